@@ -1,0 +1,142 @@
+"""The `pymunk-bot` command line: run, validate, list, bench."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from .errors import ScenarioError
+
+EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that exits with status 2 and one line on bad arguments (its default too)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"error: {message} (see `{self.prog} --help`)\n")
+
+
+def _display_available() -> bool:
+    if os.environ.get("SDL_VIDEODRIVER") in ("dummy", "offscreen"):
+        return False
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) or sys.platform in (
+        "win32", "darwin")
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .config import load_scenario
+    from .results import write_json
+    from .sim import Simulation
+
+    config = load_scenario(args.scenario)
+    sim = Simulation(config, seed=args.seed)
+    duration = args.duration if args.duration is not None else config.world.duration
+    if args.duration is not None and not args.duration > 0:
+        raise ScenarioError("--duration", "", f"must be > 0 (got {args.duration:g})")
+    interactive = not args.headless and _display_available()
+    if interactive:
+        try:
+            from .viewer import run_window
+        except ImportError:
+            interactive = False
+            print("note: the interactive window is not available in this build; running headless")
+    if interactive:
+        run_window(sim, duration)
+    else:
+        if not args.headless:
+            print("note: no display found; running headless (pass --headless to silence this)")
+        sim.run(duration)
+    result = sim.result()
+    if args.out:
+        write_json(args.out, result)
+    _print_summary(result)
+    return EXIT_OK if result["passed"] else EXIT_EXPECTATION_FAILED
+
+
+def _print_summary(result: dict) -> None:
+    rtf = result["real_time_factor"]
+    print(f"{result['scenario']} (seed {result['seed']}): {result['sim_time']:.2f} s simulated in "
+          f"{result['wall_time']:.3f} s ({rtf:.0f}x real time)" if rtf else "")
+    for name, r in result["robots"].items():
+        goal = ""
+        if r["goal_reached"]:
+            goal = f", goal reached at {r['time_to_goal']:.2f} s"
+        x, y, theta = r["pose"]
+        print(f"  {name}: pose ({x:.3f}, {y:.3f}, {theta:.3f}), {r['distance']:.2f} m travelled, "
+              f"{r['collisions']} collision(s){goal}")
+    for line in result["expectations"]:
+        print(f"  expect {line}")
+    print("PASSED" if result["passed"] else "FAILED")
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from .config import load_scenario
+
+    status = EXIT_OK
+    for spec in args.scenarios:
+        try:
+            config = load_scenario(spec)
+        except ScenarioError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            status = EXIT_BAD_INPUT
+        else:
+            print(f"ok: {spec} ({config.name})")
+    return status
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    from .config import load_scenario, shipped_scenarios
+
+    for name, path in shipped_scenarios().items():
+        try:
+            description = load_scenario(path).description
+        except ScenarioError as exc:
+            description = f"(invalid: {exc})"
+        print(f"{name:<22} {description}")
+    return EXIT_OK
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from .benchmarks import run_all
+
+    run_all(quick=args.quick)
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="pymunk-bot", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    run = sub.add_parser("run", help="run a scenario (window if a display is available)")
+    run.add_argument("scenario", nargs="?", help="path or shipped name (default: built-in)")
+    run.add_argument("--headless", action="store_true", help="no window, full speed")
+    run.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
+    run.add_argument("--seed", type=int, help="override the scenario's seed")
+    run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
+    run.set_defaults(func=_cmd_run)
+    validate = sub.add_parser("validate", help="check scenario files")
+    validate.add_argument("scenarios", nargs="+")
+    validate.set_defaults(func=_cmd_validate)
+    listing = sub.add_parser("list", help="list shipped scenarios")
+    listing.set_defaults(func=_cmd_list)
+    bench = sub.add_parser("bench", help="measure simulation and LiDAR speed")
+    bench.add_argument("--quick", action="store_true", help="fewer repeats")
+    bench.set_defaults(func=_cmd_bench)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ScenarioError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,5 @@
+"""Scenario configuration: parse, validate, freeze. Imports no physics."""
+from .loader import load_scenario, parse_scenario, resolve, shipped_scenarios
+from .schema import ScenarioConfig
+
+__all__ = ["ScenarioConfig", "load_scenario", "parse_scenario", "resolve", "shipped_scenarios"]

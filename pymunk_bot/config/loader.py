@@ -1,0 +1,89 @@
+"""Scenario files -> validated, frozen ScenarioConfig (or one ScenarioError)."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from ..errors import ScenarioError
+from . import semantics
+from .messages import describe, walk
+from .schema import ScenarioConfig
+from .yaml_source import line_of, parse_yaml
+
+PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"
+DEFAULT_SCENARIO = PACKAGE_DATA / "default.yaml"
+
+
+def shipped_scenario_dirs() -> list[Path]:
+    """Where shipped scenarios live: ./scenarios, then the source checkout's scenarios/."""
+    candidates = [Path.cwd() / "scenarios", PACKAGE_DATA.parent.parent / "scenarios"]
+    seen, dirs = set(), []
+    for d in candidates:
+        if d.is_dir() and d.resolve() not in seen:
+            seen.add(d.resolve())
+            dirs.append(d)
+    return dirs
+
+
+def shipped_scenarios() -> dict[str, Path]:
+    """Name -> path of every shipped scenario, the built-in default first."""
+    found = {"default": DEFAULT_SCENARIO}
+    for d in shipped_scenario_dirs():
+        for path in sorted(d.glob("*.yaml")):
+            found.setdefault(path.stem, path)
+    return found
+
+
+def resolve(spec: str | Path | None) -> Path:
+    """A scenario path, or the name of a shipped one; None means the built-in default."""
+    if spec is None:
+        return DEFAULT_SCENARIO
+    path = Path(spec)
+    if path.exists() or path.suffix in (".yaml", ".yml") or "/" in str(spec):
+        return path
+    shipped = shipped_scenarios()
+    if str(spec) in shipped:
+        return shipped[str(spec)]
+    from .messages import did_you_mean
+    raise ScenarioError(str(spec), "", "no such file or shipped scenario"
+                        f"{did_you_mean(str(spec), shipped)}; see `pymunk-bot list`")
+
+
+def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
+    """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers."""
+    if not isinstance(data, dict):
+        raise ScenarioError(source, "", "the file must be a YAML mapping of scenario keys "
+                                        f"(got {type(data).__name__})")
+    try:
+        config = ScenarioConfig.model_validate(data)
+    except ValidationError as exc:
+        errors = exc.errors()
+        first = errors[0]
+        path, clean_loc, owner = walk(ScenarioConfig, first["loc"])
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise ScenarioError(source, path, describe(first, owner) + more,
+                            line_of(node, clean_loc)) from None
+    try:
+        semantics.check(config)
+    except semantics.SemanticError as exc:
+        path, clean_loc, _ = walk(ScenarioConfig, exc.loc)
+        raise ScenarioError(source, path, exc.problem, line_of(node, clean_loc)) from None
+    return config
+
+
+def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
+    """Read and validate a scenario file (path or shipped name; None = built-in default)."""
+    path = resolve(spec)
+    source = str(spec) if spec is not None and Path(str(spec)).exists() else str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ScenarioError(source, "", "file not found") from None
+    except IsADirectoryError:
+        raise ScenarioError(source, "", "is a directory, not a scenario file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(source, "", f"cannot read: {exc}") from None
+    data, node = parse_yaml(text, source)
+    return parse_scenario(data, source, node)

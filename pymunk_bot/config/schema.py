@@ -1,0 +1,150 @@
+"""The scenario file as frozen pydantic models: every key, its unit and its default.
+
+docs/scenario-format.md documents each key; keep the two in step.
+"""
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal, Union
+
+from pydantic import Field
+
+from .controllers import ControllerConfig
+from .types import (
+    Float, FieldOfView, Int, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
+    Probability, Section, Vec2,
+)
+
+# ---------------------------------------------------------------------------- world
+
+
+class WorldConfig(Section):
+    size: tuple[PositiveFloat, PositiveFloat]  # arena interior width, height [m]
+    dt: PositiveFloat = 1.0 / 60.0  # physics step [s]
+    substeps: PositiveInt | None = None  # pymunk steps per dt; None = computed so nothing tunnels
+    duration: PositiveFloat = 30.0  # default run length [s]
+    wall_friction: NonNegativeFloat = 0.5  # contact friction of the arena walls
+
+
+# ---------------------------------------------------------------------------- obstacles
+
+
+class _Solid(Section):
+    friction: NonNegativeFloat = 0.5  # contact friction (pymunk multiplies the two shapes')
+    movable: bool = False  # a dynamic body the robots can push
+    mass: PositiveFloat = 1.0  # [kg], movable only
+    ground_friction: NonNegativeFloat = 0.5  # floor friction coefficient mu, movable only
+
+
+class BoxObstacle(_Solid):
+    type: Literal["box"]
+    center: Vec2  # [m]
+    size: tuple[PositiveFloat, PositiveFloat]  # width, height [m]
+    angle: Float = 0.0  # [rad]
+
+
+class CircleObstacle(_Solid):
+    type: Literal["circle"]
+    center: Vec2  # [m]
+    radius: PositiveFloat  # [m]
+
+
+class PolygonObstacle(_Solid):
+    type: Literal["polygon"]
+    points: list[Vec2] = Field(min_length=3)  # outline [m], either winding, concave allowed
+
+
+class WallObstacle(Section):
+    type: Literal["wall"]
+    start: Vec2  # [m]
+    end: Vec2  # [m]
+    thickness: PositiveFloat = 0.05  # [m]
+    friction: NonNegativeFloat = 0.5
+
+
+ObstacleConfig = Annotated[
+    Union[BoxObstacle, CircleObstacle, PolygonObstacle, WallObstacle],
+    Field(discriminator="type"),
+]
+OBSTACLE_TYPES = ("box", "circle", "polygon", "wall")
+
+# ---------------------------------------------------------------------------- sensors
+
+
+class LidarConfig(Section):
+    beams: PositiveInt = 360
+    fov: FieldOfView = 2 * math.pi  # [rad], centred on the heading
+    max_range: PositiveFloat = 8.0  # [m]
+    min_range: NonNegativeFloat = 0.05  # [m]; closer returns read max_range (no return)
+    noise_std: NonNegativeFloat = 0.0  # Gaussian range noise [m]
+    rate: PositiveFloat = 10.0  # scans per second [Hz]
+    offset: Pose = (0.0, 0.0, 0.0)  # mounting pose in the robot frame [m, m, rad]
+    dropout: Probability = 0.0  # chance that a beam has no return (reads max_range)
+
+
+class OdometryConfig(Section):
+    wheel_noise_std: NonNegativeFloat = 0.0  # [m per sqrt(m)]: travel error std after 1 m
+    left_scale_error: Float = 0.0  # fractional wheel-radius error of the left wheel
+    right_scale_error: Float = 0.0  # fractional wheel-radius error of the right wheel
+    track_width_error: Float = 0.0  # fractional error of the track width odometry assumes
+    encoder_resolution: NonNegativeFloat = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
+
+
+class ImuConfig(Section):
+    rate: PositiveFloat | None = None  # [Hz]; None = every physics step
+    gyro_noise_std: NonNegativeFloat = 0.0  # yaw-rate white noise [rad/s]
+    gyro_bias: Float = 0.0  # constant yaw-rate bias [rad/s]
+    accel_noise_std: NonNegativeFloat = 0.0  # white noise per axis [m/s^2]
+    accel_bias: Vec2 = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
+
+
+# ---------------------------------------------------------------------------- robots
+
+
+class GoalConfig(Section):
+    position: Vec2  # [m]
+    tolerance: PositiveFloat = 0.2  # [m]
+
+
+class RobotConfig(Section):
+    name: Name
+    drive: Literal["diff"] = "diff"
+    pose: Pose  # x [m], y [m], theta [rad]
+    radius: PositiveFloat = 0.2  # [m]
+    mass: PositiveFloat = 5.0  # [kg]
+    track_width: PositiveFloat = 0.3  # wheel separation [m]
+    max_wheel_speed: PositiveFloat = 1.0  # [m/s]
+    max_accel: PositiveFloat = 3.0  # per wheel [m/s^2]
+    friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
+    localization: Literal["odometry", "ground_truth"] = "odometry"  # the pose controllers see
+    lidar: LidarConfig | None = None
+    odometry: OdometryConfig = OdometryConfig()
+    imu: ImuConfig | None = None
+    controller: ControllerConfig | None = None  # None: the robot stands still
+    goal: GoalConfig | None = None
+
+
+# ---------------------------------------------------------------------------- expectations
+
+
+class RobotExpectation(Section):
+    goal_reached: bool | None = None
+    max_collisions: Annotated[Int, Field(ge=0)] | None = None
+    within: PositiveFloat | None = None  # goal reached by this simulated time [s]
+    min_clearance: NonNegativeFloat | None = None  # [m], closest approach to any obstacle
+    max_path_length: PositiveFloat | None = None  # [m]
+    never_enter: list[list[Vec2]] = []  # polygons the robot's centre must never enter
+    end_in: list[Vec2] | None = None  # polygon the robot's centre must end inside
+
+
+# ---------------------------------------------------------------------------- scenario
+
+
+class ScenarioConfig(Section):
+    name: Name
+    description: str = ""
+    seed: Annotated[Int, Field(ge=0)] = 0
+    world: WorldConfig
+    obstacles: list[ObstacleConfig] = []
+    robots: list[RobotConfig] = Field(min_length=1)
+    expect: dict[str, RobotExpectation] = {}

@@ -1,0 +1,43 @@
+"""What a controller sees and what it returns.
+
+A controller is called at its own ``rate`` with an :class:`Observation` (the robot's sensor
+readings and its pose estimate, never ground truth unless the scenario asks for it) and returns
+wheel speeds. Write your own by subclassing :class:`Controller`.
+"""
+from __future__ import annotations
+
+from ..readings import LaserScan, Observation, RobotSpec
+from ..registry import Registry
+
+__all__ = ["Controller", "LaserScan", "Observation", "RobotSpec", "controllers", "wheel_speeds"]
+
+
+class Controller:
+    """Base class for controllers: override :meth:`compute`.
+
+    ``status`` is "running", "arrived" (goal reached as far as the controller knows) or
+    "failed" (it gave up, e.g. no path); ``message`` says why.
+    """
+
+    rate: float = 10.0  # [Hz]
+
+    def __init__(self) -> None:
+        self.status = "running"
+        self.message = ""
+
+    def compute(self, obs: Observation) -> tuple[float, float]:
+        """Left and right wheel speeds [m/s] for the next control period."""
+        raise NotImplementedError
+
+    def debug_path(self) -> list[tuple[float, float]] | None:
+        """A path the controller is following, for views (None if it has none)."""
+        return None
+
+
+controllers: Registry[type] = Registry("controller")
+
+
+def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
+    """(v, omega) -> (left, right) wheel speeds."""
+    half = 0.5 * omega * track_width
+    return v - half, v + half

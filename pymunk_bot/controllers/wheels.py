@@ -1,0 +1,18 @@
+"""Constant wheel speeds."""
+from __future__ import annotations
+
+from ..config.controllers import WheelsControllerConfig
+from .base import Controller, Observation, RobotSpec, controllers
+
+
+@controllers.register("wheels")
+class WheelsController(Controller):
+    """Drives both wheels at fixed speeds forever."""
+
+    def __init__(self, config: WheelsControllerConfig, robot: RobotSpec) -> None:
+        super().__init__()
+        self.rate = config.rate
+        self.speeds = (config.left, config.right)
+
+    def compute(self, obs: Observation) -> tuple[float, float]:
+        return self.speeds

@@ -1,0 +1,18 @@
+"""The one error type users see for bad input: file, key path and problem on one line."""
+from __future__ import annotations
+
+
+class ScenarioError(Exception):
+    """Bad scenario input. ``str()`` is the one-line message the CLI prints (exit status 2)."""
+
+    def __init__(self, source: str, path: str, problem: str, line: int | None = None) -> None:
+        self.source = source
+        self.path = path
+        self.problem = problem
+        self.line = line
+        super().__init__(self.format())
+
+    def format(self) -> str:
+        where = f"{self.source}: {self.path}: " if self.path else f"{self.source}: "
+        line = f" (line {self.line})" if self.line is not None else ""
+        return f"{where}{self.problem}{line}"

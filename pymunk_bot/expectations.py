@@ -1,0 +1,63 @@
+"""Regression expectations (`expect:`) checked at the end of a run, and per-tick metrics."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import point_in_polygon
+
+
+@dataclass(frozen=True)
+class Check:
+    """One expectation of one robot and how the run measured up."""
+
+    robot: str
+    key: str
+    passed: bool
+    expected: object
+    actual: object
+
+    def describe(self) -> str:
+        verdict = "ok" if self.passed else "FAILED"
+        return f"{self.robot}.{self.key}: expected {self.expected}, got {self.actual} [{verdict}]"
+
+
+def _fmt(value) -> object:
+    return round(value, 4) if isinstance(value, float) else value
+
+
+def evaluate(expectations: dict, robots: dict) -> list[Check]:
+    """Compare each robot's run against its expectations."""
+    checks: list[Check] = []
+    for name, exp in expectations.items():
+        robot = robots[name]
+
+        def add(key, passed, expected, actual):
+            checks.append(Check(name, key, bool(passed), expected, _fmt(actual)))
+
+        if exp.goal_reached is not None:
+            add("goal_reached", robot.goal_reached == exp.goal_reached, exp.goal_reached,
+                robot.goal_reached)
+        if exp.within is not None:
+            t = robot.time_to_goal
+            add("within", t is not None and t <= exp.within, f"<= {exp.within:g} s",
+                "never" if t is None else t)
+        if exp.max_collisions is not None:
+            add("max_collisions", robot.collisions <= exp.max_collisions,
+                f"<= {exp.max_collisions}", robot.collisions)
+        if exp.min_clearance is not None:
+            add("min_clearance", robot.metrics.min_clearance >= exp.min_clearance,
+                f">= {exp.min_clearance:g} m", robot.metrics.min_clearance)
+        if exp.max_path_length is not None:
+            add("max_path_length", robot.distance <= exp.max_path_length,
+                f"<= {exp.max_path_length:g} m", robot.distance)
+        for i, _ in enumerate(exp.never_enter):
+            entered = robot.metrics.entered[i]
+            add(f"never_enter[{i}]", entered is None, "never",
+                "never" if entered is None else f"entered at t={entered:.2f} s")
+        if exp.end_in is not None:
+            inside = point_in_polygon(robot.pose[:2], np.asarray(exp.end_in, dtype=float))
+            add("end_in", inside, "inside", "inside" if inside else
+                f"outside at ({robot.pose[0]:.2f}, {robot.pose[1]:.2f})")
+    return checks

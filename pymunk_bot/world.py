@@ -1,0 +1,77 @@
+"""The physical world: one pymunk Space with the arena, obstacles and robots, and contact bookkeeping."""
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+
+from . import physics
+from .config.schema import ScenarioConfig
+from .obstacles import Obstacle, build_obstacle, half_width
+from .robot import Robot
+
+ARENA_WALL_THICKNESS = 1.0  # [m]; thick so that nothing can tunnel out of the arena
+
+
+class World:
+    """Owns the Space. Build order is fixed (arena, obstacles, robots) for determinism."""
+
+    def __init__(self, config: ScenarioConfig, rng: np.random.Generator) -> None:
+        self.config = config
+        self.width, self.height = config.world.size
+        self.space = physics.new_space()
+        self.arena_shapes = self._build_arena()
+        self.obstacles: list[Obstacle] = [build_obstacle(self.space, o) for o in config.obstacles]
+        robot_rngs = rng.spawn(len(config.robots))
+        # Group ids start at 1: group 0 means "no group" to pymunk.
+        self.robots: dict[str, Robot] = {
+            rc.name: Robot(rc, self.space, group=i + 1, rng=robot_rngs[i])
+            for i, rc in enumerate(config.robots)
+        }
+        self._robot_of_shape = {r.shape: r for r in self.robots.values()}
+        for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
+            self.space.on_collision(physics.ROBOT, other, begin=self._begin, separate=self._separate)
+        self.substeps = config.world.substeps or self._substeps_against_tunnelling()
+
+    def _build_arena(self) -> list[pymunk.Shape]:
+        w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
+        boxes = [(-t, -t, 0, h + t), (w, -t, w + t, h + t), (0, -t, w, 0), (0, h, w, h + t)]
+        shapes = []
+        for x0, y0, x1, y1 in boxes:
+            shape = pymunk.Poly(self.space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+            shape.friction = self.config.world.wall_friction
+            shape.collision_type = physics.STATIC
+            shapes.append(shape)
+        self.space.add(*shapes)
+        return shapes
+
+    def _substeps_against_tunnelling(self) -> int:
+        dt = self.config.world.dt
+        robots = self.config.robots
+        fastest = max(r.max_wheel_speed for r in robots)
+        smallest = min(r.radius for r in robots)
+        thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in self.config.obstacles])
+        substeps = physics.substeps_against_tunnelling(dt, fastest, smallest, thinnest)
+        if len(robots) > 1:  # two robots closing head-on
+            substeps = max(substeps, physics.substeps_against_tunnelling(
+                dt, 2 * fastest, smallest, smallest))
+        return substeps
+
+    # ------------------------------------------------------------------ contacts
+    def _robots_in(self, arbiter: pymunk.Arbiter):
+        a, b = arbiter.shapes
+        normal = arbiter.normal  # points from a to b
+        robot_a = self._robot_of_shape.get(a)
+        robot_b = self._robot_of_shape.get(b)
+        if robot_a is not None:
+            yield robot_a, b, (normal.x, normal.y)
+        if robot_b is not None:
+            yield robot_b, a, (-normal.x, -normal.y)
+
+    def _begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
+        for robot, other, normal in self._robots_in(arbiter):
+            robot.collisions += 1
+            robot.contacts[other] = normal
+
+    def _separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
+        for robot, other, _ in self._robots_in(arbiter):
+            robot.contacts.pop(other, None)
