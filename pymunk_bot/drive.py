@@ -36,8 +36,6 @@ class DiffDrive:
         self.commanded = (0.0, 0.0)  # acceleration-limited speeds sent to the motors [m/s]
         self.wheel_speeds = (0.0, 0.0)  # speeds the wheels turn at during this substep [m/s]
         self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        self.control.position = body.position
-        self.control.angle = body.angle
         # Enough force to follow the fastest allowed change of speed and the tightest turn, with
         # margin: the tangential wheel acceleration plus the centripetal v*omega <= v_max^2 / L.
         force = body.mass * (2.0 * max_accel + max_wheel_speed ** 2 / track_width)
@@ -74,8 +72,8 @@ class DiffDrive:
         # the chord at v * sinc keeps the robot exactly on the commanded arc.
         heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
         speed = v * sinc_half(omega * h)
-        control.position = body.position
-        control.angle = body.angle
+        # The control body's position and angle never matter: both joints act at the centres
+        # and, with max_bias = 0, only on velocities, so there is nothing to wind up.
         control.velocity = (speed * math.cos(heading), speed * math.sin(heading))
         control.angular_velocity = omega
 

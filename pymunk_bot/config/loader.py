@@ -8,7 +8,7 @@ from pydantic import ValidationError
 
 from ..errors import ScenarioError
 from . import semantics
-from .messages import describe, walk
+from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
 from .yaml_source import line_of, parse_yaml
 
@@ -60,7 +60,7 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
         config = ScenarioConfig.model_validate(data)
     except ValidationError as exc:
         errors = exc.errors()
-        first = errors[0]
+        first = most_helpful(errors)
         path, clean_loc, owner = walk(ScenarioConfig, first["loc"])
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise ScenarioError(source, path, describe(first, owner) + more,

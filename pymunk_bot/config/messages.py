@@ -76,6 +76,15 @@ def walk(model: type[BaseModel], loc: tuple) -> tuple[str, tuple, type[BaseModel
     return path, tuple(clean), owner
 
 
+# A misspelt key shows up as an unknown key *and* a missing one: report the unknown key first.
+_PRIORITY = {"extra_forbidden": 0, "union_tag_invalid": 1}
+
+
+def most_helpful(errors: list[dict]) -> dict:
+    """The error to show when pydantic found several."""
+    return min(errors, key=lambda e: _PRIORITY.get(e["type"], 2))
+
+
 def did_you_mean(word: str, choices: typing.Iterable[str]) -> str:
     match = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return f" (did you mean '{match[0]}'?)" if match else ""
@@ -98,6 +107,9 @@ def describe(error: dict, owner: type[BaseModel] | None) -> str:
         known = owner.model_fields if owner is not None else {}
         return f"unknown key{did_you_mean(key, known)}; valid keys: {', '.join(known)}"
     if kind == "missing":
+        last = error["loc"][-1] if error["loc"] else None
+        if isinstance(last, int):
+            return f"too few items: item [{last}] is missing"
         return "required key is missing"
     if kind == "union_tag_invalid":
         tags = [t.strip().strip("'") for t in str(ctx.get("expected_tags", "")).split(",")]
@@ -114,7 +126,7 @@ def describe(error: dict, owner: type[BaseModel] | None) -> str:
         return f"must be a number{got}"
     if kind in ("int_type", "int_parsing", "int_from_float"):
         return f"must be an integer{got}"
-    if kind == "bool_type":
+    if kind in ("bool_type", "bool_parsing"):
         return f"must be true or false{got}"
     if kind in ("string_type",):
         return f"must be a string{got}"
@@ -122,11 +134,10 @@ def describe(error: dict, owner: type[BaseModel] | None) -> str:
         return f"must be a finite number{got}"
     if kind == "string_pattern_mismatch":
         return f"must match {ctx.get('pattern', '').strip('^$')}{got}"
-    if kind in ("too_short", "too_long"):
-        expected = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
-        actual = ctx.get("actual_length")
-        if isinstance(value, (list, tuple)) and kind == "too_long" or kind == "too_short":
-            return f"must have {'at least' if kind == 'too_short' else 'at most'} {expected} items (got {actual})"
+    if kind == "too_short":
+        return f"must have at least {ctx.get('min_length')} items (got {ctx.get('actual_length')})"
+    if kind == "too_long":
+        return f"must have at most {ctx.get('max_length')} items (got {ctx.get('actual_length')})"
     if kind in ("tuple_type", "list_type"):
         return f"must be a list{got}"
     if kind in ("model_type", "dict_type", "model_attributes_type"):

@@ -84,9 +84,10 @@ class LidarConfig(Section):
 
 class OdometryConfig(Section):
     wheel_noise_std: NonNegativeFloat = 0.0  # [m per sqrt(m)]: travel error std after 1 m
-    left_scale_error: Float = 0.0  # fractional wheel-radius error of the left wheel
-    right_scale_error: Float = 0.0  # fractional wheel-radius error of the right wheel
-    track_width_error: Float = 0.0  # fractional error of the track width odometry assumes
+    # Fractional errors: odometry believes a wheel radius (track width) of true * (1 + error).
+    left_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # left wheel radius
+    right_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # right wheel radius
+    track_width_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # track width
     encoder_resolution: NonNegativeFloat = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
 
 
@@ -96,6 +97,8 @@ class ImuConfig(Section):
     gyro_bias: Float = 0.0  # constant yaw-rate bias [rad/s]
     accel_noise_std: NonNegativeFloat = 0.0  # white noise per axis [m/s^2]
     accel_bias: Vec2 = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
+    gyro_bias_walk: NonNegativeFloat = 0.0  # yaw-rate bias random walk [rad/s per sqrt(s)]
+    accel_bias_walk: NonNegativeFloat = 0.0  # accel bias random walk per axis [m/s^2 per sqrt(s)]
 
 
 # ---------------------------------------------------------------------------- robots

@@ -44,10 +44,10 @@ def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
     for i in range(len(points)):
         if np.allclose(points[i], points[(i + 1) % len(points)]):
             raise SemanticError(loc, f"degenerate polygon: point {i} repeats its neighbour")
-    if abs(geo.signed_area(points)) < 1e-9:
-        raise SemanticError(loc, "degenerate polygon: zero area")
     if not geo.is_simple_polygon(points):
         raise SemanticError(loc, "degenerate polygon: edges cross each other")
+    if abs(geo.signed_area(points)) < 1e-9:
+        raise SemanticError(loc, "degenerate polygon: zero area")
 
 
 def _check_wall(index: int, wall: WallObstacle) -> None:

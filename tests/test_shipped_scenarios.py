@@ -1,0 +1,28 @@
+"""Every shipped scenario validates, runs headless to its duration and meets its expectations."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pymunk_bot import Simulation, load_scenario
+from pymunk_bot.config import shipped_scenarios
+
+REPO = Path(__file__).resolve().parent.parent
+SHIPPED = {"default": None, **{p.stem: p for p in sorted((REPO / "scenarios").glob("*.yaml"))}}
+
+
+def test_the_four_foundation_scenarios_are_shipped():
+    assert {"open_goal", "wall_headon", "wall_graze", "push_crate"} <= SHIPPED.keys()
+    assert "default" in shipped_scenarios()
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_shipped_scenario_meets_its_expectations(name):
+    config = load_scenario(SHIPPED[name])
+    assert config.description
+    assert config.expect, "a shipped scenario states what it expects"
+    sim = Simulation(config)
+    sim.run(config.world.duration)
+    failed = [c.describe() for c in sim.check_expectations() if not c.passed]
+    assert not failed
