@@ -82,21 +82,20 @@ def distance_to_polygon(p: Point, points: np.ndarray) -> float:
     return min(point_segment_distance(q, points[i], points[(i + 1) % n]) for i in range(n))
 
 
-def convex_width(points: np.ndarray) -> float:
-    """Smallest width of a convex polygon (min over edges of the farthest vertex distance)."""
-    n = len(points)
-    best = math.inf
-    for i in range(n):
-        a, b = points[i], points[(i + 1) % n]
-        edge = b - a
-        length = float(np.hypot(*edge))
-        if length == 0.0:
-            continue
-        normal = np.array([-edge[1], edge[0]]) / length
-        best = min(best, float(np.max(np.abs((points - a) @ normal))))
-    return best
-
-
 def wrap_angle(angle: float) -> float:
     """Angle wrapped to [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def thinness(points: np.ndarray) -> float:
+    """A lower bound on a simple polygon's thinnest width: the smallest distance from a vertex to
+    an edge not touching it (equal to the minimum width for convex polygons; across a notch of a
+    concave one it may underestimate, which only errs on the safe side)."""
+    n = len(points)
+    best = math.inf
+    for i in range(n):
+        for j in range(n):
+            if j == i or (j + 1) % n == i:
+                continue
+            best = min(best, point_segment_distance(points[i], points[j], points[(j + 1) % n]))
+    return best

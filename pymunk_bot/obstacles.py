@@ -81,11 +81,3 @@ def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     else:
         space.add(*shapes)
     return Obstacle(config, body, shapes)
-
-
-def half_width(config) -> float:
-    """Half the thinnest extent of an obstacle: what a fast robot must not skip over."""
-    if isinstance(config, CircleObstacle):
-        return config.radius
-    _, _, outlines = _local_outlines(config)
-    return min(geo.convex_width(o) for o in outlines) / 2.0

@@ -25,17 +25,6 @@ def new_space() -> pymunk.Space:
     return space
 
 
-def substeps_against_tunnelling(dt: float, max_speed: float, robot_radius: float,
-                                thinnest_half_width: float, safety: float = 2.0) -> int:
-    """Smallest substep count so that nothing moves more than a fraction of a collision depth.
-
-    A disc of radius r passes through a wall of half-width w once its centre crosses the wall's
-    middle within one substep, i.e. when ``v * dt / k > r + w``. We keep a factor ``safety`` below.
-    """
-    depth = robot_radius + thinnest_half_width
-    return max(1, math.ceil(max_speed * dt * safety / depth))
-
-
 def ground_friction(space: pymunk.Space, body: pymunk.Body, mu: float) -> None:
     """Coulomb floor friction for a top-down body: a velocity-only pivot and gear to the ground.
 

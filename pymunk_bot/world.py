@@ -6,11 +6,9 @@ import pymunk
 
 from . import physics
 from .config.schema import ScenarioConfig
-from .obstacles import Obstacle, build_obstacle, half_width
+from .config.substeps import ARENA_WALL_THICKNESS, required_substeps
+from .obstacles import Obstacle, build_obstacle
 from .robot import Robot
-
-ARENA_WALL_THICKNESS = 1.0  # [m]; thick so that nothing can tunnel out of the arena
-
 
 class World:
     """Owns the Space. Build order is fixed (arena, obstacles, robots) for determinism."""
@@ -30,7 +28,7 @@ class World:
         self._robot_of_shape = {r.shape: r for r in self.robots.values()}
         for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
             self.space.on_collision(physics.ROBOT, other, begin=self._begin, separate=self._separate)
-        self.substeps = config.world.substeps or self._substeps_against_tunnelling()
+        self.substeps = config.world.substeps or required_substeps(config)
 
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
@@ -43,18 +41,6 @@ class World:
             shapes.append(shape)
         self.space.add(*shapes)
         return shapes
-
-    def _substeps_against_tunnelling(self) -> int:
-        dt = self.config.world.dt
-        robots = self.config.robots
-        fastest = max(r.max_wheel_speed for r in robots)
-        smallest = min(r.radius for r in robots)
-        thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in self.config.obstacles])
-        substeps = physics.substeps_against_tunnelling(dt, fastest, smallest, thinnest)
-        if len(robots) > 1:  # two robots closing head-on
-            substeps = max(substeps, physics.substeps_against_tunnelling(
-                dt, 2 * fastest, smallest, smallest))
-        return substeps
 
     # ------------------------------------------------------------------ contacts
     def _robots_in(self, arbiter: pymunk.Arbiter):

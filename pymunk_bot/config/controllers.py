@@ -1,11 +1,15 @@
-"""Controller sections (`controller: {type: ...}`), one model per controller type."""
+"""Controller sections (`controller: {type: ...}`), one model per controller type.
+
+docs/navigation.md lists every key with its unit and default; keep the two in step.
+"""
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+import re
+from typing import Annotated, Any, Literal, Union
 
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
-from .types import Float, NonNegativeFloat, PositiveFloat, Section, Vec2
+from .types import Float, NonNegativeFloat, PositiveFloat, PositiveInt, Section, Vec2
 
 
 class WheelsControllerConfig(Section):
@@ -29,7 +33,100 @@ class GoToGoalControllerConfig(Section):
     tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
 
 
+class PursuitConfig(Section):
+    """Pure-pursuit path following, shared by ``waypoints`` and ``navigate``."""
+
+    lookahead: PositiveFloat = 0.6  # [m] steering point ahead on the path, at full speed
+    lookahead_time: PositiveFloat = 0.4  # [s] lookahead = speed * this (0.2 m to ``lookahead``)
+    corner_radius: NonNegativeFloat = 0.5  # [m] corners are rounded with arcs up to this radius
+    lateral_accel: PositiveFloat = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
+    decel: PositiveFloat = 1.0  # [m/s^2] planned braking before bends and the end
+    rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot above
+
+
+class WaypointsControllerConfig(Section):
+    """Follow a polyline of points with pure pursuit; ``loop`` patrols it forever."""
+
+    type: Literal["waypoints"]
+    points: list[Vec2] = Field(min_length=1)  # [m]
+    loop: bool = False
+    rate: PositiveFloat = 10.0  # [Hz]
+    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
+    tolerance: NonNegativeFloat | None = None  # [m] stop radius at the last point; None = goal's
+    pursuit: PursuitConfig = PursuitConfig()
+
+
+class DwaConfig(Section):
+    """Dynamic Window Approach (Fox et al. 1997) tuning, shared by ``avoid`` and ``navigate``."""
+
+    horizon: PositiveFloat = 1.5  # [s] each candidate arc is simulated this far ahead
+    time_samples: PositiveInt = 12  # collision checks along each arc
+    v_samples: Annotated[PositiveInt, Field(ge=2)] = 7  # forward speeds tried per tick
+    w_samples: Annotated[PositiveInt, Field(ge=2)] = 15  # turn rates tried per tick
+    safety: NonNegativeFloat = 0.05  # [m] clearance below this counts as a collision
+    heading_weight: NonNegativeFloat = 0.4  # facing the target at the end of the arc
+    progress_weight: NonNegativeFloat = 1.0  # getting closer to the target along the arc
+    clearance_weight: NonNegativeFloat = 0.5  # closest approach on the arc (up to the cap)
+    speed_weight: NonNegativeFloat = 0.2  # driving fast
+    clearance_cap: PositiveFloat = 0.4  # [m] more clearance scores no better
+    allow_reverse: bool = False  # back away slowly when closer than ``safety`` to something
+
+
+class AvoidControllerConfig(Section):
+    """Reactive obstacle avoidance from the LiDAR toward a goal (Dynamic Window Approach)."""
+
+    type: Literal["avoid"]
+    goal: Vec2 | None = None  # [m]; None = the robot's goal
+    rate: PositiveFloat = 10.0  # [Hz]
+    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
+    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
+    dwa: DwaConfig = DwaConfig()
+
+
+class NavigateControllerConfig(Section):
+    """Global A* on the scenario's map plus a local controller that follows the path."""
+
+    type: Literal["navigate"]
+    goal: Vec2 | None = None  # [m]; None = the robot's goal
+    rate: PositiveFloat = 10.0  # [Hz]
+    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
+    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
+    resolution: Annotated[PositiveFloat, Field(ge=0.01)] = 0.1  # [m] planning grid cell size
+    margin: NonNegativeFloat = 0.25  # [m] clearance beyond the radius that paths try to keep
+    hard_margin: NonNegativeFloat = 0.02  # [m] beyond the radius: closer cells are blocked
+    clearance_cost: NonNegativeFloat = 4.0  # extra cost per metre next to an obstacle
+    map_movable: bool = False  # plan around movable obstacles at their starting places
+    lookahead: PositiveFloat = 0.6  # [m] steering point ahead on the path
+    stuck_time: PositiveFloat = 3.0  # [s] without progress along the path before a replan
+    give_up_after: PositiveFloat = 10.0  # [s] of failed replans (blocked by unmapped things)
+    pursuit: PursuitConfig = PursuitConfig()
+    dwa: DwaConfig = DwaConfig()
+
+
+_CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+
+
+def _importable(value: str) -> str:
+    if not _CLASS_PATH.match(value):
+        raise ValueError(f"must be 'package.module:ClassName' (got {value!r})")
+    from ..controllers.python import import_class  # lazy: config must not need the controllers
+
+    import_class(value)  # raises ValueError with a one-line reason
+    return value
+
+
+class PythonControllerConfig(Section):
+    """A user's own controller class, imported from ``class_path`` ('package.module:Class')."""
+
+    type: Literal["python"]
+    class_path: Annotated[str, AfterValidator(_importable)]
+    params: dict[str, Any] = {}  # keyword arguments for the class's constructor
+    rate: PositiveFloat | None = None  # [Hz]; None = the class's own ``rate`` (default 10)
+    goal: Vec2 | None = None  # [m]; None = the robot's goal
+
+
 ControllerConfig = Annotated[
-    Union[WheelsControllerConfig, GoToGoalControllerConfig],
+    Union[WheelsControllerConfig, GoToGoalControllerConfig, WaypointsControllerConfig,
+          AvoidControllerConfig, NavigateControllerConfig, PythonControllerConfig],
     Field(discriminator="type"),
 ]

@@ -17,11 +17,14 @@ from .types import (
 
 # ---------------------------------------------------------------------------- world
 
+MAX_SUBSTEPS = 100
+
 
 class WorldConfig(Section):
     size: tuple[PositiveFloat, PositiveFloat]  # arena interior width, height [m]
-    dt: PositiveFloat = 1.0 / 60.0  # physics step [s]
-    substeps: PositiveInt | None = None  # pymunk steps per dt; None = computed so nothing tunnels
+    dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
+    # pymunk steps per dt; None = computed so nothing tunnels
+    substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
     duration: PositiveFloat = 30.0  # default run length [s]
     wall_friction: NonNegativeFloat = 0.5  # contact friction of the arena walls
 

@@ -104,6 +104,17 @@ def check(scenario: ScenarioConfig) -> None:
         controller_goal = getattr(robot.controller, "goal", None)
         if controller_goal is not None:
             _check_point_in_arena(("robots", i, "controller", "goal"), controller_goal, scenario)
+    if scenario.world.substeps is None:
+        from .schema import MAX_SUBSTEPS
+        from .substeps import required_substeps
+        needed = required_substeps(scenario)
+        if needed > MAX_SUBSTEPS:
+            fastest = max(range(len(scenario.robots)),
+                          key=lambda i: scenario.robots[i].max_wheel_speed)
+            raise SemanticError(
+                ("robots", fastest, "max_wheel_speed"),
+                f"too fast for world.dt = {scenario.world.dt:g} s: it would need {needed} "
+                f"substeps (at most {MAX_SUBSTEPS}) not to tunnel; lower world.dt or the speed")
     for name, expectation in scenario.expect.items():
         if name not in names:
             from .messages import did_you_mean

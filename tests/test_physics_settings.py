@@ -1,0 +1,32 @@
+"""The substep count is computed from speeds and geometry, so nothing tunnels."""
+from __future__ import annotations
+
+import pytest
+from conftest import robot
+
+from pymunk_bot.config.substeps import substeps_against_tunnelling
+
+
+def test_formula():
+    # 1 m/s, dt 1/60: moves 1.7 cm per step, far below (0.2 + 0.01) / 2 -> one substep
+    assert substeps_against_tunnelling(1 / 60, 1.0, 0.2, 0.01) == 1
+    # 30 m/s against a 2 cm wall with a 5 cm robot: 0.5 m per step vs 3 cm allowed
+    assert substeps_against_tunnelling(1 / 60, 30.0, 0.05, 0.01) == 17
+
+
+def test_world_uses_the_thinnest_wall_and_fastest_robot(make_sim):
+    wall = {"type": "wall", "start": [5, 1], "end": [5, 9], "thickness": 0.01}
+    sim = make_sim([robot([1, 5, 0], radius=0.05, max_wheel_speed=20.0)], [wall], size=(10, 10))
+    assert sim.substeps == substeps_against_tunnelling(1 / 60, 20.0, 0.05, 0.005)
+
+
+def test_explicit_substeps_are_respected(make_sim):
+    assert make_sim([robot([1, 1, 0])], substeps=3).substeps == 3
+
+
+@pytest.mark.parametrize("count", [2, 5])
+def test_two_robots_consider_closing_speed(make_sim, count):
+    robots = [robot([1 + i, 1, 0], name=f"r{i}", radius=0.1, max_wheel_speed=8.0)
+              for i in range(count)]
+    sim = make_sim(robots)
+    assert sim.substeps >= substeps_against_tunnelling(1 / 60, 16.0, 0.1, 0.1)
