@@ -1,4 +1,4 @@
-"""The `pymunk-bot` command line: run, validate, list, bench."""
+"""The `pymunk-bot` command line: run, validate, list, plot, replay, bench."""
 from __future__ import annotations
 
 import argparse
@@ -35,20 +35,26 @@ def _cmd_run(args: argparse.Namespace) -> int:
     duration = args.duration if args.duration is not None else config.world.duration
     if args.duration is not None and not args.duration > 0:
         raise ScenarioError("--duration", "", f"must be > 0 (got {args.duration:g})")
-    interactive = not args.headless and _display_available()
+    from .viewer.commands import prepare_outputs
+
+    outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
+    interactive = not args.headless and outputs.record is None and _display_available()
     if interactive:
+        from .viewer import ViewerUnavailable, run_window
+
         try:
-            from .viewer import run_window
-        except ImportError:
+            run_window(sim, duration)
+        except ViewerUnavailable as exc:
             interactive = False
-            print("note: the interactive window is not available in this build; running headless")
-    if interactive:
-        run_window(sim, duration)
-    else:
-        if not args.headless:
+            print(f"note: the window cannot open ({exc}); running headless")
+    if outputs.record is not None:
+        outputs.record_run(sim, duration)  # offscreen: runs exactly `duration`, like headless
+    elif not interactive:
+        if not args.headless and not _display_available():
             print("note: no display found; running headless (pass --headless to silence this)")
         sim.run(duration)
     result = sim.result()
+    outputs.finish()
     if args.out:
         write_json(args.out, result)
     _print_summary(result)
@@ -98,11 +104,40 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .viewer.commands import cmd_plot
+
+    return cmd_plot(args)
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from .viewer.commands import cmd_replay
+
+    return cmd_replay(args, _display_available())
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmarks import run_all
 
     run_all(quick=args.quick)
     return EXIT_OK
+
+
+def _frame_size(text: str) -> tuple[int, int]:
+    from .viewer.commands import parse_size
+
+    try:
+        return parse_size(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> None:
+    parser.add_argument("--record", type=Path, metavar="VIDEO", help=record_help)
+    parser.add_argument("--fps", type=float, help="video frames per second (default: 30 for "
+                                                  ".mp4, 20 for .gif)")
+    parser.add_argument("--size", type=_frame_size, metavar="WxH",
+                        help="video frame size in pixels (default: fitted to the arena)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,7 +149,22 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     run.add_argument("--seed", type=int, help="override the scenario's seed")
     run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
+    _add_video_options(run, "render the run offscreen to a video (.mp4 or .gif); no window")
+    run.add_argument("--log", type=Path, metavar="RUN.npz",
+                     help="save poses, odometry, commands and LiDAR scans over time")
     run.set_defaults(func=_cmd_run)
+    plot = sub.add_parser("plot", help="plot a run log (trajectories, speed, LiDAR ranges)")
+    plot.add_argument("log", type=Path, help="a run log written by `run --log`")
+    plot.add_argument("-o", "--output", type=Path,
+                      help="image file (.png, .pdf, .svg; default: next to the log)")
+    plot.add_argument("--kind", choices=("all", "map", "speed", "ranges"), default="all",
+                      help="which figure (default: all)")
+    plot.add_argument("--robot", help="only this robot (default: all robots)")
+    plot.set_defaults(func=_cmd_plot)
+    replay = sub.add_parser("replay", help="play a run log in the window (or to a video)")
+    replay.add_argument("log", type=Path, help="a run log written by `run --log`")
+    _add_video_options(replay, "render the replay to a video (.mp4 or .gif) instead")
+    replay.set_defaults(func=_cmd_replay)
     validate = sub.add_parser("validate", help="check scenario files")
     validate.add_argument("scenarios", nargs="+")
     validate.set_defaults(func=_cmd_validate)
@@ -123,6 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="measure simulation and LiDAR speed")
     bench.add_argument("--quick", action="store_true", help="fewer repeats")
     bench.set_defaults(func=_cmd_bench)
+    from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
+
+    add_test_parser(sub)
     return parser
 
 

@@ -15,4 +15,5 @@ class ScenarioError(Exception):
     def format(self) -> str:
         where = f"{self.source}: {self.path}: " if self.path else f"{self.source}: "
         line = f" (line {self.line})" if self.line is not None else ""
-        return f"{where}{self.problem}{line}"
+        # One line always, even when the problem quotes user text with line breaks in it.
+        return f"{where}{self.problem}{line}".replace("\r", "\\r").replace("\n", "\\n")

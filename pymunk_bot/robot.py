@@ -51,6 +51,7 @@ class Robot:
         self.contacts: dict[pymunk.Shape, tuple[float, float]] = {}  # touching shape -> normal
         self.distance = 0.0  # true path length [m]
         self.time_to_goal: float | None = None
+        self.distance_to_goal: float | None = None  # path length when the goal was reached [m]
         self._override: tuple[float, float] | None = None
         self._travel = [0.0, 0.0]  # wheel travel in the current tick [m]
         self._last_position = (x, y)
@@ -78,7 +79,7 @@ class Robot:
         self.goal = self.nav_goal = (float(position[0]), float(position[1]))
         if tolerance is not None:
             self.goal_tolerance = tolerance
-        self.time_to_goal = None
+        self.time_to_goal = self.distance_to_goal = None
 
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""
@@ -115,3 +116,4 @@ class Robot:
         if self.goal is not None and self.time_to_goal is None:
             if math.hypot(p.x - self.goal[0], p.y - self.goal[1]) <= self.goal_tolerance:
                 self.time_to_goal = time
+                self.distance_to_goal = self.distance

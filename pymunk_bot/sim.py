@@ -9,8 +9,10 @@ import numpy as np
 
 from .config import ScenarioConfig, load_scenario
 from .controllers import Observation, controllers
+from .errors import ScenarioError
 from .expectations import Check, evaluate
 from .metrics import RobotMetrics
+from .planning.map import MapInfo
 from .robot import Robot
 from .sensors.attach import attach_sensors
 from .world import World
@@ -36,6 +38,7 @@ class Simulation:
         self.wall_time = 0.0  # [s] spent inside step()
         expect = config.expect
         sensor_rngs = sensor_rng.spawn(len(self.robots))
+        self._map: MapInfo | None = None  # built on demand for controllers that need a map
         for robot, rng in zip(self.robots.values(), sensor_rngs):
             attach_sensors(robot, self.world, rng)
             robot.controller = self._make_controller(robot)
@@ -108,7 +111,17 @@ class Simulation:
         goal = getattr(config, "goal", None)
         if goal is not None:
             robot.nav_goal = tuple(goal)
-        return controllers.get(config.type)(config, robot.spec)
+        index = [r.name for r in self.config.robots].index(robot.name)
+        try:
+            controller = controllers.get(config.type)(config, robot.spec)
+        except ValueError as exc:  # e.g. a user's class refusing its params
+            raise ScenarioError(self.config.name, f"robots[{index}].controller", str(exc)) from None
+        if getattr(controller, "needs_map", False):
+            # What a real robot's prebuilt map holds: the arena and obstacles as the file says.
+            if self._map is None:
+                self._map = MapInfo.from_scenario(self.config)
+            controller.set_map(self._map)
+        return controller
 
     def observe(self, robot: Robot) -> Observation:
         """What ``robot``'s controller knows now."""
@@ -133,6 +146,12 @@ class Simulation:
     def check_expectations(self) -> list[Check]:
         return evaluate(self.config.expect, self.robots)
 
+    def _mean_speed(self, robot: Robot) -> float:
+        """Up to the goal if reached (not diluted by waiting there), else over the whole run."""
+        if robot.time_to_goal:
+            return robot.distance_to_goal / robot.time_to_goal
+        return robot.distance / self.time if self.time > 0 else 0.0
+
     def result(self) -> dict:
         """The JSON-ready summary of the run so far (see docs/cli.md)."""
         checks = self.check_expectations()
@@ -148,7 +167,7 @@ class Simulation:
                 "goal_reached": r.goal_reached,
                 "time_to_goal": r.time_to_goal,
                 "path_length": r.distance,
-                "mean_speed": r.distance / sim_time if sim_time > 0 else 0.0,
+                "mean_speed": self._mean_speed(r),
                 "min_clearance": r.metrics.min_clearance,
                 "odometry_pose": [float(v) for v in r.odometry.pose],
                 "odometry_error": odometry_error,

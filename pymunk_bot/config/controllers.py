@@ -63,7 +63,7 @@ class DwaConfig(Section):
     time_samples: PositiveInt = 12  # collision checks along each arc
     v_samples: Annotated[PositiveInt, Field(ge=2)] = 7  # forward speeds tried per tick
     w_samples: Annotated[PositiveInt, Field(ge=2)] = 15  # turn rates tried per tick
-    safety: NonNegativeFloat = 0.05  # [m] clearance below this counts as a collision
+    safety: NonNegativeFloat = 0.1  # [m] clearance below this counts as a collision
     heading_weight: NonNegativeFloat = 0.4  # facing the target at the end of the arc
     progress_weight: NonNegativeFloat = 1.0  # getting closer to the target along the arc
     clearance_weight: NonNegativeFloat = 0.5  # closest approach on the arc (up to the cap)

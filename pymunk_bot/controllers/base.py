@@ -20,6 +20,7 @@ class Controller:
     """
 
     rate: float = 10.0  # [Hz]
+    needs_map: bool = False  # True: the simulation calls set_map() before the first compute()
 
     def __init__(self) -> None:
         self.status = "running"
@@ -28,6 +29,10 @@ class Controller:
     def compute(self, obs: Observation) -> tuple[float, float]:
         """Left and right wheel speeds [m/s] for the next control period."""
         raise NotImplementedError
+
+    def set_map(self, world_map) -> None:
+        """Receive the scenario's map (a :class:`pymunk_bot.planning.MapInfo`) if ``needs_map``."""
+        self.map = world_map
 
     def debug_path(self) -> list[tuple[float, float]] | None:
         """A path the controller is following, for views (None if it has none)."""

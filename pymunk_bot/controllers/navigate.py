@@ -1,0 +1,220 @@
+"""Global planning on the scenario's map plus local following and avoidance.
+
+1. Plan: A* on a clearance grid of the map (:mod:`pymunk_bot.planning`), inflated by the robot
+   radius (hard) plus a margin (soft cost), then line-of-sight smoothing.
+2. Follow: pure pursuit proposes a command; with a LiDAR the Dynamic Window Approach filters it
+   (the nearest arc on which the robot can still stop before anything it sees).
+3. Watch: scan returns the map does not explain are remembered (and forgotten once a beam
+   passes through them). When they block the path ahead, or the robot makes no progress along
+   the path for ``stuck_time``, it replans around them.
+4. Fail clearly: no path on the map itself is a permanent failure at once; no path only because
+   of unmapped obstacles is retried until ``give_up_after`` seconds have passed.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..config.controllers import NavigateControllerConfig
+from ..planning.astar import astar
+from ..planning.dwa import DynamicWindow, scan_points
+from ..planning.grid import ClearanceGrid
+from ..planning.map import MapInfo
+from ..planning.paths import shortcut
+from .avoid import dwa_params
+from .base import Controller, Observation, RobotSpec, controllers, wheel_speeds
+from .waypoints import PathFollower, pursuit_gains
+
+LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
+OFF_PATH = 1.0  # [m] farther than this from the path: replan from here
+RETRY_PERIOD = 1.0  # [s] between replans while unmapped obstacles block every route
+PROGRESS_STEP = 0.1  # [m] along the path that counts as progress
+PATH_CORNER_RADIUS = 0.25  # [m] fillets on planned paths (small: they cut toward obstacles)
+
+
+@controllers.register("navigate")
+class NavigateController(Controller):
+    """Plans on the map, follows the plan, avoids and replans around what the map missed."""
+
+    needs_map = True
+
+    def __init__(self, config: NavigateControllerConfig, robot: RobotSpec) -> None:
+        super().__init__()
+        self.config = config
+        self.robot = robot
+        self.rate = config.rate
+        max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
+        self.gains = pursuit_gains(config.pursuit, robot, max_speed, config.lookahead)
+        self.window = DynamicWindow(robot, dwa_params(config.dwa, max_speed), 1.0 / config.rate)
+        self.hard = robot.radius + config.hard_margin  # [m] closer cells are blocked
+        self.soft = robot.radius + config.margin  # [m] paths keep this much where they can
+        self.map: MapInfo | None = None
+        self.static: ClearanceGrid | None = None
+        self.path: list[tuple[float, float]] | None = None
+        self.follower: PathFollower | None = None
+        self.unmapped: dict[tuple[int, int], tuple[float, float]] = {}  # cell -> point [m]
+        self.replans = 0
+        self._goal: tuple[float, float] | None = None
+        self._blocked_since: float | None = None  # first failed replan in a row [s]
+        self._next_retry = 0.0
+        self._permanent = False
+        self._progress = (0.0, 0.0)  # (path progress [m], when [s])
+        self.command = (0.0, 0.0)  # last (v, omega)
+
+    def set_map(self, world_map: MapInfo) -> None:
+        self.map = world_map if self.config.map_movable else world_map.without_movable()
+        cap = self.soft + 2.0 * self.config.resolution
+        self.static = ClearanceGrid.from_map(self.map, self.config.resolution, cap)
+
+    def debug_path(self):
+        return self.path
+
+    # ------------------------------------------------------------------ the control step
+    def compute(self, obs: Observation) -> tuple[float, float]:
+        goal = self.config.goal or obs.goal
+        if goal is None:
+            return self._fail("no goal: set controller.goal or the robot's goal", permanent=True)
+        if self.static is None:
+            return self._fail("no map (the simulation did not call set_map)", permanent=True)
+        goal = (float(goal[0]), float(goal[1]))
+        if goal != self._goal:
+            self._reset(goal)
+        x, y = float(obs.pose[0]), float(obs.pose[1])
+        tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
+        if math.hypot(goal[0] - x, goal[1] - y) <= 0.5 * tolerance:
+            self.status, self.message = "arrived", ""
+            return self._stop()
+        if self._permanent:
+            return self._stop()
+        points = None
+        if obs.scan is not None:
+            points = scan_points(obs.scan)
+            self._remember(obs.pose, points, obs.scan)
+        if self.follower is None:
+            if obs.time < self._next_retry or not self._plan(obs, goal, tolerance):
+                return self._stop()
+        elif self._needs_replan(obs):
+            if not self._plan(obs, goal, tolerance):
+                return self._stop()
+        self.status = "running"
+        v, omega, _ = self.follower.command(obs.pose)
+        if points is not None:
+            # The LiDAR vetoes arcs that would hit something the map did not show.
+            v, omega = self.window.track(*self.command, points, v, omega)
+        self.command = (v, omega)
+        return wheel_speeds(v, omega, obs.robot.track_width)
+
+    # ------------------------------------------------------------------ planning
+    def _reset(self, goal: tuple[float, float]) -> None:
+        self._goal = goal
+        self.path = self.follower = None
+        self._blocked_since = None
+        self._permanent = False
+        self._next_retry = 0.0
+        self.status, self.message = "running", ""
+
+    def _plan(self, obs: Observation, goal, tolerance: float) -> bool:
+        """Plan from the pose estimate; on failure set status and the retry time."""
+        self.replans += 1
+        grid = self.static
+        if self.unmapped:
+            grid = self.static.copy()
+            grid.add_points(np.array(list(self.unmapped.values())))
+        start = (float(obs.pose[0]), float(obs.pose[1]))
+        result = astar(grid, start, goal, self.hard, self.soft, self.config.clearance_cost,
+                       goal_radius=0.5 * tolerance)
+        if result.found:
+            self.path = shortcut(grid, result.path, self.soft)
+            self.follower = PathFollower(self.path, False, self.gains, PATH_CORNER_RADIUS)
+            self._progress = (0.0, obs.time)
+            self._blocked_since = None
+            self.message = f"following a {len(self.path)}-point path (plan {self.replans})"
+            return True
+        self.path = self.follower = None
+        if grid is self.static:
+            self._fail(f"{result.reason} on the map", permanent=True)
+            return False
+        # Maybe only the unmapped obstacles block it: does the map alone have a route?
+        on_map = astar(self.static, start, goal, self.hard, self.soft,
+                       self.config.clearance_cost, goal_radius=0.5 * tolerance)
+        if not on_map.found:
+            self._fail(f"{on_map.reason} on the map", permanent=True)
+            return False
+        if self._blocked_since is None:
+            self._blocked_since = obs.time
+        waited = obs.time - self._blocked_since
+        if waited >= self.config.give_up_after:
+            self._fail(f"no path: obstacles that are not on the map have blocked every route "
+                       f"for {waited:.0f} s", permanent=True)
+            return False
+        self._next_retry = obs.time + RETRY_PERIOD
+        self.status = "running"
+        self.message = f"waiting: obstacles not on the map block every route ({waited:.0f} s)"
+        return False
+
+    def _needs_replan(self, obs: Observation) -> bool:
+        tracker = self.follower.tracker
+        x, y = float(obs.pose[0]), float(obs.pose[1])
+        near = tracker.point_at(tracker.s)
+        if math.hypot(near[0] - x, near[1] - y) > OFF_PATH:
+            return True
+        if tracker.s > self._progress[0] + PROGRESS_STEP:
+            self._progress = (tracker.s, obs.time)
+        elif obs.time - self._progress[1] > self.config.stuck_time:
+            return True
+        if self.unmapped:
+            ahead = tracker.points_at(np.arange(tracker.s, min(tracker.length, tracker.s
+                                                               + LOOK_AHEAD_FOR_BLOCKS), 0.05))
+            if len(ahead):
+                pts = np.array(list(self.unmapped.values()))
+                d2 = ((ahead[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2)
+                if float(d2.min()) < self.hard ** 2:
+                    return True
+        return False
+
+    # ------------------------------------------------------------------ unmapped obstacles
+    def _remember(self, pose, points: np.ndarray, scan) -> None:
+        """Keep returns the map cannot explain; forget remembered ones a beam now passes."""
+        x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
+        c, s = math.cos(theta), math.sin(theta)
+        res = self.config.resolution
+        if len(points):
+            world = np.column_stack([x + c * points[:, 0] - s * points[:, 1],
+                                     y + s * points[:, 0] + c * points[:, 1]])
+            grid = self.static
+            cols = np.clip((world[:, 0] / res).astype(int), 0, grid.cols - 1)
+            rows = np.clip((world[:, 1] / res).astype(int), 0, grid.rows - 1)
+            inside = ((world[:, 0] > 0) & (world[:, 0] < grid.size[0])
+                      & (world[:, 1] > 0) & (world[:, 1] < grid.size[1]))
+            unexplained = inside & (grid.clearance[rows, cols] > 2.0 * res)
+            for (px, py), r, k in zip(world[unexplained], rows[unexplained], cols[unexplained]):
+                self.unmapped[(int(r), int(k))] = (float(px), float(py))
+        if not self.unmapped:
+            return
+        keys = list(self.unmapped)
+        pts = np.array([self.unmapped[k] for k in keys])
+        ox = x + c * scan.offset[0] - s * scan.offset[1]
+        oy = y + s * scan.offset[0] + c * scan.offset[1]
+        dist = np.hypot(pts[:, 0] - ox, pts[:, 1] - oy)
+        bearing = np.arctan2(pts[:, 1] - oy, pts[:, 0] - ox) - theta
+        angles = np.asarray(scan.angles)
+        ranges = np.asarray(scan.ranges)
+        diff = np.abs((bearing[:, None] - angles[None, :] + np.pi) % (2 * np.pi) - np.pi)
+        beam = diff.argmin(axis=1)
+        step = 2 * np.pi / len(angles) if len(angles) > 1 else np.inf
+        covered = diff[np.arange(len(keys)), beam] <= step
+        seen_through = covered & (ranges[beam] > dist + 2.0 * res)
+        for key, gone in zip(keys, seen_through):
+            if gone:
+                del self.unmapped[key]
+
+    # ------------------------------------------------------------------ helpers
+    def _fail(self, message: str, permanent: bool) -> tuple[float, float]:
+        self.status, self.message = "failed", message
+        self._permanent = permanent
+        return self._stop()
+
+    def _stop(self) -> tuple[float, float]:
+        self.command = (0.0, 0.0)
+        return 0.0, 0.0

@@ -1,0 +1,153 @@
+"""A clearance grid: the distance from each cell centre to the nearest obstacle, built with numpy.
+
+Instead of a 0/1 occupancy image plus a distance transform we compute, for every cell centre,
+the exact Euclidean distance to the nearest obstacle surface (0 inside one), capped at ``cap``.
+Each obstacle only touches the cells within ``cap`` of its bounding box, so a map of a few
+hundred obstacles rasterises in milliseconds. Inflation is then a threshold: a disc robot of
+radius r fits wherever the clearance is at least r.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .map import MapInfo
+
+
+def _segment_distances(px: np.ndarray, py: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance from each (px, py) to the closed outline ``points`` (edges only)."""
+    best = np.full(px.shape, np.inf)
+    n = len(points)
+    for i in range(n):
+        ax, ay = points[i]
+        bx, by = points[(i + 1) % n]
+        ex, ey = bx - ax, by - ay
+        length2 = ex * ex + ey * ey
+        t = ((px - ax) * ex + (py - ay) * ey) / length2 if length2 > 0 else np.zeros(px.shape)
+        t = np.clip(t, 0.0, 1.0)
+        np.minimum(best, np.hypot(px - (ax + t * ex), py - (ay + t * ey)), out=best)
+    return best
+
+
+def points_in_polygon(px: np.ndarray, py: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Even-odd rule for many points at once (either winding, concave allowed)."""
+    inside = np.zeros(px.shape, dtype=bool)
+    n = len(points)
+    for i in range(n):
+        x1, y1 = points[i]
+        x2, y2 = points[(i + 1) % n]
+        if y1 == y2:
+            continue  # a horizontal edge never crosses the horizontal ray
+        crosses = (y1 > py) != (y2 > py)
+        x_at = x1 + (py - y1) * (x2 - x1) / (y2 - y1)
+        inside ^= crosses & (px < x_at)
+    return inside
+
+
+class ClearanceGrid:
+    """Cells of ``resolution`` metres covering the arena; ``clearance[row, col]`` in metres.
+
+    Row i, column j has its centre at ``((j + 0.5) * res, (i + 0.5) * res)``.
+    """
+
+    def __init__(self, size: tuple[float, float], resolution: float, cap: float) -> None:
+        if not (resolution > 0 and cap > 0):
+            raise ValueError("resolution and cap must be > 0")
+        self.size = (float(size[0]), float(size[1]))
+        self.resolution = float(resolution)
+        self.cap = float(cap)  # [m] clearances beyond this read as this
+        self.cols = max(1, math.ceil(self.size[0] / resolution - 1e-9))
+        self.rows = max(1, math.ceil(self.size[1] / resolution - 1e-9))
+        self.xs = (np.arange(self.cols) + 0.5) * resolution  # cell centre x [m]
+        self.ys = (np.arange(self.rows) + 0.5) * resolution  # cell centre y [m]
+        width, height = self.size
+        to_wall_x = np.minimum(self.xs, width - self.xs)
+        to_wall_y = np.minimum(self.ys, height - self.ys)
+        self.clearance = np.minimum(np.minimum.outer(to_wall_y, to_wall_x), self.cap)
+        np.maximum(self.clearance, 0.0, out=self.clearance)
+
+    @classmethod
+    def from_map(cls, world_map: MapInfo, resolution: float, cap: float) -> "ClearanceGrid":
+        """Rasterise a map's arena and every obstacle in it."""
+        grid = cls(world_map.size, resolution, cap)
+        for polygon in world_map.polygons:
+            grid.add_polygon(polygon.points)
+        for circle in world_map.circles:
+            grid.add_circle(circle.center, circle.radius)
+        return grid
+
+    def copy(self) -> "ClearanceGrid":
+        twin = object.__new__(ClearanceGrid)
+        twin.__dict__.update(self.__dict__)
+        twin.clearance = self.clearance.copy()
+        return twin
+
+    # ------------------------------------------------------------------ rasterising
+    def _window(self, x0: float, y0: float, x1: float, y1: float):
+        """Index slices of the cells whose centres lie within ``cap`` of a bounding box."""
+        res, cap = self.resolution, self.cap
+        c0 = max(0, math.floor((x0 - cap) / res - 0.5))
+        c1 = min(self.cols, math.ceil((x1 + cap) / res + 0.5))
+        r0 = max(0, math.floor((y0 - cap) / res - 0.5))
+        r1 = min(self.rows, math.ceil((y1 + cap) / res + 0.5))
+        if c0 >= c1 or r0 >= r1:
+            return None
+        return slice(r0, r1), slice(c0, c1)
+
+    def add_polygon(self, points: np.ndarray) -> None:
+        """Lower the clearance around a filled polygon."""
+        points = np.asarray(points, dtype=float)
+        window = self._window(*points.min(axis=0), *points.max(axis=0))
+        if window is None:
+            return
+        rows, cols = window
+        px, py = np.meshgrid(self.xs[cols], self.ys[rows])
+        distance = _segment_distances(px, py, points)
+        distance[points_in_polygon(px, py, points)] = 0.0
+        np.minimum(self.clearance[rows, cols], distance, out=self.clearance[rows, cols])
+
+    def add_circle(self, center, radius: float) -> None:
+        """Lower the clearance around a filled disc (radius 0: a point obstacle)."""
+        cx, cy = float(center[0]), float(center[1])
+        window = self._window(cx - radius, cy - radius, cx + radius, cy + radius)
+        if window is None:
+            return
+        rows, cols = window
+        distance = np.sqrt(np.add.outer((self.ys[rows] - cy) ** 2, (self.xs[cols] - cx) ** 2))
+        np.maximum(distance - radius, 0.0, out=distance)
+        np.minimum(self.clearance[rows, cols], distance, out=self.clearance[rows, cols])
+
+    def add_points(self, points: np.ndarray) -> None:
+        """Lower the clearance around point obstacles (e.g. LiDAR returns), shape (n, 2)."""
+        for x, y in np.asarray(points, dtype=float).reshape(-1, 2):
+            self.add_circle((x, y), 0.0)
+
+    # ------------------------------------------------------------------ look-ups
+    def cell_of(self, x: float, y: float) -> tuple[int, int]:
+        """(row, col) of the cell containing a point, clamped to the grid."""
+        col = min(self.cols - 1, max(0, int(x / self.resolution)))
+        row = min(self.rows - 1, max(0, int(y / self.resolution)))
+        return row, col
+
+    def center_of(self, row: int, col: int) -> tuple[float, float]:
+        return (col + 0.5) * self.resolution, (row + 0.5) * self.resolution
+
+    def clearance_at(self, x: float, y: float) -> float:
+        """Clearance [m] of the cell containing a point (0 outside the arena)."""
+        if not (0.0 <= x <= self.size[0] and 0.0 <= y <= self.size[1]):
+            return 0.0
+        return float(self.clearance[self.cell_of(x, y)])
+
+    def segment_clearance(self, a, b) -> float:
+        """Smallest cell clearance along the straight segment a-b (sampled at res/2)."""
+        ax, ay = float(a[0]), float(a[1])
+        bx, by = float(b[0]), float(b[1])
+        n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * self.resolution)) + 1)
+        t = np.linspace(0.0, 1.0, n)
+        x, y = ax + t * (bx - ax), ay + t * (by - ay)
+        outside = (x < 0) | (x > self.size[0]) | (y < 0) | (y > self.size[1])
+        cols = np.clip((x / self.resolution).astype(int), 0, self.cols - 1)
+        rows = np.clip((y / self.resolution).astype(int), 0, self.rows - 1)
+        values = self.clearance[rows, cols]
+        return 0.0 if outside.any() else float(values.min())

@@ -1,0 +1,126 @@
+"""A 2D LiDAR: beams cast from the sensor's mount on the robot, with the errors real scanners have.
+
+Measurement model, per beam (true range d from the ray caster, which stops at max_range):
+    no return           if d < min_range or d >= max_range, or with probability ``dropout``
+    d + N(0, noise_std^2), clipped to [min_range, max_range]   otherwise
+A beam without a return reads max_range. Beam angles are fixed in the robot frame (see
+:func:`beam_angles`); the robot's own body is invisible because the rays use its shape filter.
+"""
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+import pymunk
+
+from ..config.schema import LidarConfig
+from ..readings import LaserScan
+from .schedule import Schedule
+
+FULL_CIRCLE_TOLERANCE = 1e-9  # [rad]; a fov this close to 2*pi is a full circle
+
+
+class Caster(Protocol):
+    """What the LiDAR needs from a ray caster (``raycast.RayCaster`` is the real one)."""
+
+    def cast(self, origin: tuple[float, float], world_angles: np.ndarray, max_range: float,
+             shape_filter: pymunk.ShapeFilter) -> np.ndarray: ...
+
+
+def beam_angles(beams: int, fov: float) -> np.ndarray:
+    """Beam angles [rad] in the sensor frame, ascending (counter-clockwise), centred on 0.
+
+    A full circle has ``beams`` equal steps and no beam repeated at +-pi; beam ``beams // 2``
+    looks straight ahead (for an even count the first beam is at -pi). A partial field of
+    view has beams at both ends, -fov/2 and +fov/2; a single beam looks straight ahead.
+    """
+    if beams < 1:
+        raise ValueError(f"beams must be >= 1 (got {beams})")
+    if fov >= 2.0 * math.pi - FULL_CIRCLE_TOLERANCE:
+        step = 2.0 * math.pi / beams
+        return (np.arange(beams) - beams // 2) * step
+    if beams == 1:
+        return np.zeros(1)
+    return np.linspace(-0.5 * fov, 0.5 * fov, beams)
+
+
+class Lidar:
+    """A scanning range finder mounted at ``config.offset`` on a robot body.
+
+    ``ranges`` / ``latest`` hold the measurement taken at the sensor's own rate (the simulation
+    calls :meth:`update` after every tick); :meth:`scan` measures now, on demand, from its own
+    random stream so that calling it never changes the periodic scans.
+    """
+
+    name = "lidar"
+
+    def __init__(self, config: LidarConfig, body: pymunk.Body, shape_filter: pymunk.ShapeFilter,
+                 caster: Caster, rng: np.random.Generator, start_time: float = 0.0) -> None:
+        self.config = config
+        self._body = body
+        self._filter = shape_filter
+        self._caster = caster
+        self._periodic_rng, self._on_demand_rng = rng.spawn(2)
+        self._schedule = Schedule(config.rate, start_time)
+        x, y, yaw = config.offset
+        self._mount = (float(x), float(y))  # [m] in the robot frame
+        self.offset = (float(x), float(y), float(yaw))
+        angles = float(yaw) + beam_angles(config.beams, config.fov)
+        angles.setflags(write=False)
+        self._angles = angles
+        self.latest: LaserScan | None = None  # None until the first scan
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def angles(self) -> np.ndarray:
+        """Beam angles relative to the robot heading [rad] (mount yaw included), read-only."""
+        return self._angles
+
+    @property
+    def ranges(self) -> np.ndarray | None:
+        """Ranges [m] of the latest periodic scan (read-only), None before the first."""
+        return None if self.latest is None else self.latest.ranges
+
+    @property
+    def reading(self) -> LaserScan | None:
+        """The latest periodic scan (the sensor contract's name for ``latest``)."""
+        return self.latest
+
+    def origin(self) -> tuple[float, float]:
+        """Where the beams start now, in the world frame [m]."""
+        p = self._body.local_to_world(self._mount)
+        return (p.x, p.y)
+
+    def true_ranges(self) -> np.ndarray:
+        """Noise-free distances [m] to the first thing each beam meets, capped at max_range."""
+        world_angles = self._body.angle + self._angles
+        return self._caster.cast(self.origin(), world_angles, self.config.max_range, self._filter)
+
+    def scan(self) -> np.ndarray:
+        """Cast the beams now at the current pose: ranges [m] with the configured errors."""
+        return self._measure(self._on_demand_rng)
+
+    def update(self, time: float) -> None:
+        """Take a scan if one is due at ``time`` [s] (called after every tick)."""
+        if self._schedule.due(time):
+            ranges = self._measure(self._periodic_rng)
+            ranges.setflags(write=False)
+            c = self.config
+            self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
+                                    max_range=c.max_range, offset=self.offset, time=time)
+
+    # ------------------------------------------------------------------ model
+    def _measure(self, rng: np.random.Generator) -> np.ndarray:
+        c = self.config
+        true = self.true_ranges()
+        no_return = (true < c.min_range) | (true >= c.max_range)
+        if c.noise_std > 0.0:
+            ranges = true + c.noise_std * rng.standard_normal(true.shape[0])
+            np.clip(ranges, c.min_range, c.max_range, out=ranges)
+        else:
+            ranges = true
+        if c.dropout > 0.0:
+            no_return |= rng.random(true.shape[0]) < c.dropout
+        ranges[no_return] = c.max_range
+        return ranges

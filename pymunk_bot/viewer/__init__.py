@@ -1,0 +1,48 @@
+"""Views of a simulation: the interactive pygame window, video recordings and replays.
+
+Importing this package does not import pygame: the functions below do it when called, and
+raise :class:`ViewerUnavailable` with a one-line reason (pygame missing, no display) that the
+CLI prints before it falls back to a headless run.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+# pygame prints a banner on import unless told not to; our output is the run summary.
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+
+
+class ViewerUnavailable(RuntimeError):
+    """The window cannot open here; ``str()`` says why in one line."""
+
+
+def run_window(sim, duration: float | None = None) -> None:
+    """Show ``sim`` in an interactive window until the user quits.
+
+    The run pauses when ``duration`` simulated seconds have passed (space runs on, q quits).
+    """
+    from .window import run_window as run
+
+    run(sim, duration)
+
+
+def replay_window(log) -> None:
+    """Play a :class:`~pymunk_bot.runlog.RunLog` in the window."""
+    from .window import replay_window as replay
+
+    replay(log)
+
+
+def record_video(source, path: str | Path, duration: float, fps: float | None = None,
+                 size: tuple[int, int] | None = None, progress: bool = True) -> int:
+    """Render ``duration`` simulated seconds of a live simulation or run log to .mp4 or .gif.
+
+    ``source`` is a Simulation or a RunLog; returns the number of frames written.
+    """
+    from .recorder import record
+
+    return record(source, path, duration, fps=fps, size=size, progress=progress)
+
+
+__all__ = ["ViewerUnavailable", "record_video", "replay_window", "run_window"]

@@ -1,0 +1,153 @@
+"""The command-line side of the views: `run --record/--log`, `plot` and `replay`.
+
+cli.py defines the options; the work is here so that cli.py stays a thin dispatcher. Output
+paths are checked before anything runs, so a typo costs no simulation time. Nothing here
+imports pygame or matplotlib at module level.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import ScenarioError
+
+VIDEO_FORMATS = (".mp4", ".gif")
+LOG_FORMATS = (".npz",)
+PLOT_FORMATS = (".png", ".pdf", ".svg")
+MAX_FPS = 240.0  # [Hz]
+
+
+def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:
+    """``path`` if it can be written as one of ``formats``; else a one-line ScenarioError."""
+    if path.suffix.lower() not in formats:
+        got = f"'{path.suffix}'" if path.suffix else "no extension"
+        raise ScenarioError(option, "", f"{path}: unsupported file type ({got}); use "
+                                        f"{' or '.join(formats)}")
+    if path.is_dir():
+        raise ScenarioError(option, "", f"{path} is a directory")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise ScenarioError(option, "", f"{path}: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ScenarioError(option, "", f"{path}: directory {parent} is not writable")
+    return path
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """'WxH' in pixels (argparse type: raises ValueError with a readable message)."""
+    parts = text.lower().split("x")
+    try:
+        w, h = (int(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"expected WIDTHxHEIGHT in pixels, e.g. 1280x720 (got '{text}')") from None
+    if not (16 <= w <= 7680 and 16 <= h <= 4320):
+        raise ValueError(f"frame size must be 16..7680 x 16..4320 pixels (got {w}x{h})")
+    return w, h
+
+
+def _check_fps(fps: float | None) -> None:
+    if fps is not None and not (math.isfinite(fps) and 0 < fps <= MAX_FPS):
+        raise ScenarioError("--fps", "", f"must be > 0 and <= {MAX_FPS:g} (got {fps:g})")
+
+
+def _check_video_options(args) -> Path | None:
+    record = getattr(args, "record", None)
+    if record is None:
+        for option, value in (("--fps", args.fps), ("--size", args.size)):
+            if value is not None:
+                raise ScenarioError(option, "", "only applies with --record")
+        return None
+    _check_fps(args.fps)
+    return check_output("--record", Path(record), VIDEO_FORMATS)
+
+
+# ---------------------------------------------------------------------------- run
+
+
+@dataclass
+class RunOutputs:
+    """What `run` writes besides its JSON result: a video and/or a run log."""
+
+    record: Path | None = None
+    fps: float | None = None
+    size: tuple[int, int] | None = None
+    log_path: Path | None = None
+    logger: object = None
+
+    def record_run(self, sim, duration: float) -> None:
+        """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
+        from . import ViewerUnavailable, record_video
+
+        try:
+            frames = record_video(sim, self.record, duration, fps=self.fps, size=self.size,
+                                  progress=True)
+        except ViewerUnavailable as exc:
+            raise ScenarioError("--record", "", str(exc)) from None
+        print(f"wrote {self.record} ({frames} frames)")
+
+    def finish(self) -> None:
+        """Write the run log, if one was asked for."""
+        if self.logger is not None:
+            self.logger.save(self.log_path)
+            steps = len(self.logger.log().time) - 1
+            print(f"wrote {self.log_path} ({steps} steps)")
+
+
+def prepare_outputs(args, sim) -> RunOutputs:
+    """Check --record/--fps/--size/--log before the run and start the logger."""
+    outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size)
+    if args.log is not None:
+        from ..runlog import RunLogger
+
+        outputs.log_path = check_output("--log", Path(args.log), LOG_FORMATS)
+        outputs.logger = RunLogger().attach(sim)
+    return outputs
+
+
+# ---------------------------------------------------------------------------- plot, replay
+
+
+def cmd_plot(args) -> int:
+    """`pymunk-bot plot LOG [-o OUT] [--kind K] [--robot NAME]`."""
+    from ..plots import save_plot
+    from ..runlog import load_log
+
+    log_path = Path(args.log)
+    if args.output is not None:
+        out = Path(args.output)
+    else:
+        suffix = "" if args.kind == "all" else f"_{args.kind}"
+        out = log_path.with_name(f"{log_path.stem}{suffix}.png")
+    check_output("--output", out, PLOT_FORMATS)
+    log = load_log(log_path)
+    save_plot(log, out, args.kind, args.robot)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_replay(args, display_available: bool) -> int:
+    """`pymunk-bot replay LOG [--record VIDEO]`: play a run log in the window or to a video."""
+    from ..runlog import load_log
+    from . import ViewerUnavailable
+
+    record = _check_video_options(args)
+    log = load_log(args.log)
+    if record is not None:
+        from . import record_video
+
+        frames = record_video(log, record, None, fps=args.fps, size=args.size, progress=True)
+        print(f"wrote {record} ({frames} frames)")
+        return 0
+    if not display_available:
+        raise ScenarioError("replay", "", "no display available for the window; render the "
+                                          "log to a video instead (--record run.mp4)")
+    try:
+        from . import replay_window
+
+        replay_window(log)
+    except ViewerUnavailable as exc:
+        raise ScenarioError("replay", "", f"{exc}; render the log to a video instead "
+                                          "(--record run.mp4)") from None
+    return 0

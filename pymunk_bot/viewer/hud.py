@@ -1,0 +1,140 @@
+"""The heads-up display: time, speed, the selected robot, a scale bar, messages and key help."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pygame
+
+from . import palette as pal
+from .camera import Camera
+from .scene import RobotView, Scene
+
+HELP_LIVE = (
+    ("left click", "set the selected robot's goal (click a robot: select it)"),
+    ("drag, wheel", "pan, zoom"),
+    ("arrows / WASD", "drive the selected robot by hand (teleop)"),
+    ("c", "give the robot back to its controller"),
+    ("tab", "select the next robot"),
+    ("space", "pause / resume"),
+    (".", "one physics step while paused"),
+    ("+ / -", "faster / slower (up to as fast as possible)"),
+    ("r", "reset from the seed"),
+    ("l  t  g  o  p", "toggle LiDAR rays, trails, grid, odometry ghost, paths"),
+    ("f", "fit the arena in the window"),
+    ("h", "this help"),
+    ("q / esc", "quit"),
+)
+HELP_REPLAY = (
+    ("drag, wheel", "pan, zoom"),
+    ("space", "pause / resume"),
+    (".  /  ,", "one logged step forward / back while paused"),
+    ("right / left", "jump 1 s forward / back"),
+    ("+ / -", "faster / slower"),
+    ("r", "restart the replay"),
+    ("tab", "select the next robot"),
+    ("l  t  g  o", "toggle LiDAR rays, trails, grid, odometry ghost"),
+    ("f", "fit the arena in the window"),
+    ("h", "this help"),
+    ("q / esc", "quit"),
+)
+
+
+@dataclass
+class HudState:
+    """What the HUD shows besides the scene."""
+
+    speed_label: str  # the chosen speed, e.g. "1x" or "max"; "" shows none (recordings)
+    achieved: float | None  # measured simulated seconds per real second
+    paused: bool
+    ended: str = ""  # why the run stopped, if it did
+    message: str = ""  # a short-lived note (goal set, teleop on, ...)
+    help: bool = False
+    replay: bool = False
+    hint: bool = True  # "h: keys" (not in recordings)
+
+
+class Hud:
+    """Draws the HUD with its own fonts (pygame.font must be initialised)."""
+
+    def __init__(self) -> None:
+        self.font = pygame.font.Font(None, 22)
+        self.small = pygame.font.Font(None, 18)
+
+    def draw(self, surface: pygame.Surface, scene: Scene, camera: Camera, state: HudState,
+             selected: RobotView | None) -> None:
+        """Overlay the HUD on ``surface``."""
+        lines: list[tuple[str, tuple[int, int, int]]] = []
+        speed = f"   speed {state.speed_label}" if state.speed_label else ""
+        if state.speed_label and state.achieved is not None:
+            speed += f" (running at {state.achieved:.2f}x real time)"
+        status = "  PAUSED" if state.paused else ""
+        lines.append((f"t = {scene.time:7.2f} s{speed}{status}",
+                      pal.HUD_WARN if state.paused else pal.HUD_TEXT))
+        if selected is not None:
+            v, omega = selected.velocity
+            turn = f"{omega:+.2f}" if abs(omega) >= 0.005 else "0.00"
+            status = f", {selected.status}" if selected.status not in ("", "running") else ""
+            lines.append((f"{selected.name}: {abs(v):.2f} m/s, {turn} rad/s, "
+                          f"{selected.collisions} collision(s)"
+                          + (", goal reached" if selected.goal_reached else "") + status
+                          + ("  TELEOP" if selected.teleop else ""), pal.HUD_TEXT))
+        total = sum(r.collisions for r in scene.robots)
+        if len(scene.robots) > 1:
+            lines.append((f"{len(scene.robots)} robots, {total} collision(s) in all", pal.HUD_DIM))
+        if state.ended:
+            lines.append((state.ended, pal.HUD_WARN))
+        if state.hint:
+            lines.append(("h: keys", pal.HUD_DIM))
+        self._panel(surface, lines, (8, 8), self.font)
+        self._scale_bar(surface, camera)
+        if state.message:
+            text = self.font.render(state.message, True, pal.HUD_TEXT)
+            w, h = surface.get_size()
+            self._panel(surface, [(state.message, pal.HUD_TEXT)],
+                        ((w - text.get_width()) // 2 - 8, h - 40), self.font)
+        if state.help:
+            self._help(surface, HELP_REPLAY if state.replay else HELP_LIVE)
+
+    def _panel(self, surface: pygame.Surface, lines, pos: tuple[int, int], font) -> None:
+        rendered = [font.render(text, True, colour) for text, colour in lines]
+        width = max(t.get_width() for t in rendered) + 16
+        height = sum(t.get_height() + 2 for t in rendered) + 10
+        panel = pygame.Surface((width, height), pygame.SRCALPHA)
+        panel.fill(pal.HUD_BACK)
+        y = 6
+        for t in rendered:
+            panel.blit(t, (8, y))
+            y += t.get_height() + 2
+        surface.blit(panel, pos)
+
+    def _scale_bar(self, surface: pygame.Surface, camera: Camera) -> None:
+        """A bar of a round length near 100 px, bottom left."""
+        target = 100.0 / camera.scale  # [m]
+        length = next((m * 10.0 ** e for e in range(-3, 4) for m in (1, 2, 5)
+                       if m * 10.0 ** e >= target * 0.6), 1000.0)
+        px = int(round(length * camera.scale))
+        _, h = surface.get_size()
+        label = f"{length:g} m" if length >= 1 else f"{length * 100:g} cm"
+        text = self.small.render(label, True, pal.HUD_TEXT)
+        panel = pygame.Surface((px + 20 + text.get_width() + 8, 26), pygame.SRCALPHA)
+        panel.fill(pal.HUD_BACK)
+        pygame.draw.line(panel, pal.HUD_TEXT, (8, 17), (8 + px, 17), 3)
+        pygame.draw.line(panel, pal.HUD_TEXT, (8, 11), (8, 22), 2)
+        pygame.draw.line(panel, pal.HUD_TEXT, (8 + px, 11), (8 + px, 22), 2)
+        panel.blit(text, (16 + px, 6))
+        surface.blit(panel, (8, h - 34))
+
+    def _help(self, surface: pygame.Surface, rows) -> None:
+        keys = [self.font.render(k, True, pal.HUD_WARN) for k, _ in rows]
+        what = [self.font.render(d, True, pal.HUD_TEXT) for _, d in rows]
+        key_w = max(k.get_width() for k in keys) + 24
+        width = key_w + max(d.get_width() for d in what) + 32
+        row_h = keys[0].get_height() + 6
+        height = row_h * len(rows) + 24
+        panel = pygame.Surface((width, height), pygame.SRCALPHA)
+        panel.fill((20, 22, 26, 230))
+        for i, (k, d) in enumerate(zip(keys, what)):
+            panel.blit(k, (16, 12 + i * row_h))
+            panel.blit(d, (16 + key_w, 12 + i * row_h))
+        w, h = surface.get_size()
+        surface.blit(panel, ((w - width) // 2, max(8, (h - height) // 2)))

@@ -1,0 +1,228 @@
+"""Where the frames come from: a live simulation or a saved run log.
+
+Both give :class:`~pymunk_bot.viewer.scene.Scene` snapshots and advance one step at a time,
+so the window and the video recorder treat them alike. Only a live source accepts goals and
+teleop; it changes the simulation through its public API and nothing else.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .scene import RobotView, Scene, ShapeView, body_pose, scan_end_points, world_geometry
+
+TRAIL_SPACING = 0.01  # [m]; a trail point is added once the robot has moved this far
+TRAIL_MAX_POINTS = 20_000  # older halves are thinned beyond this, so memory stays bounded
+
+
+class LiveSource:
+    """A running :class:`~pymunk_bot.sim.Simulation`, plus the trails and scans seen so far.
+
+    Step it only through :meth:`step` so that every scan is seen with the pose it was taken at.
+    """
+
+    interactive = True
+
+    def __init__(self, sim) -> None:
+        self.sim = sim
+        self._rebuild()
+
+    def _rebuild(self) -> None:
+        sim = self.sim
+        fixed, movable = world_geometry(sim.world)
+        self._fixed = [g.placed((0.0, 0.0, 0.0)) for g in fixed]
+        self._movable = [(sim.world.obstacles[i].body, shapes) for i, shapes in movable]
+        self._index = {name: i for i, name in enumerate(sim.robots)}
+        self._trails: dict[str, list[tuple[float, float]]] = {}
+        self._scans: dict[str, tuple] = {}
+        self._seen_scan: dict[str, object] = {}
+        self._observe()
+
+    # ------------------------------------------------------------------ clock
+    @property
+    def dt(self) -> float:
+        return self.sim.dt
+
+    @property
+    def steps(self) -> int:
+        return self.sim.steps
+
+    @property
+    def time(self) -> float:
+        return self.sim.time
+
+    @property
+    def at_end(self) -> bool:
+        return False  # a simulation can always go on
+
+    @property
+    def robot_names(self) -> list[str]:
+        return list(self.sim.robots)
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """Arena interior width and height [m]."""
+        return self.sim.world.width, self.sim.world.height
+
+    def step(self) -> None:
+        """One physics step, then note trails and new scans."""
+        self.sim.step()
+        self._observe()
+
+    def reset(self) -> None:
+        """Rebuild the simulation from its config and seed; observers (e.g. a logger) stay."""
+        observers = list(self.sim.observers)
+        self.sim.reset()
+        for observer in observers:
+            if observer not in self.sim.observers:
+                self.sim.observers.append(observer)
+            on_reset = getattr(observer, "on_reset", None)
+            if on_reset is not None:
+                on_reset(self.sim)
+        self._rebuild()
+
+    def _observe(self) -> None:
+        for name, robot in self.sim.robots.items():
+            x, y, _ = robot.pose
+            trail = self._trails.setdefault(name, [(x, y)])
+            lx, ly = trail[-1]
+            if math.hypot(x - lx, y - ly) >= TRAIL_SPACING:
+                trail.append((x, y))
+                if len(trail) > TRAIL_MAX_POINTS:
+                    half = len(trail) // 2
+                    trail[:half] = trail[:half:2]
+            lidar = robot.lidar
+            scan = getattr(lidar, "latest", None) if lidar is not None else None
+            if scan is not None and scan is not self._seen_scan.get(name):
+                self._seen_scan[name] = scan
+                self._scans[name] = scan_end_points(robot.pose, scan)
+
+    # ------------------------------------------------------------------ interaction
+    def robot(self, name: str):
+        """The live Robot called ``name``."""
+        return self.sim.robots[name]
+
+    # ------------------------------------------------------------------ drawing
+    def scene(self) -> Scene:
+        """A snapshot of the present state."""
+        shapes: list[ShapeView] = list(self._fixed)
+        for body, geometry in self._movable:
+            pose = body_pose(body)
+            shapes.extend(g.placed(pose) for g in geometry)
+        robots = []
+        for name, robot in self.sim.robots.items():
+            controller = robot.controller
+            path = controller.debug_path() if controller is not None else None
+            origin, points, hit = self._scans.get(name, (None, None, None))
+            v, omega = robot.velocity
+            robots.append(RobotView(
+                name=name, index=self._index[name], pose=robot.pose, radius=robot.radius,
+                odometry=robot.odometry.pose, velocity=(float(v), float(omega)),
+                goal=robot.goal, goal_tolerance=robot.goal_tolerance,
+                goal_reached=robot.goal_reached,
+                path=None if not path else np.asarray(path, dtype=float).reshape(-1, 2),
+                trail=np.asarray(self._trails[name], dtype=float),
+                scan_origin=origin, scan_points=points, scan_hit=hit,
+                collisions=robot.collisions,
+                status=_status(controller),
+                teleop=robot.overridden))
+        return Scene(self.sim.world.width, self.sim.world.height, self.sim.time, shapes, robots,
+                     self.sim.config.name)
+
+
+def _status(controller) -> str:
+    """The controller's status for the HUD, with its reason when it has given up."""
+    if controller is None:
+        return "no controller"
+    if controller.status == "failed" and controller.message:
+        return f"failed: {controller.message}"
+    return controller.status
+
+
+class ReplaySource:
+    """A saved :class:`~pymunk_bot.runlog.RunLog`, played back one logged step at a time."""
+
+    interactive = False
+
+    def __init__(self, log) -> None:
+        self.log = log
+        self.index = 0
+        self._fixed = [g.placed((0.0, 0.0, 0.0)) for g in log.fixed_shapes()]
+        self._movable = log.movable_shapes()
+
+    @property
+    def dt(self) -> float:
+        return self.log.dt
+
+    @property
+    def steps(self) -> int:
+        return self.index
+
+    @property
+    def time(self) -> float:
+        return float(self.log.time[self.index])
+
+    @property
+    def at_end(self) -> bool:
+        return self.index >= len(self.log.time) - 1
+
+    @property
+    def robot_names(self) -> list[str]:
+        return self.log.robot_names
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """Arena interior width and height [m]."""
+        return self.log.size
+
+    def step(self) -> None:
+        """The next logged step (stays on the last one)."""
+        if not self.at_end:
+            self.index += 1
+
+    def reset(self) -> None:
+        """Back to the start of the log."""
+        self.index = 0
+
+    def seek(self, steps: int) -> None:
+        """Jump by ``steps`` logged steps (negative: back), within the log."""
+        self.index = int(np.clip(self.index + steps, 0, len(self.log.time) - 1))
+
+    def scene(self) -> Scene:
+        log, i = self.log, self.index
+        shapes = list(self._fixed)
+        for k, geometry in enumerate(self._movable):
+            shapes.extend(g.placed(log.obstacle_pose[i, k]) for g in geometry)
+        robots = []
+        for j, meta in enumerate(log.meta["robots"]):
+            name = meta["name"]
+            goal = log.goal[i, j]
+            origin = points = hit = None
+            scans = log.scans.get(name)
+            if scans is not None and len(scans.time):
+                # The latest scan taken at or before this step.
+                k = int(np.searchsorted(scans.time, log.time[i] + 1e-9, side="right")) - 1
+                if k >= 0:
+                    origin, points, hit = scan_end_points(scans.pose[k], _Scan(scans, k))
+            robots.append(RobotView(
+                name=name, index=j, pose=log.pose[i, j], radius=float(meta["radius"]),
+                odometry=log.odometry[i, j], velocity=tuple(float(v) for v in log.velocity[i, j]),
+                goal=None if np.isnan(goal).any() else (float(goal[0]), float(goal[1])),
+                goal_tolerance=float(log.goal_tolerance[i, j]),
+                goal_reached=bool(log.goal_reached[i, j]),
+                trail=log.pose[: i + 1, j, :2], scan_origin=origin, scan_points=points,
+                scan_hit=hit, collisions=int(log.collisions[i, j]),
+                teleop=bool(log.teleop[i, j])))
+        width, height = log.size
+        return Scene(width, height, self.time, shapes, robots, f"replay: {log.meta['scenario']}")
+
+
+class _Scan:
+    """One logged scan with the fields scan_end_points reads."""
+
+    def __init__(self, scans, k: int) -> None:
+        self.ranges = scans.ranges[k]
+        self.angles = scans.angles
+        self.offset = scans.offset
+        self.max_range = scans.max_range
