@@ -35,8 +35,7 @@ class Robot:
         space.add(self.body, self.shape)
         self.drive = DiffDrive(space, self.body, config.track_width, config.max_wheel_speed,
                                config.max_accel)
-        odometry_rng, self.sensor_rng = rng.spawn(2)
-        self.odometry = Odometry(config.odometry, config.pose, config.track_width, odometry_rng)
+        self.odometry = Odometry(config.odometry, config.pose, config.track_width, rng)
         self.sensors: list = []  # everything with update(time), in the order they read
         self.lidar = None  # set by sensors.attach when configured
         self.imu = None

@@ -61,7 +61,10 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
     except ValidationError as exc:
         errors = exc.errors()
         first = most_helpful(errors)
-        path, clean_loc, owner = walk(ScenarioConfig, first["loc"])
+        loc = first["loc"]
+        if first["type"] == "missing" and loc and isinstance(loc[-1], int):
+            loc = loc[:-1]  # a short list: name the list, not its absent item
+        path, clean_loc, owner = walk(ScenarioConfig, loc)
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise ScenarioError(source, path, describe(first, owner) + more,
                             line_of(node, clean_loc)) from None

@@ -108,8 +108,8 @@ def describe(error: dict, owner: type[BaseModel] | None) -> str:
         return f"unknown key{did_you_mean(key, known)}; valid keys: {', '.join(known)}"
     if kind == "missing":
         last = error["loc"][-1] if error["loc"] else None
-        if isinstance(last, int):
-            return f"too few items: item [{last}] is missing"
+        if isinstance(last, int):  # a fixed-length list (tuple) that is too short
+            return f"must have {last + 1} items (got {last})"
         return "required key is missing"
     if kind == "union_tag_invalid":
         tags = [t.strip().strip("'") for t in str(ctx.get("expected_tags", "")).split(",")]

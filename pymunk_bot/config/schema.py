@@ -11,7 +11,7 @@ from pydantic import Field
 
 from .controllers import ControllerConfig
 from .types import (
-    Float, FieldOfView, Int, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
+    Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
     Probability, Section, Vec2,
 )
 
@@ -21,7 +21,7 @@ MAX_SUBSTEPS = 100
 
 
 class WorldConfig(Section):
-    size: tuple[PositiveFloat, PositiveFloat]  # arena interior width, height [m]
+    size: tuple[Length, Length]  # arena interior width, height [m]
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
     # pymunk steps per dt; None = computed so nothing tunnels
     substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
@@ -35,21 +35,21 @@ class WorldConfig(Section):
 class _Solid(Section):
     friction: NonNegativeFloat = 0.5  # contact friction (pymunk multiplies the two shapes')
     movable: bool = False  # a dynamic body the robots can push
-    mass: PositiveFloat = 1.0  # [kg], movable only
+    mass: Mass = 1.0  # [kg], movable only
     ground_friction: NonNegativeFloat = 0.5  # floor friction coefficient mu, movable only
 
 
 class BoxObstacle(_Solid):
     type: Literal["box"]
     center: Vec2  # [m]
-    size: tuple[PositiveFloat, PositiveFloat]  # width, height [m]
+    size: tuple[Length, Length]  # width, height [m]
     angle: Float = 0.0  # [rad]
 
 
 class CircleObstacle(_Solid):
     type: Literal["circle"]
     center: Vec2  # [m]
-    radius: PositiveFloat  # [m]
+    radius: Length  # [m]
 
 
 class PolygonObstacle(_Solid):
@@ -61,7 +61,7 @@ class WallObstacle(Section):
     type: Literal["wall"]
     start: Vec2  # [m]
     end: Vec2  # [m]
-    thickness: PositiveFloat = 0.05  # [m]
+    thickness: Length = 0.05  # [m]
     friction: NonNegativeFloat = 0.5
 
 
@@ -116,9 +116,9 @@ class RobotConfig(Section):
     name: Name
     drive: Literal["diff"] = "diff"
     pose: Pose  # x [m], y [m], theta [rad]
-    radius: PositiveFloat = 0.2  # [m]
-    mass: PositiveFloat = 5.0  # [kg]
-    track_width: PositiveFloat = 0.3  # wheel separation [m]
+    radius: Length = 0.2  # [m]
+    mass: Mass = 5.0  # [kg]
+    track_width: Length = 0.3  # wheel separation [m]
     max_wheel_speed: PositiveFloat = 1.0  # [m/s]
     max_accel: PositiveFloat = 3.0  # per wheel [m/s^2]
     friction: NonNegativeFloat = 0.5  # contact friction of the robot's body

@@ -13,6 +13,9 @@ Float = Annotated[float, Strict(), Field(allow_inf_nan=False)]
 PositiveFloat = Annotated[Float, Field(gt=0)]
 NonNegativeFloat = Annotated[Float, Field(ge=0)]
 Probability = Annotated[Float, Field(ge=0, lt=1)]
+# Physical sizes and masses have sane bounds: pymunk turns a 1e-150 m radius into NaN poses.
+Length = Annotated[Float, Field(ge=1e-3, le=1e4)]  # [m], 1 mm .. 10 km
+Mass = Annotated[Float, Field(ge=1e-3, le=1e6)]  # [kg]
 Int = Annotated[int, Strict()]
 PositiveInt = Annotated[Int, Field(gt=0)]
 Vec2 = tuple[Float, Float]
