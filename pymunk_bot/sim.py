@@ -100,8 +100,17 @@ class Simulation:
             self.step()
 
     def reset(self) -> None:
-        """Rebuild everything from the config and seed (pymunk copies are not bit-exact)."""
+        """Rebuild everything from the config and seed (pymunk copies are not bit-exact).
+
+        Observers stay attached; those with an ``on_reset(sim)`` method are told.
+        """
+        observers = self.observers
         self.__init__(self.config, self.seed)
+        self.observers = observers
+        for observer in observers:
+            on_reset = getattr(observer, "on_reset", None)
+            if on_reset is not None:
+                on_reset(self)
 
     # ------------------------------------------------------------------ control
     def _make_controller(self, robot: Robot):

@@ -47,7 +47,7 @@ def test_command_exit_status_and_table(suite, capsys):
     assert "r.max_path_length: expected <= 1 m, got 1.45" in out and "(off by 0.45" in out
     (suite / "broken.yaml").write_text(BROKEN)
     assert main(["test", str(suite), "--jobs", "1"]) == 2
-    assert "world.size[1]: must be > 0" in capsys.readouterr().out
+    assert "world.size[1]: must be >= 0.001" in capsys.readouterr().out
 
 
 def test_pytest_plugin_collects_only_what_it_is_pointed_at(suite):

@@ -48,8 +48,10 @@ def build_world(size: float, n_boxes: int, n_robots: int,
     discs on free spots, each with its own shape-filter group."""
     space = pymunk.Space()
     sb, t = space.static_body, 0.5
-    space.add(_box(sb, size / 2, -t / 2, size + 2 * t, t, 0.0), _box(sb, size / 2, size + t / 2, size + 2 * t, t, 0.0),
-              _box(sb, -t / 2, size / 2, t, size, 0.0), _box(sb, size + t / 2, size / 2, t, size, 0.0))
+    space.add(_box(sb, size / 2, -t / 2, size + 2 * t, t, 0.0),
+              _box(sb, size / 2, size + t / 2, size + 2 * t, t, 0.0),
+              _box(sb, -t / 2, size / 2, t, size, 0.0),
+              _box(sb, size + t / 2, size / 2, t, size, 0.0))
     for _ in range(n_boxes):
         space.add(_box(sb, *rng.uniform(0.0, size, 2), *rng.uniform(0.2, 1.0, 2), rng.uniform(0.0, math.pi)))
     robots = []

@@ -59,7 +59,7 @@ class AvoidController(Controller):
         self._escape: tuple | None = None  # (world point [m], until [s])
 
     def compute(self, obs: Observation) -> tuple[float, float]:
-        goal = self.config.goal or obs.goal
+        goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             self.status, self.message = "failed", "no goal: set controller.goal or the robot's goal"
             return 0.0, 0.0

@@ -24,7 +24,7 @@ class GoToGoalController(Controller):
         self.max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
 
     def compute(self, obs: Observation) -> tuple[float, float]:
-        goal = self.config.goal or obs.goal
+        goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             self.status, self.message = "failed", "no goal: set controller.goal or the robot's goal"
             return 0.0, 0.0

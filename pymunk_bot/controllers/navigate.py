@@ -72,7 +72,7 @@ class NavigateController(Controller):
 
     # ------------------------------------------------------------------ the control step
     def compute(self, obs: Observation) -> tuple[float, float]:
-        goal = self.config.goal or obs.goal
+        goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             return self._fail("no goal: set controller.goal or the robot's goal", permanent=True)
         if self.static is None:

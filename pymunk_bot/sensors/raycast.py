@@ -1,23 +1,37 @@
-"""Batch ray casting that reproduces pymunk's ``Space.segment_query_first`` exactly.
+"""Batch ray casting that returns what pymunk's ``Space.segment_query_first`` returns.
 
-Each (primitive, ray) test repeats Chipmunk's own floating-point expressions in the same
-order (cpPolyShapeSegmentQuery, CircleSegmentQuery, cpSegmentShapeSegmentQuery) on world
-geometry built with Chipmunk's transform arithmetic, so every candidate alpha is the alpha
-pymunk computes. The speed comes from choosing the pairs: shapes rejected by the filter or
-out of range are dropped, back-facing polygon edges are dropped by Chipmunk's own plane
-test, and each primitive meets only the rays inside the angle it subtends (widened by a
-margin far above rounding, so the choice never changes a result). Dense scenes are traced
-nearest-first in batches, so rays already stopped by near shapes skip the far ones.
+How it stays exact: every (primitive, ray) test repeats Chipmunk's own floating-point
+expressions in Chipmunk's order (cpPolyShapeSegmentQuery, CircleSegmentQuery,
+cpSegmentShapeSegmentQuery) on world geometry built with Chipmunk's transform arithmetic,
+so each candidate alpha is bit-identical to pymunk's, and the answer per ray is their
+minimum, as in cpSpaceSegmentQueryFirst. The start-inside rule (alpha 0 when the point
+query at the origin gives distance <= 0) is asked of pymunk itself. pymunk also skips a
+static shape whose bounding box a rounded slab test says the segment misses; that can
+differ from the shape test only for rays running (within rounding) along a box side or
+through a box corner lying on the shape, so such rays are detected with wide margins and
+answered by pymunk directly. Everything else only chooses which pairs to test, always
+with margins far above rounding, so the choice never changes a result.
 
-Like pymunk, a ray starting inside (or on) an admitted shape reports distance 0.
-pymunk's queries see each shape where it was at the last ``space.step()`` or reindex, while
-this caster uses every non-static body's current transform; the two agree whenever a moved
-body has been stepped or reindexed (``space.reindex_shapes_for_body``).
+How it is fast: shapes the filter rejects are dropped, back-facing polygon edges are
+dropped by Chipmunk's own plane test, and each primitive meets only the rays inside the
+angle it subtends (the rays are sorted by angle, so that is an index range). Dense scenes
+are traced in rings of growing distance, so rays already stopped nearby skip far shapes.
+Static geometry is cached in world coordinates; moving bodies are re-read every cast.
+
+Differences from pymunk, by design:
+- pymunk queries see a shape where it was at the last ``space.step()`` or reindex; this
+  caster uses each body's current transform. They agree whenever a body moved by hand
+  has been reindexed (``space.reindex_shapes_for_body``), and always after a step.
+- Changing a shape's filter, radius or vertices, or a body's type, without adding or
+  removing a shape is not detected: call :meth:`RayCaster.invalidate`.
+- Bodies put to sleep (only if the space enables sleeping) are treated as moving bodies,
+  so rays grazing their bounding boxes are not handed to pymunk (a measure-zero case).
 """
 
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 import sys
 
@@ -31,8 +45,6 @@ _TWO_PI = 2.0 * math.pi
 _PARALLEL_EPS = 10e-6
 # cpvnormalize adds CPFLOAT_MIN (DBL_MIN) to the length; kept for bit-equal normals.
 _DBL_MIN = sys.float_info.min
-# An interval at least this wide [rad] is treated as covering every ray.
-_FULL_TURN = _TWO_PI - 1e-6
 # Candidate rays of a sharp polygon edge: its end points' directions widened by this margin
 # [rad], or every ray when the origin is within _EDGE_NEAR * scale of the edge's plane.
 _EDGE_MARGIN = 1e-7
@@ -49,6 +61,7 @@ _MAX_RINGS = 3
 
 def _check_args(origin: tuple[float, float], angles: np.ndarray,
                 max_range: float) -> tuple[float, float, np.ndarray, float]:
+    """Validated (ox, oy, angles as float64, max_range)."""
     ox, oy = float(origin[0]), float(origin[1])
     ang = np.asarray(angles, dtype=np.float64)
     if ang.ndim != 1:
@@ -90,18 +103,110 @@ def reference_cast(space: pymunk.Space, origin: tuple[float, float], angles: np.
 
 
 # ----------------------------------------------------------------------------------------
+# Public caster
+# ----------------------------------------------------------------------------------------
+
+class RayCaster:
+    """Casts batches of rays against every shape in a pymunk Space."""
+
+    def __init__(self, space: pymunk.Space) -> None:
+        self.space = space
+        self._cache = _SceneCache(space)
+
+    def invalidate(self) -> None:
+        """Drop cached geometry; needed only after changing a shape's filter, size or vertices,
+        or a body's type, without adding or removing a shape."""
+        self._cache.invalidate()
+
+    def cast(self, origin: tuple[float, float], angles: np.ndarray, max_range: float,
+             shape_filter: pymunk.ShapeFilter = pymunk.ShapeFilter()) -> np.ndarray:
+        """Distance along each ray (world-frame angles [rad]) from origin to the first shape the
+        filter admits; max_range where nothing is hit within max_range. float64 array, len(angles)."""
+        ox, oy, ang, rng = _check_args(origin, angles, max_range)
+        n_rays = ang.shape[0]
+        if n_rays == 0:
+            return np.empty(0)
+        cos, sin, ends = _endpoints(ox, oy, ang, rng)
+        parts, bound = self._cache.world()
+        # Coordinate scale of this cast: rounding errors are ~1e-16 of it.
+        scale = 1.0 + abs(ox) + abs(oy) + rng
+        slack = 1e-9 * scale
+        keep, n_keep = self._cache.admitted(shape_filter)
+        dense = n_keep > _DENSE_SHAPES
+        if dense:  # cull by distance; in small worlds the pair tests reject far shapes anyway
+            dx, dy = bound[0] - ox, bound[1] - oy
+            dist = np.sqrt(dx * dx + dy * dy)
+            gap = dist - bound[2]  # lower bound on the distance to any point of the shape
+            keep = keep & (gap <= rng + slack)
+            n_keep = int(np.count_nonzero(keep))
+            rings = (gap, dx, dy, dist)
+        if n_keep == 0:
+            return np.full(n_rays, rng)
+        # cpShapeSegmentQuery reports alpha 0 when its point query at the start gives a
+        # distance <= 0; the nearest-shape query runs that same test on the same shapes.
+        inside = self.space.point_query_nearest((ox, oy), slack, shape_filter)
+        if inside is not None and inside.distance <= 0.0:
+            bb = inside.shape.bb
+            if bb.left <= ox <= bb.right and bb.bottom <= oy <= bb.top:
+                return np.zeros(n_rays)  # every ray's bounding-box test admits the shape
+            # Distance 0 by underflow just outside the box: pymunk's box test decides ray by ray.
+            return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
+        best = np.ones(n_rays)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            fan = _Fan(np.arctan2(sin, cos), ends)
+            self._side_flags(fan, ox, oy, scale)
+            if n_keep <= _DENSE_SHAPES:
+                _Scene(parts, keep, ox, oy, scale, rng, subset=dense).trace(fan, fan.every, best)
+            else:
+                _trace_rings(parts, bound, keep, n_keep, rings, fan, best, (ox, oy, rng, scale))
+        if fan.flagged:
+            # Rays near a box corner or along a box side (see _corner_flags): ask pymunk.
+            query, start = self.space.segment_query_first, (ox, oy)
+            for i in np.unique(np.concatenate(fan.flagged)).tolist():
+                hit = query(start, (ends[0, i], ends[1, i]), 0.0, shape_filter)
+                best[i] = 1.0 if hit is None else hit.alpha
+        return best * rng
+
+    def _side_flags(self, fan: _Fan, ox: float, oy: float, scale: float) -> None:
+        """Flag the rays that may run along a side line of a static bounding box.
+
+        Such a ray starts (within rounding) on the line and points along it; pymunk's box
+        test is then decided by rounding (see _corner_flags). The tolerances are generous
+        because flagged rays are exact anyway, only slower."""
+        near, corner = 1e-7 * scale, _EDGE_NEAR * scale
+        directions, close = [], 0
+        for sides, v, along in ((self._cache.side_x, ox, (-0.5 * math.pi, 0.5 * math.pi)),
+                                (self._cache.side_y, oy, (-math.pi, 0.0, math.pi))):
+            i = bisect.bisect_left(sides, v - corner)
+            if i < len(sides) and sides[i] <= v + corner:
+                close += 1
+                i = bisect.bisect_left(sides, v - near)
+                if i < len(sides) and sides[i] <= v + near:
+                    directions.extend(along)
+        if close == 2:
+            # Within _EDGE_NEAR * scale of both a vertical and a horizontal side line, so
+            # perhaps of a flag, whose direction is then too uncertain: flag every ray.
+            fan.flagged.append(np.arange(fan.ends.shape[1]))
+        elif directions:
+            a = np.array(directions)
+            first, counts = fan.every.ranges(a - _SIDE_ANGLE, a + _SIDE_ANGLE, np.zeros(a.size, dtype=bool))
+            fan.flagged.append(fan.every.expand(first, counts)[0])
+
+
+# ----------------------------------------------------------------------------------------
 # Geometry cache
 # ----------------------------------------------------------------------------------------
 
 # Rows of a primitive table (one column per primitive). Every primitive is a capsule A-B
 # of radius RAD; the kinds are stored contiguously in this order:
-#   edge:    A = vertex i, B = vertex i-1, N = plane normal, VN = A.N,
+#   edge:    A = vertex i, B = vertex i-1, N = plane normal, VN = A.N, RAD = poly radius,
 #            DTMIN = cross(N, B), DTMAX = cross(N, A)       (cpPolyShapeSegmentQuery terms)
 #   flag:    A = B = a corner of a static shape's bounding box that lies on the shape (see
 #            _corner_flags); rays through it are handed to pymunk itself
 #   circle:  A = B = centre (also the rounded corners of polys with a radius)
 #   segment: A, B = end points, N = the segment's normal
-AX, AY, BX, BY, RAD, NX, NY, VN, DTMIN, DTMAX = range(10)
+AX, AY, BX, BY, RAD, VN, NX, NY, DTMIN, DTMAX = range(10)
+_RAW = [AX, AY, BX, BY, RAD, NX, NY]  # the rows _Collector fills
 _ROWS = 10
 _KINDS = 4
 
@@ -114,6 +219,17 @@ def _body_transform(body: pymunk.Body) -> tuple[float, float, float, float]:
     rot = pymunk.cp.cpBodyGetRotation(body._body)
     pos = pymunk.cp.cpBodyGetPosition(body._body)
     return rot.x, rot.y, pos.x, pos.y
+
+
+def _transforms(handles: list) -> np.ndarray:
+    """(4, n) cos, sin, tx, ty of many bodies (their cffi handles), as _body_transform."""
+    rotation, position = pymunk.cp.cpBodyGetRotation, pymunk.cp.cpBodyGetPosition
+    out: list[float] = []
+    add = out.extend
+    for h in handles:
+        r, p = rotation(h), position(h)
+        add((r.x, r.y, p.x, p.y))
+    return np.array(out).reshape(-1, 4).T
 
 
 def _moved(rows: np.ndarray, bound: np.ndarray, tf: np.ndarray, prim_body: np.ndarray,
@@ -179,7 +295,7 @@ class _Collector:
         rows = np.zeros((_ROWS, sum(len(k) for k in self.kinds)))
         raw = [r for kind in self.kinds for r in kind]
         if raw:
-            rows[:7] = np.array(raw, dtype=np.float64).T
+            rows[_RAW] = np.array(raw, dtype=np.float64).T
         owner = np.array([i for kind in self.owners for i in kind], dtype=np.intp)
         counts = tuple(len(k) for k in self.kinds)
         bound = np.array(self.bound, dtype=np.float64).reshape(-1, 3).T.copy()
@@ -187,25 +303,31 @@ class _Collector:
 
 
 class _World:
-    """World-frame primitives of every shape, plus per-shape data, for one cast."""
+    """A primitive table: rows (see AX...), owner shape of each column, column count of each
+    kind, and each shape's bounding circle (cx, cy, radius)."""
 
     def __init__(self, rows: np.ndarray, owner: np.ndarray, counts: tuple[int, ...],
-                 bound: np.ndarray) -> None:
+                 bound: np.ndarray, rounded: bool | None = None) -> None:
         self.rows, self.owner, self.counts, self.bound = rows, owner, counts, bound
+        # Whether any polygon edge has a radius (those need the slower interval rule).
+        self.rounded = bool(rows[RAD, :counts[0]].any()) if rounded is None else rounded
 
 
 def _kind_slices(counts: tuple[int, ...]) -> list[slice]:
-    ends = np.cumsum(counts).tolist()
+    ends = list(itertools.accumulate(counts))
     return [slice(e - c, e) for c, e in zip(counts, ends)]
 
 
 def _merge(parts: list[_World]) -> _World:
-    """Concatenate worlds kind by kind (shapes keep the order of parts)."""
-    pieces = [(w, sl) for k in range(_KINDS) for w in parts for sl in [_kind_slices(w.counts)[k]]]
+    """Concatenate the primitive tables kind by kind (bounding circles are not merged)."""
+    if len(parts) == 1:
+        return parts[0]
+    slices = [_kind_slices(w.counts) for w in parts]
+    pieces = [(w, sl[k]) for k in range(_KINDS) for w, sl in zip(parts, slices)]
     rows = np.concatenate([w.rows[:, sl] for w, sl in pieces], axis=1)
     owner = np.concatenate([w.owner[sl] for w, sl in pieces])
     counts = tuple(sum(w.counts[k] for w in parts) for k in range(_KINDS))
-    return _World(rows, owner, counts, np.concatenate([w.bound for w in parts], axis=1))
+    return _World(rows, owner, counts, np.empty((3, 0)), any(w.rounded for w in parts))
 
 
 def _bounding_boxes(world: _World) -> np.ndarray:
@@ -266,15 +388,18 @@ class _SceneCache:
     def invalidate(self) -> None:
         self._key = None
 
-    def world(self) -> _World:
+    def world(self) -> tuple[list[_World], np.ndarray]:
+        """World primitive tables (static, then moving shapes) and every shape's bounding
+        circle (cx, cy, radius) in shape order."""
         key = tuple(self.space.shapes)
         if key != self._key or any(_body_transform(b) != tf for b, tf in self._static_tf.items()):
             self._build(key)
         if not self._bodies:
-            return self._static
-        tf = np.array([_body_transform(b) for b in self._bodies]).T
+            return [self._static], self._static.bound
+        tf = _transforms(self._handles)
         rows, bound = _moved(self._local.rows, self._local.bound, tf, self._prim_body, self._shape_body)
-        return _merge([self._static, _World(rows, self._local.owner, self._local.counts, bound)])
+        moving = _World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
+        return [self._static, moving], np.concatenate((self._static.bound, bound), axis=1)
 
     def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
         static = [s for s in key if s.body.body_type == pymunk.Body.STATIC]
@@ -284,7 +409,7 @@ class _SceneCache:
         self.groups = np.array([f.group for f in filters], dtype=np.uint64)
         self.categories = np.array([f.categories for f in filters], dtype=np.uint64)
         self.masks = np.array([f.mask for f in filters], dtype=np.uint64)
-        self._admitted: dict[pymunk.ShapeFilter, np.ndarray] = {}
+        self._admitted: dict[pymunk.ShapeFilter, tuple[np.ndarray, int]] = {}
 
         collect = _Collector()
         for i, s in enumerate(static):
@@ -306,134 +431,54 @@ class _SceneCache:
             collect.add(s, len(static) + i)
         self._local = _World(*collect.tables())
         self._bodies = list({id(s.body): s.body for s in dynamic}.values())
+        self._handles = [b._body for b in self._bodies]
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]
         self._key = key
 
-    def admitted(self, f: pymunk.ShapeFilter) -> np.ndarray:
-        """Shapes the query filter does not reject (cpShapeFilterReject, negated)."""
-        mask = self._admitted.get(f)
-        if mask is None:
+    def admitted(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int]:
+        """Shapes the query filter does not reject (cpShapeFilterReject, negated), and their count."""
+        found = self._admitted.get(f)
+        if found is None:
             group, cats, qmask = int(f.group), int(f.categories), int(f.mask)
             reject = ((self.groups != 0) & (self.groups == group)) \
                 | ((self.categories & qmask) == 0) | ((self.masks & cats) == 0)
-            mask = ~reject
-            self._admitted[f] = mask
-        return mask
-
-
-# ----------------------------------------------------------------------------------------
-# Public caster
-# ----------------------------------------------------------------------------------------
-
-class RayCaster:
-    """Casts batches of rays against every shape in a pymunk Space."""
-
-    def __init__(self, space: pymunk.Space) -> None:
-        self.space = space
-        self._cache = _SceneCache(space)
-
-    def invalidate(self) -> None:
-        """Drop cached geometry; needed only after changing a shape's filter, size or vertices,
-        or a body's type, without adding or removing a shape."""
-        self._cache.invalidate()
-
-    def cast(self, origin: tuple[float, float], angles: np.ndarray, max_range: float,
-             shape_filter: pymunk.ShapeFilter = pymunk.ShapeFilter()) -> np.ndarray:
-        """Distance along each ray (world-frame angles [rad]) from origin to the first shape the
-        filter admits; max_range where nothing is hit within max_range. float64 array, len(angles)."""
-        ox, oy, ang, rng = _check_args(origin, angles, max_range)
-        n_rays = ang.shape[0]
-        if n_rays == 0:
-            return np.empty(0)
-        cos, sin, ends = _endpoints(ox, oy, ang, rng)
-        world = self._cache.world()
-        # Coordinate scale of this cast: rounding errors are ~1e-16 of it.
-        scale = 1.0 + abs(ox) + abs(oy) + rng
-        slack = 1e-9 * scale
-        bound = world.bound
-        dx, dy = bound[0] - ox, bound[1] - oy
-        dist = np.sqrt(dx * dx + dy * dy)
-        gap = dist - bound[2]  # lower bound on the distance to any point of the shape
-        keep = self._cache.admitted(shape_filter) & (gap <= rng + slack)
-        n_keep = int(np.count_nonzero(keep))
-        if n_keep == 0:
-            return np.full(n_rays, rng)
-        # cpShapeSegmentQuery reports alpha 0 when its point query at the start gives a
-        # distance <= 0; the nearest-shape query runs that same test on the same shapes.
-        inside = self.space.point_query_nearest((ox, oy), slack, shape_filter)
-        if inside is not None and inside.distance <= 0.0:
-            bb = inside.shape.bb
-            if bb.left <= ox <= bb.right and bb.bottom <= oy <= bb.top:
-                return np.zeros(n_rays)  # every ray's bounding-box test admits the shape
-            # Distance 0 by underflow just outside the box: pymunk's box test decides ray by ray.
-            return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-        best = np.ones(n_rays)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            fan = _Fan(np.arctan2(sin, cos), ends)
-            self._side_flags(fan, ox, oy, scale)
-            if n_keep <= _DENSE_SHAPES:
-                _Scene(world, keep, ox, oy, scale, rng, subset=False).trace(fan, fan.every, best)
-            else:
-                self._trace_rings(world, keep, n_keep, gap, dx, dy, dist, fan, best, (ox, oy, rng, scale))
-        if fan.flagged:
-            # Rays through a flagged bounding-box corner: pymunk answers them itself.
-            query, start = self.space.segment_query_first, (ox, oy)
-            for i in np.unique(np.concatenate(fan.flagged)).tolist():
-                hit = query(start, (ends[0, i], ends[1, i]), 0.0, shape_filter)
-                best[i] = 1.0 if hit is None else hit.alpha
-        return best * rng
-
-    def _side_flags(self, fan: _Fan, ox: float, oy: float, scale: float) -> None:
-        """Flag the rays that may run along a side line of a static bounding box.
-
-        Such a ray starts (within rounding) on the line and points along it; pymunk's box
-        test is then decided by rounding (see _corner_flags). The tolerances are generous
-        because flagged rays are exact anyway, only slower."""
-        near = 1e-7 * scale
-        directions = []
-        for sides, v, along in ((self._cache.side_x, ox, (-0.5 * math.pi, 0.5 * math.pi)),
-                                (self._cache.side_y, oy, (-math.pi, 0.0, math.pi))):
-            i = bisect.bisect_left(sides, v - near)
-            if i < len(sides) and sides[i] <= v + near:
-                directions.extend(along)
-        if directions:
-            a = np.array(directions)
-            first, counts = fan.every.ranges(a - _SIDE_ANGLE, a + _SIDE_ANGLE, np.zeros(a.shape, dtype=bool))
-            fan.flagged.append(fan.every.expand(first, counts))
-
-    @staticmethod
-    def _trace_rings(world: _World, keep: np.ndarray, n_keep: int, gap: np.ndarray, dx: np.ndarray,
-                     dy: np.ndarray, dist: np.ndarray, fan: _Fan, best: np.ndarray,
-                     cast: tuple[float, float, float, float]) -> None:
-        """Dense scenes: trace shapes in rings of growing distance. Alphas only decrease, so
-        a ray already stopped nearer than a ring's inner radius is left out of that ring,
-        and so is every shape whose bounding circle no open ray can reach."""
-        ox, oy, rng, scale = cast
-        slack = 1e-9 * scale
-        inner = rng * math.sqrt(_RING_SHAPES / n_keep)
-        edges = [-math.inf] + [inner * _RING_GROWTH ** k for k in range(_MAX_RINGS - 1)] + [math.inf]
-        for k in range(len(edges) - 1):
-            ring = keep & (gap > edges[k]) & (gap <= edges[k + 1])
-            rays = fan.every
-            if k > 0:
-                rays = fan.open(best, (edges[k] - slack) / rng)
-                if rays.n == 0:
-                    return
-                cand = np.flatnonzero(ring)
-                reach = world.bound[2, cand] + slack
-                half = np.arcsin(np.minimum(reach / dist[cand], 1.0)) + 1e-12
-                phi = np.arctan2(dy[cand], dx[cand])
-                _, counts = rays.ranges(phi - half, phi + half, dist[cand] <= reach)
-                ring[cand[counts == 0]] = False
-            if ring.any():
-                _Scene(world, ring, ox, oy, scale, rng, subset=True).trace(fan, rays, best)
+            found = self._admitted[f] = (~reject, int(np.count_nonzero(~reject)))
+        return found
 
 
 # ----------------------------------------------------------------------------------------
 # One cast
 # ----------------------------------------------------------------------------------------
+
+def _trace_rings(parts: list[_World], bound: np.ndarray, keep: np.ndarray, n_keep: int,
+                 near: tuple[np.ndarray, ...], fan: _Fan, best: np.ndarray,
+                 cast: tuple[float, float, float, float]) -> None:
+    """Dense scenes: trace shapes in rings of growing distance. Alphas only decrease, so a
+    ray already stopped nearer than a ring's inner radius is left out of that ring, and so
+    is every shape whose bounding circle no open ray can reach."""
+    gap, dx, dy, dist = near
+    ox, oy, rng, scale = cast
+    slack = 1e-9 * scale
+    first_ring = rng * math.sqrt(_RING_SHAPES / n_keep)
+    radii = [-math.inf] + [first_ring * _RING_GROWTH ** k for k in range(_MAX_RINGS - 1)] + [math.inf]
+    for k in range(_MAX_RINGS):
+        ring = keep & (gap > radii[k]) & (gap <= radii[k + 1])
+        rays = fan.every
+        if k > 0:
+            rays = fan.open(best, (radii[k] - slack) / rng)
+            if rays.n == 0:
+                return
+            cand = np.flatnonzero(ring)
+            reach = bound[2, cand] + slack
+            half = np.arcsin(np.minimum(reach / dist[cand], 1.0)) + 1e-12
+            phi = np.arctan2(dy[cand], dx[cand])
+            _, counts = rays.ranges(phi - half, phi + half, dist[cand] <= reach)
+            ring[cand[counts == 0]] = False
+        if ring.any():
+            _Scene(parts, ring, ox, oy, scale, rng, subset=True).trace(fan, rays, best)
+
 
 class _Rays:
     """Some of the rays, sorted by angle: the angles tiled over three turns, and the ray
@@ -449,14 +494,17 @@ class _Rays:
         """First entry and number of rays inside each [lo, hi] (every ray where full)."""
         first = np.searchsorted(self.theta3, lo, "left")
         stop = np.searchsorted(self.theta3, hi, "right")
-        first[full] = self.n
-        stop[full] = 2 * self.n
+        if full.any():
+            first[full] = self.n
+            stop[full] = 2 * self.n
         return first, stop - first
 
-    def expand(self, first: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        """Ray index of every (interval, ray) pair, interval by interval."""
-        entry = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts - first, counts)
-        return self.ray3[entry]
+    def expand(self, first: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Ray index of every (interval, ray) pair, interval by interval; and where each
+        interval's pairs end."""
+        stop = np.cumsum(counts)
+        entry = np.arange(int(stop[-1]) if stop.shape[0] else 0) - np.repeat(stop - counts - first, counts)
+        return self.ray3[entry], stop
 
 
 class _Fan:
@@ -470,11 +518,11 @@ class _Fan:
             order = np.arange(n)
         elif drops.shape[0] == 1 and theta[-1] <= theta[0]:
             # A sorted fan that wraps past +pi once (e.g. 0..2*pi): rotate instead of sorting.
-            k = int(drops[0]) + 1
-            order = np.concatenate((np.arange(k, n), np.arange(k)))
+            order = np.arange(int(drops[0]) + 1, int(drops[0]) + 1 + n)
+            order %= n
         else:
             order = np.argsort(theta, kind="stable")
-        self.theta, self.order = theta[order], order
+        self.theta, self.order = theta.take(order), order
         self.every = _Rays(self.theta, order)
         self.flagged: list[np.ndarray] = []  # rays passing near a flag (see _corner_flags)
 
@@ -487,46 +535,55 @@ class _Fan:
 class _Scene:
     """Admitted, in-range primitives for one cast from one origin."""
 
-    def __init__(self, world: _World, keep: np.ndarray, ox: float, oy: float, scale: float,
+    def __init__(self, parts: list[_World], keep: np.ndarray, ox: float, oy: float, scale: float,
                  rng: float, subset: bool) -> None:
         self.ox, self.oy, self.scale = ox, oy, scale
         # Positional slack [m] and angular margin [rad] for choosing candidate pairs; the
         # second term covers the direction rounding of the segment origin -> end point.
         self.slack = 1e-9 * scale
         self.margin = _EDGE_MARGIN + 1e-15 * scale / rng
-        rows, counts = world.rows, world.counts
-        sel = keep[world.owner]
         if subset:  # few of the shapes: gather their columns before any arithmetic
-            idx = np.flatnonzero(sel)
-            ends = np.searchsorted(idx, np.cumsum(counts)).tolist()
-            counts = (ends[0], ends[1] - ends[0], ends[2] - ends[1], ends[3] - ends[2])
-            rows, sel = rows.take(idx, axis=1), np.ones(idx.shape[0], dtype=bool)
-        n_e = counts[0]
+            picked = []
+            for part in parts:
+                idx = np.flatnonzero(keep[part.owner])
+                ends = np.searchsorted(idx, np.cumsum(part.counts)).tolist()
+                counts = (ends[0], ends[1] - ends[0], ends[2] - ends[1], ends[3] - ends[2])
+                picked.append(_World(part.rows.take(idx, axis=1), part.owner.take(idx), counts,
+                                     part.bound, part.rounded))
+            world = _merge(picked)
+            sel = np.ones(world.owner.shape[0], dtype=bool)
+        else:
+            world = _merge(parts)
+            sel = keep[world.owner]
+        rows, n_e = world.rows, world.counts[0]
         # Chipmunk's plane test for edges: d = a.n - v0.n - r; the edge is skipped if d < 0.
-        an = ox * rows[NX, :n_e] + oy * rows[NY, :n_e]
-        d = an - rows[VN, :n_e] - rows[RAD, :n_e]
+        dan = np.empty((2, n_e))
+        an = np.add(ox * rows[NX, :n_e], oy * rows[NY, :n_e], out=dan[1])
+        d = np.subtract(an - rows[VN, :n_e], rows[RAD, :n_e], out=dan[0])
         sel_e = sel[:n_e]
         sel_e &= d >= 0.0
         self.rows = rows.compress(sel, axis=1)  # much faster than rows[:, sel]
-        ends = np.cumsum(counts).tolist()
-        self.counts = tuple(int(np.count_nonzero(sel[e - c:e])) for c, e in zip(counts, ends))
-        self._intervals(d[sel_e])
+        kept = np.cumsum(sel)[[e - 1 for e in itertools.accumulate(world.counts) if e]].tolist()
+        kept = [0] * (_KINDS - len(kept)) + kept  # leading empty kinds
+        self.ends = kept  # column where each kind ends
+        self.n_edges = kept[0]
+        dan = dan.compress(sel_e, axis=1)
+        self._intervals(dan[0], world.rounded)
         # From here on RAD and VN hold d and a.n for edges, so that rows RAD: are exactly
-        # the per-edge terms of the pair test (d, nx, ny, a.n, dt_min, dt_max).
-        ne = self.counts[0]
-        self.rows[RAD, :ne] = d[sel_e]
-        self.rows[VN, :ne] = an[sel_e]
+        # the per-edge terms of the pair test (d, a.n, nx, ny, dt_min, dt_max).
+        self.rows[RAD:VN + 1, :self.n_edges] = dan
 
-    def _intervals(self, d: np.ndarray) -> None:
+    def _intervals(self, d: np.ndarray, rounded: bool) -> None:
         """Ray-angle interval [lo, hi] that can hit each primitive, or the full turn.
 
         Each primitive is a capsule A-B of radius r. A front-facing edge runs counter-
         clockwise from A (v0) to B (v_prev) as seen from the origin (cross(A-o, B-o) equals
         |edge| * d >= 0); segments are swapped into that order. The A..B arc is widened by
         the half-angle of the wider end disc (radius r + slack), which holds the capsule.
-        Rounding moves Chipmunk's hit points by ~1e-15 * scale, far inside these margins."""
-        rows = self.rows
-        ne, nf, seg_start = self.counts[0], self.counts[1], sum(self.counts[:3])
+        Rounding moves Chipmunk's hit points by ~1e-15 * scale, far inside these margins.
+        An interval wider than a turn needs no flag: it covers every ray (some twice)."""
+        rows, ne = self.rows, self.n_edges
+        nf_end, seg_start = self.ends[1], self.ends[2]
         rel = rows[:4] - np.array((self.ox, self.oy, self.ox, self.oy))[:, None]
         m = rel.shape[1]
         if seg_start < m:
@@ -538,16 +595,18 @@ class _Scene:
         span[span < 0.0] += _TWO_PI
         # Origin near an edge's plane: its end points may be near too, and Chipmunk may
         # report t = 0 on any ray when the origin is on the plane; take the full turn.
-        full = np.zeros(m, dtype=bool)
-        near_limit = _EDGE_NEAR * self.scale
-        full[:ne] = d <= near_limit
-        # Flags likewise, with |x| + |y| <= sqrt(2) * distance.
-        full[ne:ne + nf] = np.abs(rel[0, ne:ne + nf]) + np.abs(rel[1, ne:ne + nf]) <= 1.5 * near_limit
+        # (An origin near a flag is caught by _side_flags.)
+        near_edge = d <= _EDGE_NEAR * self.scale
         # Sharp edges and flags: every end point is farther than _EDGE_NEAR * scale, so a
         # fixed angular margin covers the rounding. Everything else gets the positional slack.
-        start = 0 if rows[RAD, :ne].any() else ne + nf
-        half = np.full(m, self.margin)
-        if start < m:
+        start = 0 if rounded else nf_end
+        if start == m:
+            half: np.ndarray | float = self.margin
+            full = near_edge if ne == m else np.concatenate((near_edge, np.zeros(m - ne, dtype=bool)))
+        else:
+            full = np.zeros(m, dtype=bool)
+            full[:ne] = near_edge
+            half = np.full(m, self.margin)
             reach = rows[RAD, start:] + self.slack
             dist = np.hypot(rel[0::2, start:], rel[1::2, start:])
             near = np.minimum(dist[0], dist[1])
@@ -558,20 +617,18 @@ class _Scene:
                 e = b - a
                 u = np.clip(-(a * e).sum(axis=0) / ((e * e).sum(axis=0) + 1e-300), 0.0, 1.0)
                 full[seg_start:] |= np.hypot(*(a + u * e)) - rows[RAD, seg_start:] <= self.slack
-        lo = phi[0] - half
-        hi = lo + (span + 2.0 * half)
-        full |= hi - lo >= _FULL_TURN
-        self.lo, self.hi, self.full = lo, hi, full
+        self.lo = phi[0] - half
+        self.hi = self.lo + (span + 2.0 * half)
+        self.full = full
 
     def trace(self, fan: _Fan, rays: _Rays, best: np.ndarray) -> None:
         """Lower best (alpha per ray) by every hit among the given rays."""
         if self.lo.shape[0] == 0:
             return
         first, counts = rays.ranges(self.lo, self.hi, self.full)
-        ray = rays.expand(first, counts)
-        ends = np.cumsum(self.counts).tolist()
-        cum = np.cumsum(counts).tolist()
-        p = [0] + [cum[e - 1] if e else 0 for e in ends]  # pair index where each kind ends
+        ray, stop = rays.expand(first, counts)
+        ends = self.ends
+        p = [0] + [int(stop[e - 1]) if e else 0 for e in ends]  # pair index where each kind ends
         bxy = fan.ends.take(ray, axis=1)
         rows = self.rows
         if p[1]:
@@ -583,16 +640,17 @@ class _Scene:
             k = np.repeat(rows[:RAD + 1, ends[1]:ends[2]], counts[ends[1]:ends[2]], axis=1)
             self._circle_pairs(k, ray[p[2]:p[3]], bxy[:, p[2]:p[3]], best)
         if p[4] > p[3]:
-            k = np.repeat(rows[:VN, ends[2]:], counts[ends[2]:], axis=1)
+            k = np.repeat(rows[:NY + 1, ends[2]:], counts[ends[2]:], axis=1)
             self._segment_pairs(k, ray[p[3]:], bxy[:, p[3]:], best)
 
     def _edge_pairs(self, k: np.ndarray, ray: np.ndarray, bxy: np.ndarray, best: np.ndarray) -> None:
         """cpPolyShapeSegmentQuery's plane test, one (edge, ray) pair per column."""
-        d, nx, ny, an, dt_min, dt_max = k
+        d, an, nx, ny, dt_min, dt_max = k
         bx, by = bxy
         den = an - (bx * nx + by * ny)
         t = d / den
-        ok = (np.abs(den) >= _PARALLEL_EPS) & (t >= 0.0) & (t <= 1.0)
+        # Chipmunk also rejects t > 1; here such a t cannot lower best (which starts at 1).
+        ok = (np.abs(den) >= _PARALLEL_EPS) & (t >= 0.0)
         one_t = 1.0 - t
         dt = nx * (self.oy * one_t + by * t) - ny * (self.ox * one_t + bx * t)
         ok &= (dt_min <= dt) & (dt <= dt_max)
@@ -607,7 +665,7 @@ class _Scene:
     def _segment_pairs(self, k: np.ndarray, ray: np.ndarray, bxy: np.ndarray, best: np.ndarray) -> None:
         """cpSegmentShapeSegmentQuery with query radius 0, including the rounded end caps."""
         ox, oy = self.ox, self.oy
-        tax, tay, tbx, tby, r, nx, ny = k
+        tax, tay, tbx, tby, r, _, nx, ny = k
         bx, by = bxy
         d = (tax - ox) * nx + (tay - oy) * ny
         pos = d > 0.0
@@ -643,4 +701,4 @@ def _circle_alpha(dax: np.ndarray, day: np.ndarray, dbx: np.ndarray, dby: np.nda
     rsum = r + 0.0
     det = qb * qb - qa * (aa - rsum * rsum)
     t = (-qb - np.sqrt(det)) / qa
-    return t, (det >= 0.0) & (t >= 0.0) & (t <= 1.0)
+    return t, (det >= 0.0) & (t >= 0.0) & (t <= 1.0)  # t <= 1 matters for the caps rule

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from ..results import temp_beside
 from ._pygame import require_pygame
 
 pygame = require_pygame()
@@ -98,15 +98,7 @@ def _pixels(surface: "pygame.Surface") -> np.ndarray:
 
 def _temp_name(path: Path) -> str:
     """A fresh file next to ``path`` with the same extension (the writers pick the format by it)."""
-    directory = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{path.suffix.lower()}",
-                               dir=directory)
-    os.close(fd)
-    # mkstemp makes the file private (0600); give it the permissions a new file normally gets.
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    return tmp
+    return temp_beside(path, f".part{path.suffix.lower()}")
 
 
 def _progress(frames, enabled: bool, name: str):

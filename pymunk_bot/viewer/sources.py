@@ -72,14 +72,7 @@ class LiveSource:
 
     def reset(self) -> None:
         """Rebuild the simulation from its config and seed; observers (e.g. a logger) stay."""
-        observers = list(self.sim.observers)
         self.sim.reset()
-        for observer in observers:
-            if observer not in self.sim.observers:
-                self.sim.observers.append(observer)
-            on_reset = getattr(observer, "on_reset", None)
-            if on_reset is not None:
-                on_reset(self.sim)
         self._rebuild()
 
     def _observe(self) -> None:

@@ -51,18 +51,19 @@ def mixed_world(seed: int, size: float = 12.0) -> tuple[pymunk.Space, list[pymun
     for _ in range(25):  # boxes, half of them rotated
         angle = rng.uniform(0, math.pi) if rng.random() < 0.5 else 0.0
         space.add(box(sb, *rng.uniform(0, size, 2), *rng.uniform(0.1, 1.2, 2), angle))
-    for _ in range(4):  # static circles, some with an offset on a moved static body
+    for _ in range(4):  # static circles (the offset places them)
         space.add(pymunk.Circle(sb, rng.uniform(0.05, 0.6), tuple(rng.uniform(0, size, 2))))
     for _ in range(4):  # thin and thick segments (a thick segment is a capsule)
         a = rng.uniform(0, size, 2)
-        space.add(pymunk.Segment(sb, tuple(a), tuple(a + rng.uniform(-3, 3, 2)), rng.choice([0.0, 0.02, 0.3])))
+        radius = float(rng.choice([0.0, 0.02, 0.3]))
+        space.add(pymunk.Segment(sb, tuple(a), tuple(a + rng.uniform(-3, 3, 2)), radius))
     outline = [(0, 0), (3, 0), (3, 3), (2, 3), (2, 1), (1, 1), (1, 3), (0, 3), (0, 0)]  # a U, CCW
     ox, oy = rng.uniform(0, size - 3, 2)
     for part in convex_decomposition(outline, 0.0):
         space.add(pymunk.Poly(sb, [(x + ox, y + oy) for x, y in part]))
     space.add(pymunk.Poly(sb, [(1, 1), (2, 1), (1.5, 1.8)], radius=0.15))  # rounded triangle
     movers = []
-    for _ in range(6):  # pushable boxes and a wheel with an offset circle, kicked and stepped
+    for _ in range(6):  # pushable boxes, each with an offset circle too, kicked and stepped
         body = pymunk.Body(1.0, 1.0)
         body.position = tuple(rng.uniform(1, size - 1, 2))
         body.angle = rng.uniform(-math.pi, math.pi)
@@ -83,8 +84,8 @@ def assert_same(space: pymunk.Space, caster: RayCaster, origin, angles, max_rang
     got = caster.cast(origin, angles, max_range, shape_filter)
     assert got.dtype == np.float64 and got.shape == (len(angles),)
     bad = np.flatnonzero(np.abs(got - want) > TOL)
-    assert bad.size == 0, (f"{bad.size} rays differ from pymunk, e.g. angle {angles[bad[0]]!r} from {origin}: "
-                           f"pymunk {want[bad[0]]!r}, RayCaster {got[bad[0]]!r}")
+    assert bad.size == 0, (f"{bad.size} rays differ from pymunk, e.g. angle {angles[bad[0]]!r} "
+                           f"from {origin}: pymunk {want[bad[0]]!r}, RayCaster {got[bad[0]]!r}")
     return got
 
 
@@ -128,12 +129,13 @@ def test_random_mixed_worlds_match_pymunk(seed):
         if k % 3 == 0:  # a robot's own view: its group hides itself, not the others
             who = int(rng.integers(len(robots)))
             origin, shape_filter = tuple(robots[who].position), pymunk.ShapeFilter(group=who + 1)
-        assert_same(space, caster, origin, fans[k % 4], float(rng.choice([0.3, 2.5, 10.0, 40.0])), shape_filter)
+        max_range = float(rng.choice([0.3, 2.5, 10.0, 40.0]))
+        assert_same(space, caster, origin, fans[k % 4], max_range, shape_filter)
 
 
 @pytest.mark.parametrize("seed", range(6))
 def test_origins_hugging_edges_match_pymunk(seed):
-    """Origins a hair outside (or on) polygon edges and circles, where rounding decides."""
+    """Origins a hair outside (or exactly on) polygon edges, where rounding decides."""
     space, _ = mixed_world(seed)
     caster = RayCaster(space)
     rng = np.random.default_rng(200 + seed)

@@ -210,3 +210,18 @@ def test_run_window_opens_handles_events_and_returns():
     run_window(sim, 5.0)
     assert sim.steps == 1  # paused at once, one step, then quit
     assert not pygame.display.get_init()
+
+
+def test_an_unreachable_display_falls_back_to_headless_instead_of_an_invisible_window(tmp_path):
+    """SDL silently picks its offscreen driver when no display answers; the CLI must not."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("SDL_VIDEODRIVER", "WAYLAND_DISPLAY")}
+    env.update(DISPLAY=":97", XDG_RUNTIME_DIR=str(tmp_path))  # no X server there
+    done = subprocess.run([sys.executable, "-m", "pymunk_bot", "run", "--duration", "0.2"],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode in (0, 1), done.stderr
+    assert "running headless" in done.stdout
+    assert "0.20 s simulated" in done.stdout
