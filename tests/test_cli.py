@@ -85,3 +85,9 @@ def test_python_api_of_the_contract():
     r.set_wheel_speeds(0.5, 0.4)
     assert r.odometry.pose.shape == (3,)
     assert r.collisions == 0
+    ranges = r.lidar.scan()
+    assert ranges.shape == (360,) and r.lidar.angles.shape == (360,)
+    ahead = int(abs(r.lidar.angles).argmin())
+    crate_face = 4.0 - 0.25
+    assert ranges[ahead] == pytest.approx(crate_face - r.pose[0], abs=1e-6)  # the crate
+    assert r.lidar.ranges.shape == (360,)

@@ -568,6 +568,9 @@ class _Scene:
         self.ends = kept  # column where each kind ends
         self.n_edges = kept[0]
         dan = dan.compress(sel_e, axis=1)
+        # With d > 0 only den > 0 gives t >= 0; d == 0 (origin on the plane) needs Chipmunk's
+        # own t >= 0 test, which also passes t = -0.0.
+        self.on_plane = not dan[0].all()
         self._intervals(dan[0], world.rounded)
         # From here on RAD and VN hold d and a.n for edges, so that rows RAD: are exactly
         # the per-edge terms of the pair test (d, a.n, nx, ny, dt_min, dt_max).
@@ -650,7 +653,7 @@ class _Scene:
         den = an - (bx * nx + by * ny)
         t = d / den
         # Chipmunk also rejects t > 1; here such a t cannot lower best (which starts at 1).
-        ok = (np.abs(den) >= _PARALLEL_EPS) & (t >= 0.0)
+        ok = ((np.abs(den) >= _PARALLEL_EPS) & (t >= 0.0)) if self.on_plane else den >= _PARALLEL_EPS
         one_t = 1.0 - t
         dt = nx * (self.oy * one_t + by * t) - ny * (self.ox * one_t + bx * t)
         ok &= (dt_min <= dt) & (dt <= dt_max)
