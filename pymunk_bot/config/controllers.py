@@ -12,6 +12,18 @@ from pydantic import AfterValidator, Field
 from .types import Float, NonNegativeFloat, PositiveFloat, PositiveInt, Section, Vec2
 
 
+class _DrivingConfig(Section):
+    """Keys every path- or goal-driving controller shares."""
+
+    rate: PositiveFloat = 10.0  # [Hz]
+    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
+    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
+
+
+class _GoalConfig(_DrivingConfig):
+    goal: Vec2 | None = None  # [m]; None = the robot's goal
+
+
 class WheelsControllerConfig(Section):
     """Constant wheel speeds."""
 
@@ -21,16 +33,12 @@ class WheelsControllerConfig(Section):
     rate: PositiveFloat = 10.0  # [Hz]
 
 
-class GoToGoalControllerConfig(Section):
+class GoToGoalControllerConfig(_GoalConfig):
     """Proportional steering toward a point: v = k_rho * distance, omega = k_alpha * bearing."""
 
     type: Literal["go_to_goal"]
-    goal: Vec2 | None = None  # [m]; None = the robot's goal
-    rate: PositiveFloat = 10.0  # [Hz]
     k_rho: PositiveFloat = 1.0  # [1/s]
     k_alpha: PositiveFloat = 3.0  # [1/s]
-    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
-    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
 
 
 class PursuitConfig(Section):
@@ -44,15 +52,14 @@ class PursuitConfig(Section):
     rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot above
 
 
-class WaypointsControllerConfig(Section):
-    """Follow a polyline of points with pure pursuit; ``loop`` patrols it forever."""
+class WaypointsControllerConfig(_DrivingConfig):
+    """Follow a polyline of points with pure pursuit; ``loop`` patrols it forever.
+
+    ``tolerance`` is the stop radius at the last point."""
 
     type: Literal["waypoints"]
     points: list[Vec2] = Field(min_length=1)  # [m]
     loop: bool = False
-    rate: PositiveFloat = 10.0  # [Hz]
-    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
-    tolerance: NonNegativeFloat | None = None  # [m] stop radius at the last point; None = goal's
     pursuit: PursuitConfig = PursuitConfig()
 
 
@@ -72,25 +79,17 @@ class DwaConfig(Section):
     allow_reverse: bool = False  # back away slowly when closer than ``safety`` to something
 
 
-class AvoidControllerConfig(Section):
+class AvoidControllerConfig(_GoalConfig):
     """Reactive obstacle avoidance from the LiDAR toward a goal (Dynamic Window Approach)."""
 
     type: Literal["avoid"]
-    goal: Vec2 | None = None  # [m]; None = the robot's goal
-    rate: PositiveFloat = 10.0  # [Hz]
-    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
-    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
     dwa: DwaConfig = DwaConfig()
 
 
-class NavigateControllerConfig(Section):
+class NavigateControllerConfig(_GoalConfig):
     """Global A* on the scenario's map plus a local controller that follows the path."""
 
     type: Literal["navigate"]
-    goal: Vec2 | None = None  # [m]; None = the robot's goal
-    rate: PositiveFloat = 10.0  # [Hz]
-    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
-    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
     resolution: Annotated[PositiveFloat, Field(ge=0.01)] = 0.1  # [m] planning grid cell size
     margin: NonNegativeFloat = 0.25  # [m] clearance beyond the radius that paths try to keep
     hard_margin: NonNegativeFloat = 0.02  # [m] beyond the radius: closer cells are blocked

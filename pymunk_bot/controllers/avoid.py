@@ -47,11 +47,8 @@ class AvoidController(Controller):
     """Drives to the goal around whatever the LiDAR sees; needs a ``lidar`` on the robot."""
 
     def __init__(self, config: AvoidControllerConfig, robot: RobotSpec) -> None:
-        super().__init__()
-        self.config = config
-        self.rate = config.rate
-        max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
-        self.window = DynamicWindow(robot, dwa_params(config.dwa, max_speed), 1.0 / config.rate)
+        super().__init__(config, robot)
+        self.window = DynamicWindow(robot, dwa_params(config.dwa, self.max_speed), 1.0 / config.rate)
         self.command = (0.0, 0.0)  # last (v, omega): our velocity estimate
         self._best_distance = math.inf
         self._best_time = 0.0

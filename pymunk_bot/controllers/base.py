@@ -22,9 +22,17 @@ class Controller:
     rate: float = 10.0  # [Hz]
     needs_map: bool = False  # True: the simulation calls set_map() before the first compute()
 
-    def __init__(self) -> None:
+    def __init__(self, config=None, robot: RobotSpec | None = None) -> None:
+        """Built-in controllers pass their config and robot: that sets ``config``, ``rate`` and
+        ``max_speed`` (the config's, capped by the robot's max wheel speed)."""
         self.status = "running"
         self.message = ""
+        if config is not None:
+            self.config = config
+            self.rate = getattr(config, "rate", None) or self.rate
+        if robot is not None:
+            wanted = getattr(config, "max_speed", None) or robot.max_wheel_speed
+            self.max_speed = min(wanted, robot.max_wheel_speed)
 
     def compute(self, obs: Observation) -> tuple[float, float]:
         """Left and right wheel speeds [m/s] for the next control period."""

@@ -18,10 +18,7 @@ class GoToGoalController(Controller):
     """Steers straight at one goal point and stops inside the tolerance."""
 
     def __init__(self, config: GoToGoalControllerConfig, robot: RobotSpec) -> None:
-        super().__init__()
-        self.config = config
-        self.rate = config.rate
-        self.max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
+        super().__init__(config, robot)
 
     def compute(self, obs: Observation) -> tuple[float, float]:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)

@@ -40,13 +40,10 @@ class NavigateController(Controller):
     needs_map = True
 
     def __init__(self, config: NavigateControllerConfig, robot: RobotSpec) -> None:
-        super().__init__()
-        self.config = config
+        super().__init__(config, robot)
         self.robot = robot
-        self.rate = config.rate
-        max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
-        self.gains = pursuit_gains(config.pursuit, robot, max_speed, config.lookahead)
-        self.window = DynamicWindow(robot, dwa_params(config.dwa, max_speed), 1.0 / config.rate)
+        self.gains = pursuit_gains(config.pursuit, robot, self.max_speed, config.lookahead)
+        self.window = DynamicWindow(robot, dwa_params(config.dwa, self.max_speed), 1.0 / config.rate)
         self.hard = robot.radius + config.hard_margin  # [m] closer cells are blocked
         self.soft = robot.radius + config.margin  # [m] paths keep this much where they can
         self.map: MapInfo | None = None

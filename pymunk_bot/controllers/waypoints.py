@@ -65,11 +65,8 @@ class WaypointsController(Controller):
     """Follows ``points`` in order from wherever the robot starts; stops at the last one."""
 
     def __init__(self, config: WaypointsControllerConfig, robot: RobotSpec) -> None:
-        super().__init__()
-        self.config = config
-        self.rate = config.rate
-        max_speed = min(config.max_speed or robot.max_wheel_speed, robot.max_wheel_speed)
-        self.gains = pursuit_gains(config.pursuit, robot, max_speed)
+        super().__init__(config, robot)
+        self.gains = pursuit_gains(config.pursuit, robot, self.max_speed)
         self.corner_radius = config.pursuit.corner_radius
         self.points = [tuple(p) for p in config.points]
         self.lead_in: PathFollower | None = None  # from the start pose to the first point

@@ -10,8 +10,7 @@ class WheelsController(Controller):
     """Drives both wheels at fixed speeds forever."""
 
     def __init__(self, config: WheelsControllerConfig, robot: RobotSpec) -> None:
-        super().__init__()
-        self.rate = config.rate
+        super().__init__(config)
         self.speeds = (config.left, config.right)
 
     def compute(self, obs: Observation) -> tuple[float, float]:
