@@ -2,10 +2,12 @@
 
     python -m pymunk_bot.benchmarks.lidar
 
-Each world gets 360-beam full-circle scans (10 m range) from free poses; the two methods
-are timed alternately and each figure is the median of several repeats. Times are the CPU
-time of this thread (time.thread_time), so load from other processes on a shared machine
-does not count. The last column is the largest disagreement between them over every ray.
+Each world gets 360-beam full-circle scans (10 m range, random headings) from free
+poses: robots' own positions with their own shape filter when there are robots. The two
+methods are timed alternately, block by block, and each figure is the median over the
+repeats of the CPU time of this thread (time.thread_time, garbage collection paused), so
+time spent waiting for other processes on a shared machine is not counted. The last
+column is the largest disagreement between the two over every ray cast.
 """
 from __future__ import annotations
 
@@ -107,7 +109,7 @@ def measure(seed: int = 0) -> list[dict]:
         def slow(origin, angles, shape_filter):
             return reference_cast(space, origin, angles, MAX_RANGE, shape_filter)
 
-        fast(*poses[0][:1], beams, poses[0][2])  # builds the static cache: not timed
+        fast(poses[0][0], beams, poses[0][2])  # builds the static cache: not timed
         fast_us, slow_us, worst = [], [], 0.0
         gc_was_enabled = gc.isenabled()
         gc.disable()

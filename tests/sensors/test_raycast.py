@@ -152,6 +152,35 @@ def test_origins_hugging_edges_match_pymunk(seed):
         assert_same(space, caster, origin, angles, 6.0)
 
 
+def test_origin_a_denormal_off_a_wall_matches_pymunk():
+    """d / den underflows to -0.0, which Chipmunk accepts as a hit at alpha 0."""
+    space = arena(12.0, 12.0)
+    caster = RayCaster(space)
+    for y in (5e-324, 1e-323, 1e-300, 0.0):
+        got = assert_same(space, caster, (2.0, y), np.linspace(-math.pi, math.pi, 721), 5.0)
+        assert y != 5e-324 or got[540] == 0.0  # straight up: d = 5e-324, den = -5, t = -0.0
+
+
+def test_origins_ulps_from_extreme_vertices_match_pymunk():
+    """A few ulps outside a rotated box's leftmost/rightmost/top/bottom vertex: on (within
+    rounding) both the shape and its bounding box, where pymunk's box test decides."""
+    space, _ = mixed_world(4)
+    caster = RayCaster(space)
+    boxes = [s for s in space.shapes
+             if isinstance(s, pymunk.Poly) and s.body.body_type == pymunk.Body.STATIC]
+    for poly in boxes[:20]:
+        verts = [tuple(poly.body.local_to_world(v)) for v in poly.get_vertices()]
+        for (x, y), (toward_x, toward_y) in [(min(verts), (-1, 0)), (max(verts), (1, 0)),
+                                             (min(verts, key=lambda v: v[1]), (0, -1)),
+                                             (max(verts, key=lambda v: v[1]), (0, 1))]:
+            for ulps in (1, 2, 3):
+                ox, oy = x, y
+                for _ in range(ulps):
+                    ox = math.nextafter(ox, math.inf * toward_x) if toward_x else ox
+                    oy = math.nextafter(oy, math.inf * toward_y) if toward_y else oy
+                assert_same(space, caster, (ox, oy), FAN, 25.0)
+
+
 def test_origins_next_to_vertices_match_pymunk():
     """Within 1e-15..1e-9 m of a corner, rounding can make any nearby ray graze it."""
     space, _ = mixed_world(3)
@@ -205,10 +234,16 @@ def test_dense_world_match_pymunk():
         assert_same(space, caster, origin, FAN + k, float(rng.choice([3.0, 10.0, 30.0])), shape_filter)
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(x=st.floats(-1.0, 13.0), y=st.floats(-1.0, 13.0),
-       angles=st.lists(st.floats(-10.0, 10.0), min_size=1, max_size=40),
-       max_range=st.floats(0.01, 30.0))
+# Coordinates on the walls and a hair (even a denormal) off them: where rounding decides.
+EDGY = st.sampled_from([0.0, 5e-324, -5e-324, 1e-300, 1e-12, 6.0, 12.0])
+
+
+@settings(max_examples=400, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(x=st.one_of(st.floats(-1.0, 13.0), EDGY), y=st.one_of(st.floats(-1.0, 13.0), EDGY),
+       angles=st.lists(st.one_of(st.floats(-10.0, 10.0), st.sampled_from([0.0, math.pi / 2, math.pi])),
+                       min_size=1, max_size=40),
+       max_range=st.one_of(st.floats(1e-6, 30.0), st.sampled_from([6.0, 12.0])))
 def test_any_rays_match_pymunk(x, y, angles, max_range):
     assert_same(HYPOTHESIS_WORLD[0], HYPOTHESIS_WORLD[1], (x, y), np.array(angles), max_range)
 
@@ -346,3 +381,35 @@ def test_moved_static_body_is_followed():
     anchor.position, anchor.angle = (1.0, 0.0), 0.4
     space.reindex_static()
     assert_same(space, caster, (0.0, 0.0), FAN, 10.0)
+
+
+def test_static_world_with_alternating_filters_is_bit_identical():
+    """The static fast path keeps per-filter work between casts; interleave filters that
+    admit different parts of every kind (sharp and rounded edges, circles, segments) and
+    check every ray is bit-identical to pymunk, on an even fan and on random angles."""
+    rng = np.random.default_rng(7)
+    space = arena(12.0, 12.0)
+    sb = space.static_body
+    for k in range(60):
+        x, y = rng.uniform(0.5, 11.5, 2)
+        kind = k % 4
+        if kind == 0:
+            shape = box(sb, x, y, *rng.uniform(0.2, 0.8, 2), rng.uniform(0, math.pi))
+        elif kind == 1:
+            shape = pymunk.Poly(sb, [(x, y), (x + 0.5, y), (x + 0.2, y + 0.4)], radius=0.05)
+        elif kind == 2:
+            shape = pymunk.Circle(sb, float(rng.uniform(0.1, 0.4)), (float(x), float(y)))
+        else:
+            shape = pymunk.Segment(sb, (x, y), (x + rng.uniform(-1, 1), y + rng.uniform(-1, 1)), 0.03)
+        shape.filter = pymunk.ShapeFilter(group=k % 3, categories=1 << (k % 2))
+        space.add(shape)
+    caster = RayCaster(space)
+    filters = [pymunk.ShapeFilter(), pymunk.ShapeFilter(group=1), pymunk.ShapeFilter(group=2),
+               pymunk.ShapeFilter(mask=0b10), pymunk.ShapeFilter(categories=0b1, mask=0b1)]
+    for _ in range(3):
+        for shape_filter in filters:
+            origin = tuple(rng.uniform(0.5, 11.5, 2))
+            for angles in (FAN + rng.uniform(-math.pi, math.pi), rng.uniform(-10, 10, 50)):
+                want = reference_cast(space, origin, angles, 8.0, shape_filter)
+                got = caster.cast(origin, angles, 8.0, shape_filter)
+                assert np.array_equal(got, want), (origin, shape_filter)

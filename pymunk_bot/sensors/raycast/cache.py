@@ -1,0 +1,133 @@
+"""Per-space cache of primitive tables: static ones in world coordinates, built once.
+
+pymunk skips a static shape whose bounding box a rounded slab test says the segment
+misses; the corner flags and side lines kept here mark the only rays where that test can
+disagree with the shape's own, so the caster can hand exactly those rays to pymunk.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+
+from .geometry import AX, AY, BX, BY, RAD, ROWS, Collector, World, body_transform, kind_slices, moved, transforms
+
+
+def bounding_boxes(world: World) -> np.ndarray:
+    """(4, n_shapes) l, b, r, t of each shape, as cpShapeCacheBB computes them."""
+    rows, owner = world.rows, world.owner
+    box = np.empty((4, world.bound.shape[1]))
+    box[:2], box[2:] = np.inf, -np.inf
+    r = rows[RAD]
+    for x, y in ((AX, AY), (BX, BY)):
+        np.minimum.at(box[0], owner, rows[x] - r)
+        np.minimum.at(box[1], owner, rows[y] - r)
+        np.maximum.at(box[2], owner, rows[x] + r)
+        np.maximum.at(box[3], owner, rows[y] + r)
+    return box
+
+
+def corner_flags(world: World, box: np.ndarray) -> World:
+    """Add a flag at every bounding-box corner that (nearly) lies on its shape.
+
+    pymunk tests a static shape only if the query segment meets its bounding box, by a
+    rounded slab test. The box test can reject a ray that the shape's exact test accepts
+    only if the ray runs (within rounding) along a side line of the box (see
+    caster.RayCaster._side_flags)
+    or through a corner that lies on the shape; rays near a flag are answered by pymunk.
+    'Nearly' is generous (1e-6 of the world's size): extra flags only cost time."""
+    rows, owner, sl = world.rows, world.owner, kind_slices(world.counts)
+    n = box.shape[1]
+    corners = np.stack((box[[0, 2, 2, 0]], box[[1, 1, 3, 3]]))  # (2, 4 corners, n)
+    # Distance from each corner to the nearest vertex disc of its shape (an upper bound on
+    # the distance to the shape's boundary near a corner).
+    gap = np.full((4, n), np.inf)
+    for x, y in ((AX, AY), (BX, BY)):
+        for c in range(4):
+            d = np.hypot(rows[x] - corners[0, c, owner], rows[y] - corners[1, c, owner]) - rows[RAD]
+            np.minimum.at(gap[c], owner, d)
+    finite = np.isfinite(box).all(axis=0)
+    size = 1.0 + (np.abs(box[:, finite]).max() if finite.any() else 0.0)
+    c_idx, who = np.nonzero((gap <= 1e-6 * size) & finite)
+    flag_rows = np.zeros((ROWS, who.shape[0]))
+    flag_rows[AX] = flag_rows[BX] = corners[0, c_idx, who]
+    flag_rows[AY] = flag_rows[BY] = corners[1, c_idx, who]
+    order = np.argsort(who, kind="stable")
+    pieces = [rows[:, sl[0]], flag_rows[:, order], rows[:, sl[2]], rows[:, sl[3]]]
+    owners = [owner[sl[0]], who[order], owner[sl[2]], owner[sl[3]]]
+    counts = (world.counts[0], who.shape[0], world.counts[2], world.counts[3])
+    return World(np.concatenate(pieces, axis=1), np.concatenate(owners), counts, world.bound)
+
+
+class SceneCache:
+    """Static geometry kept in world coordinates; dynamic geometry moved on every cast.
+
+    Rebuilt when the space's shapes change (compared by identity on every cast) or a
+    static body's transform changes."""
+
+    def __init__(self, space: pymunk.Space) -> None:
+        self.space = space
+        self._key: tuple[pymunk.Shape, ...] | None = None
+
+    def invalidate(self) -> None:
+        self._key = None
+
+    def world(self) -> tuple[list[World], np.ndarray]:
+        """World primitive tables (static, then moving shapes) and every shape's bounding
+        circle (cx, cy, radius) in shape order."""
+        key = tuple(self.space.shapes)
+        if key != self._key or any(body_transform(b) != tf for b, tf in self._static_tf.items()):
+            self._build(key)
+        if not self._bodies:
+            return [self._static], self._static.bound
+        tf = transforms(self._handles)
+        rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body, self._shape_body)
+        moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
+        return [self._static, moving], np.concatenate((self._static.bound, bound), axis=1)
+
+    def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
+        static = [s for s in key if s.body.body_type == pymunk.Body.STATIC]
+        dynamic = [s for s in key if s.body.body_type != pymunk.Body.STATIC]
+        self.shapes: list[pymunk.Shape] = static + dynamic
+        filters = [s.filter for s in self.shapes]
+        self.groups = np.array([f.group for f in filters], dtype=np.uint64)
+        self.categories = np.array([f.categories for f in filters], dtype=np.uint64)
+        self.masks = np.array([f.mask for f in filters], dtype=np.uint64)
+        self._admitted: dict[pymunk.ShapeFilter, tuple[np.ndarray, int]] = {}
+
+        collect = Collector()
+        for i, s in enumerate(static):
+            collect.add(s, i)
+        rows, owner, counts, bound = collect.tables()
+        self._static_tf = {b: body_transform(b) for b in {id(s.body): s.body for s in static}.values()}
+        tf = np.array([self._static_tf[s.body] for s in static]).reshape(-1, 4).T
+        rows, bound = moved(rows, bound, tf, owner, np.arange(len(static)))
+        static_world = World(rows, owner, counts, bound)
+        box = bounding_boxes(static_world)
+        self._static = corner_flags(static_world, box)
+        # Sorted coordinates of the static boxes' vertical and horizontal side lines.
+        finite = np.isfinite(box).all(axis=0)
+        self.side_x: list[float] = np.unique(box[[0, 2]][:, finite]).tolist()
+        self.side_y: list[float] = np.unique(box[[1, 3]][:, finite]).tolist()
+
+        collect = Collector()
+        for i, s in enumerate(dynamic):
+            collect.add(s, len(static) + i)
+        self._local = World(*collect.tables())
+        self._bodies = list({id(s.body): s.body for s in dynamic}.values())
+        self._handles = [b._body for b in self._bodies]
+        slot = {id(b): k for k, b in enumerate(self._bodies)}
+        self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
+        self._prim_body = self._shape_body[self._local.owner - len(static)]
+        self._key = key
+
+    def admitted(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int]:
+        """Shapes the query filter does not reject (cpShapeFilterReject, negated), and their count."""
+        found = self._admitted.get(f)
+        if found is None:
+            group, cats, qmask = int(f.group), int(f.categories), int(f.mask)
+            reject = ((self.groups != 0) & (self.groups == group)) \
+                | ((self.categories & qmask) == 0) | ((self.masks & cats) == 0)
+            found = self._admitted[f] = (~reject, int(np.count_nonzero(~reject)))
+        return found
+

@@ -1,0 +1,155 @@
+"""Primitive tables: pymunk shapes as columns of Chipmunk's own per-primitive numbers.
+
+Every shape becomes capsules A-B of radius RAD, one column each, grouped by kind, with
+world coordinates computed by Chipmunk's transform arithmetic in Chipmunk's order, so
+every later test sees the very floats Chipmunk would.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import sys
+
+import numpy as np
+import pymunk
+
+# cpvnormalize adds CPFLOAT_MIN (DBL_MIN) to the length; kept for bit-equal normals.
+_DBL_MIN = sys.float_info.min
+
+# Rows of a primitive table (one column per primitive). Every primitive is a capsule A-B
+# of radius RAD; the kinds are stored contiguously in this order:
+#   edge:    A = vertex i, B = vertex i-1, N = plane normal, VN = A.N, RAD = poly radius,
+#            DTMIN = cross(N, B), DTMAX = cross(N, A)       (cpPolyShapeSegmentQuery terms)
+#   flag:    A = B = a corner of a static shape's bounding box that lies on the shape (see
+#            cache.corner_flags); rays through it are handed to pymunk itself
+#   circle:  A = B = centre (also the rounded corners of polys with a radius)
+#   segment: A, B = end points, N = the segment's normal
+AX, AY, BX, BY, RAD, VN, NX, NY, DTMIN, DTMAX = range(10)
+RAW = [AX, AY, BX, BY, RAD, NX, NY]  # the rows Collector fills
+ROWS = 10
+KINDS = 4
+
+
+
+def body_transform(body: pymunk.Body) -> tuple[float, float, float, float]:
+    """(cos, sin, tx, ty) of the body's cpTransform, read exactly.
+
+    cpBodyGetRotation returns the transform's (a, b) and cpBodyGetPosition its (tx, ty)
+    (c = -b, d = a); the public properties return the same numbers at ~3x the cost."""
+    rot = pymunk.cp.cpBodyGetRotation(body._body)
+    pos = pymunk.cp.cpBodyGetPosition(body._body)
+    return rot.x, rot.y, pos.x, pos.y
+
+
+def transforms(handles: list) -> np.ndarray:
+    """(4, n) cos, sin, tx, ty of many bodies (their cffi handles), as body_transform."""
+    rotation, position = pymunk.cp.cpBodyGetRotation, pymunk.cp.cpBodyGetPosition
+    out: list[float] = []
+    add = out.extend
+    for h in handles:
+        r, p = rotation(h), position(h)
+        add((r.x, r.y, p.x, p.y))
+    return np.array(out).reshape(-1, 4).T
+
+
+def moved(rows: np.ndarray, bound: np.ndarray, tf: np.ndarray, prim_body: np.ndarray,
+           shape_body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Local tables to world: cpTransformPoint / cpTransformVect in Chipmunk's operation order,
+    then the derived edge terms."""
+    rx, ry, tx, ty = tf.take(prim_body, axis=1)
+    out = np.empty_like(rows)
+    for x, y in ((AX, AY), (BX, BY)):
+        out[x] = rx * rows[x] - ry * rows[y] + tx
+        out[y] = ry * rows[x] + rx * rows[y] + ty
+    out[NX] = rx * rows[NX] - ry * rows[NY]
+    out[NY] = ry * rows[NX] + rx * rows[NY]
+    out[RAD] = rows[RAD]
+    out[VN] = out[AX] * out[NX] + out[AY] * out[NY]
+    out[DTMIN] = out[NX] * out[BY] - out[NY] * out[BX]
+    out[DTMAX] = out[NX] * out[AY] - out[NY] * out[AX]
+    rx, ry, tx, ty = tf.take(shape_body, axis=1)
+    world_bound = np.stack((rx * bound[0] - ry * bound[1] + tx, ry * bound[0] + rx * bound[1] + ty, bound[2]))
+    return out, world_bound
+
+
+class Collector:
+    """Body-local primitives of a list of shapes, grouped by kind (no flags)."""
+
+    def __init__(self) -> None:
+        self.kinds: tuple[list[list[float]], ...] = ([], [], [], [])
+        self.owners: tuple[list[int], ...] = ([], [], [], [])
+        self.bound: list[list[float]] = []  # bounding circle per shape: cx, cy, radius
+
+    def add(self, shape: pymunk.Shape, index: int) -> None:
+        edges, _, circles, segments = self.kinds
+        if isinstance(shape, pymunk.Poly):
+            verts = [tuple(v) for v in shape.get_vertices()]
+            r = shape.radius
+            for (qx, qy), (px, py) in zip(verts, verts[-1:] + verts[:-1]):
+                # SetVerts: n = cpvnormalize(cpvrperp(v_i - v_{i-1})), rperp(x, y) = (y, -x).
+                ex, ey = qx - px, qy - py
+                inv = 1.0 / (math.sqrt(ey * ey + (-ex) * (-ex)) + _DBL_MIN)
+                edges.append([qx, qy, px, py, r, ey * inv, (-ex) * inv])
+                self.owners[0].append(index)
+            if r > 0.0:  # rounded corners: CircleSegmentQuery at each vertex
+                circles.extend([[x, y, x, y, r, 0.0, 0.0] for x, y in verts])
+                self.owners[2].extend([index] * len(verts))
+            cx = sum(v[0] for v in verts) / len(verts)
+            cy = sum(v[1] for v in verts) / len(verts)
+            self.bound.append([cx, cy, max(math.hypot(x - cx, y - cy) for x, y in verts) + r])
+        elif isinstance(shape, pymunk.Circle):
+            (cx, cy), r = shape.offset, shape.radius
+            circles.append([cx, cy, cx, cy, r, 0.0, 0.0])
+            self.owners[2].append(index)
+            self.bound.append([cx, cy, r])
+        elif isinstance(shape, pymunk.Segment):
+            (ax, ay), (bx, by), (nx, ny), r = shape.a, shape.b, shape.normal, shape.radius
+            segments.append([ax, ay, bx, by, r, nx, ny])
+            self.owners[3].append(index)
+            self.bound.append([(ax + bx) / 2, (ay + by) / 2, math.hypot(bx - ax, by - ay) / 2 + r])
+        else:
+            raise TypeError(f"unsupported shape type {type(shape).__name__}")
+
+    def tables(self) -> tuple[np.ndarray, np.ndarray, tuple[int, ...], np.ndarray]:
+        """(rows, owner shape per column, per-kind counts, bounding circles)."""
+        rows = np.zeros((ROWS, sum(len(k) for k in self.kinds)))
+        raw = [r for kind in self.kinds for r in kind]
+        if raw:
+            rows[RAW] = np.array(raw, dtype=np.float64).T
+        owner = np.array([i for kind in self.owners for i in kind], dtype=np.intp)
+        counts = tuple(len(k) for k in self.kinds)
+        bound = np.array(self.bound, dtype=np.float64).reshape(-1, 3).T.copy()
+        return rows, owner, counts, bound
+
+
+class World:
+    """A primitive table: rows (see AX...), owner shape of each column, column count of each
+    kind, and each shape's bounding circle (cx, cy, radius)."""
+
+    def __init__(self, rows: np.ndarray, owner: np.ndarray, counts: tuple[int, ...],
+                 bound: np.ndarray, rounded: bool | None = None) -> None:
+        self.rows, self.owner, self.counts, self.bound = rows, owner, counts, bound
+        # Whether any polygon edge has a radius (those need the slower interval rule).
+        self.rounded = bool(rows[RAD, :counts[0]].any()) if rounded is None else rounded
+        # Cast-independent work on a cached static table (see scene._static_selection).
+        self.scratch: np.ndarray | None = None
+        self.selections: dict = {}
+
+
+def kind_slices(counts: tuple[int, ...]) -> list[slice]:
+    ends = list(itertools.accumulate(counts))
+    return [slice(e - c, e) for c, e in zip(counts, ends)]
+
+
+def merge(parts: list[World]) -> World:
+    """Concatenate the primitive tables kind by kind (bounding circles are not merged)."""
+    if len(parts) == 1:
+        return parts[0]
+    slices = [kind_slices(w.counts) for w in parts]
+    pieces = [(w, sl[k]) for k in range(KINDS) for w, sl in zip(parts, slices)]
+    rows = np.concatenate([w.rows[:, sl] for w, sl in pieces], axis=1)
+    owner = np.concatenate([w.owner[sl] for w, sl in pieces])
+    counts = tuple(sum(w.counts[k] for w in parts) for k in range(KINDS))
+    return World(rows, owner, counts, np.empty((3, 0)), any(w.rounded for w in parts))
+
