@@ -31,7 +31,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .sim import Simulation
 
     config = load_scenario(args.scenario)
-    sim = Simulation(config, seed=args.seed)
+    sim = Simulation(config, seed=args.seed, source=args.scenario)
     duration = args.duration if args.duration is not None else config.world.duration
     if args.duration is not None and not args.duration > 0:
         raise ScenarioError("--duration", "", f"must be > 0 (got {args.duration:g})")

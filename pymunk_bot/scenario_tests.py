@@ -87,7 +87,7 @@ def run_scenario(path: str | Path, seed: int | None = None,
     try:
         config = load_scenario(path)
         outcome.name = config.name
-        sim = Simulation(config, seed=seed)
+        sim = Simulation(config, seed=seed, source=str(path))
         sim.run(config.world.duration if duration is None else duration)
     except ScenarioError as exc:
         outcome.status, outcome.error = "error", str(exc)

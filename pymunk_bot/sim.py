@@ -26,8 +26,10 @@ class Simulation:
     whose period has come read the world; per-tick metrics.
     """
 
-    def __init__(self, config: ScenarioConfig, seed: int | None = None) -> None:
+    def __init__(self, config: ScenarioConfig, seed: int | None = None,
+                 source: str | None = None) -> None:
         self.config = config
+        self.source = source or f"scenario '{config.name}'"  # names the file in errors
         self.seed = config.seed if seed is None else int(seed)
         self.rng = np.random.default_rng(self.seed)
         world_rng, sensor_rng = self.rng.spawn(2)
@@ -50,7 +52,7 @@ class Simulation:
     @classmethod
     def from_file(cls, path: str | Path | None = None, seed: int | None = None) -> "Simulation":
         """Load a scenario file (path or shipped name; None = the built-in default)."""
-        return cls(load_scenario(path), seed=seed)
+        return cls(load_scenario(path), seed=seed, source=None if path is None else str(path))
 
     # ------------------------------------------------------------------ state
     @property
@@ -105,7 +107,7 @@ class Simulation:
         Observers stay attached; those with an ``on_reset(sim)`` method are told.
         """
         observers = self.observers
-        self.__init__(self.config, self.seed)
+        self.__init__(self.config, self.seed, self.source)
         self.observers = observers
         for observer in observers:
             on_reset = getattr(observer, "on_reset", None)
@@ -124,7 +126,7 @@ class Simulation:
         try:
             controller = controllers.get(config.type)(config, robot.spec)
         except ValueError as exc:  # e.g. a user's class refusing its params
-            raise ScenarioError(self.config.name, f"robots[{index}].controller", str(exc)) from None
+            raise ScenarioError(self.source, f"robots[{index}].controller", str(exc)) from None
         if getattr(controller, "needs_map", False):
             # What a real robot's prebuilt map holds: the arena and obstacles as the file says.
             if self._map is None:

@@ -70,5 +70,5 @@ def test_bad_class_paths_are_one_line_errors(user_package, class_path, problem):
 def test_unknown_params_are_reported_at_the_controller(user_package):
     with pytest.raises(ScenarioError) as err:
         Simulation(config_with({"type": "python", "class_path": user_package,
-                                "params": {"sped": 1.0}}))
-    assert "robots[0].controller" in str(err.value) and "sped" in str(err.value)
+                                "params": {"sped": 1.0}}), source="p.yaml")
+    assert str(err.value).startswith("p.yaml: robots[0].controller: ") and "sped" in str(err.value)
