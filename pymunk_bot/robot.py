@@ -47,7 +47,6 @@ class Robot:
         self.goal_tolerance = config.goal.tolerance if config.goal is not None else 0.2
         self.nav_goal = self.goal  # where the controller drives: its own goal, else the task's
         self.collisions = 0  # contact episodes so far
-        self.contacts: dict[pymunk.Shape, tuple[float, float]] = {}  # touching shape -> normal
         self.distance = 0.0  # true path length [m]
         self.time_to_goal: float | None = None
         self.distance_to_goal: float | None = None  # path length when the goal was reached [m]

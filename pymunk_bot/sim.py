@@ -142,7 +142,7 @@ class Simulation:
             time=self.time, pose=pose, odometry=odometry, goal=robot.nav_goal,
             goal_tolerance=robot.goal_tolerance, robot=robot.spec,
             scan=robot.lidar.latest if robot.lidar is not None else None,
-            bumper=bool(robot.contacts), extra=robot.readings())
+            bumper=robot.bumper.touching, extra=robot.readings())
 
     def _control(self, robot: Robot, now: float) -> None:
         if robot.overridden or robot.controller is None:

@@ -27,7 +27,7 @@ class World:
         }
         self._robot_of_shape = {r.shape: r for r in self.robots.values()}
         for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
-            self.space.on_collision(physics.ROBOT, other, begin=self._begin, separate=self._separate)
+            self.space.on_collision(physics.ROBOT, other, begin=self._begin)
         self.substeps = config.world.substeps or required_substeps(config)
 
     def _build_arena(self) -> list[pymunk.Shape]:
@@ -43,21 +43,9 @@ class World:
         return shapes
 
     # ------------------------------------------------------------------ contacts
-    def _robots_in(self, arbiter: pymunk.Arbiter):
-        a, b = arbiter.shapes
-        normal = arbiter.normal  # points from a to b
-        robot_a = self._robot_of_shape.get(a)
-        robot_b = self._robot_of_shape.get(b)
-        if robot_a is not None:
-            yield robot_a, b, (normal.x, normal.y)
-        if robot_b is not None:
-            yield robot_b, a, (-normal.x, -normal.y)
-
     def _begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
-        for robot, other, normal in self._robots_in(arbiter):
-            robot.collisions += 1
-            robot.contacts[other] = normal
-
-    def _separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
-        for robot, other, _ in self._robots_in(arbiter):
-            robot.contacts.pop(other, None)
+        """A contact episode starts: count it for every robot in it (both, robot on robot)."""
+        for shape in arbiter.shapes:
+            robot = self._robot_of_shape.get(shape)
+            if robot is not None:
+                robot.collisions += 1

@@ -107,7 +107,7 @@ def test_robot_robot_contact_counts_for_both(make_sim):
     a, b = sim.robots["a"], sim.robots["b"]
     assert a.collisions == 1 and b.collisions == 1
     assert b.pose[0] - a.pose[0] == pytest.approx(2 * RADIUS, abs=0.01)
-    assert a.contacts and b.contacts  # still touching (bumper)
+    assert a.bumper.touching and b.bumper.touching  # still pressed together
 
 
 def test_concave_polygon_is_solid_in_its_notch_outline(make_sim):
