@@ -8,26 +8,10 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
+from builders import scenario  # noqa: E402
+
 from pymunk_bot import Simulation  # noqa: E402
 from pymunk_bot.config import parse_scenario  # noqa: E402
-
-
-def scenario(robots: list[dict], obstacles: list[dict] | None = None, size=(20.0, 20.0),
-             **extra) -> dict:
-    """A scenario mapping with sensible defaults; ``extra`` adds top-level keys or world keys."""
-    world = {"size": list(size)}
-    for key in ("dt", "substeps", "duration", "wall_friction"):
-        if key in extra:
-            world[key] = extra.pop(key)
-    return {"name": "test", "world": world, "obstacles": obstacles or [], "robots": robots, **extra}
-
-
-def robot(pose, **keys) -> dict:
-    return {"name": keys.pop("name", "r"), "pose": list(pose), **keys}
-
-
-def wheels(left: float, right: float) -> dict:
-    return {"type": "wheels", "left": left, "right": right}
 
 
 @pytest.fixture

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 RADIUS = 0.2
 

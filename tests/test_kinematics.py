@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 TRACK = 0.3
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import pytest
-from conftest import robot
+from builders import robot
 
 from pymunk_bot.config.substeps import substeps_against_tunnelling
 

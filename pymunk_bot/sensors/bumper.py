@@ -28,25 +28,17 @@ class Bumper:
     def __init__(self, body: pymunk.Body, episodes: Callable[[], int]) -> None:
         self._body = body
         self._episodes = episodes
-        self.reading: BumperReading | None = None  # None until the first reading
+        self._time: float | None = None  # when the simulation last asked for a reading [s]
 
     @property
-    def touching(self) -> bool:
-        """True while the robot touches something."""
-        return self.reading is not None and self.reading.touching
+    def reading(self) -> BumperReading | None:
+        """The contacts as of the last update (None before the first).
 
-    @property
-    def normals(self) -> tuple[tuple[float, float], ...]:
-        """Contact directions in the robot frame (see :class:`BumperReading`)."""
-        return () if self.reading is None else self.reading.normals
-
-    @property
-    def episodes(self) -> int:
-        """Contact episodes so far."""
-        return self._episodes()
-
-    def update(self, time: float) -> None:
-        """Read the contacts now (called after every tick)."""
+        Built on demand: contacts change only inside a physics step and update() runs after
+        every step, so reading the body's arbiters now gives what update() time saw, without
+        paying for it on every tick of every robot."""
+        if self._time is None:
+            return None
         world_normals: list[tuple[float, float]] = []
 
         def collect(arbiter: pymunk.Arbiter) -> None:
@@ -61,5 +53,26 @@ class Bumper:
         angle = self._body.angle
         c, s = math.cos(angle), math.sin(angle)
         normals = tuple((c * nx + s * ny, -s * nx + c * ny) for nx, ny in world_normals)
-        self.reading = BumperReading(time=time, touching=bool(normals), normals=normals,
-                                     episodes=self._episodes())
+        return BumperReading(time=self._time, touching=bool(normals), normals=normals,
+                             episodes=self._episodes())
+
+    @property
+    def touching(self) -> bool:
+        """True while the robot touches something."""
+        reading = self.reading
+        return reading is not None and reading.touching
+
+    @property
+    def normals(self) -> tuple[tuple[float, float], ...]:
+        """Contact directions in the robot frame (see :class:`BumperReading`)."""
+        reading = self.reading
+        return () if reading is None else reading.normals
+
+    @property
+    def episodes(self) -> int:
+        """Contact episodes so far."""
+        return self._episodes()
+
+    def update(self, time: float) -> None:
+        """Mark a reading taken now (called after every tick)."""
+        self._time = time

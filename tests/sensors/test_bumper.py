@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 
 def test_bumping_a_wall_ahead(make_sim):

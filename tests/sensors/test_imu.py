@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pymunk
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 from pymunk_bot.config.schema import ImuConfig
 from pymunk_bot.drive import sinc_half

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 from pymunk_bot.readings import LaserScan
 from pymunk_bot.sensors.lidar import beam_angles

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 from pydantic import TypeAdapter
-from conftest import robot, scenario
+from builders import robot, scenario
 
 from pymunk_bot import Simulation
 from pymunk_bot.config import parse_scenario

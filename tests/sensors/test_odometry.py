@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import robot, wheels
+from builders import robot, wheels
 
 from pymunk_bot.drive import sinc_half
 

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import robot, scenario, wheels
+from builders import robot, scenario, wheels
 
 from pymunk_bot import Simulation
 from pymunk_bot.config import parse_scenario
