@@ -72,18 +72,22 @@ class SceneCache:
     def invalidate(self) -> None:
         self._key = None
 
-    def world(self) -> tuple[list[World], np.ndarray]:
-        """World primitive tables (static, then moving shapes) and every shape's bounding
-        circle (cx, cy, radius) in shape order."""
+    def world(self, f: pymunk.ShapeFilter) -> tuple[list[World], np.ndarray, np.ndarray, int]:
+        """World primitive tables (static, then moving shapes), every shape's bounding circle
+        (cx, cy, radius) in shape order, and the shapes the filter admits with their count.
+
+        Moving shapes the filter rejects are not moved: a robot's LiDAR never sees its own
+        body, so in a world where only robots move that skips the per-cast transform."""
         key = tuple(self.space.shapes)
         if key != self._key or any(body_transform(b) != tf for b, tf in self._static_tf.items()):
             self._build(key)
-        if not self._bodies:
-            return [self._static], self._static.bound
+        keep, n_keep, static_keep, n_static_keep = self._admitted_for(f)
+        if not self._bodies or static_keep is not None:
+            return [self._static], self._static.bound, static_keep, n_static_keep
         tf = transforms(self._handles)
         rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body, self._shape_body)
         moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
-        return [self._static, moving], np.concatenate((self._static.bound, bound), axis=1)
+        return [self._static, moving], np.concatenate((self._static.bound, bound), axis=1), keep, n_keep
 
     def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
         static = [s for s in key if s.body.body_type == pymunk.Body.STATIC]
@@ -121,13 +125,19 @@ class SceneCache:
         self._prim_body = self._shape_body[self._local.owner - len(static)]
         self._key = key
 
-    def admitted(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int]:
-        """Shapes the query filter does not reject (cpShapeFilterReject, negated), and their count."""
+    def _admitted_for(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int, np.ndarray | None, int]:
+        """Shapes the query filter does not reject (cpShapeFilterReject, negated) and their
+        count; then the same for the static shapes alone if the filter rejects every moving
+        shape (else None, 0). Cached per filter: the arrays' identity keys later caches."""
         found = self._admitted.get(f)
         if found is None:
             group, cats, qmask = int(f.group), int(f.categories), int(f.mask)
             reject = ((self.groups != 0) & (self.groups == group)) \
                 | ((self.categories & qmask) == 0) | ((self.masks & cats) == 0)
-            found = self._admitted[f] = (~reject, int(np.count_nonzero(~reject)))
+            keep = ~reject
+            n_static = len(self.shapes) - len(self._shape_body)
+            static_keep = None if keep[n_static:].any() else keep[:n_static].copy()
+            found = self._admitted[f] = (
+                keep, int(np.count_nonzero(keep)), static_keep,
+                0 if static_keep is None else int(np.count_nonzero(static_keep)))
         return found
-

@@ -46,11 +46,10 @@ class RayCaster:
         if n_rays == 0:
             return np.empty(0)
         cos, sin, ends = endpoints(ox, oy, ang, rng)
-        parts, bound = self._cache.world()
+        parts, bound, keep, n_keep = self._cache.world(shape_filter)
         # Coordinate scale of this cast: rounding errors are ~1e-16 of it.
         scale = 1.0 + abs(ox) + abs(oy) + rng
         slack = 1e-9 * scale
-        keep, n_keep = self._cache.admitted(shape_filter)
         dense = n_keep > _DENSE_SHAPES
         if dense:  # cull by distance; in small worlds the pair tests reject far shapes anyway
             dx, dy = bound[0] - ox, bound[1] - oy
