@@ -96,13 +96,15 @@ class DynamicWindow:
         return x, y, wt
 
     def candidates(self, v0: float, w0: float, obstacles: np.ndarray,
-                   speed_cap: float = math.inf):
+                   speed_cap: float = math.inf, velocities: np.ndarray | None = None):
         """The admissible (v, omega) pairs from the current (v0, w0) and their arcs.
 
         Returns (v, w, x, y, heading, clearance) over the admissible candidates, or None when
         none is admissible. Arcs are checked against ``obstacles`` (robot frame, (n, 2)); a
         candidate is admissible when the robot can stop (v^2 / 2a) within its free run, and
-        turning on the spot always is (the robot is a disc).
+        turning on the spot always is (the robot is a disc). ``velocities`` (n, 2) [m/s], if
+        given, marks points that move: each is checked both where it is and where it will be
+        at each sample time, so a prediction can only make an arc less safe, never more.
         """
         p = self.params
         v, w = self._window(v0, w0)
@@ -114,13 +116,23 @@ class DynamicWindow:
         x, y, heading = self.arcs(v, w)
         reach = self.max_speed * p.horizon + self.robot.radius + p.safety + 0.1
         pts = np.asarray(obstacles, dtype=float).reshape(-1, 2)
+        vel = (np.zeros_like(pts) if velocities is None
+               else np.asarray(velocities, dtype=float).reshape(-1, 2))
         if len(pts):
-            pts = pts[np.hypot(pts[:, 0], pts[:, 1]) < reach]
+            near = np.hypot(pts[:, 0], pts[:, 1]) < reach + np.hypot(vel[:, 0], vel[:, 1]) * p.horizon
+            pts, vel = pts[near], vel[near]
         now = math.inf
         if len(pts):
             # Clearance of the robot's disc at each arc sample to the nearest point.
             d = np.sqrt((x[:, :, None] - pts[None, None, :, 0]) ** 2
                         + (y[:, :, None] - pts[None, None, :, 1]) ** 2).min(axis=2)
+            moving = np.any(vel != 0.0, axis=1)
+            if moving.any():  # and to where the moving ones will be at each sample time
+                t = np.linspace(p.horizon / p.time_samples, p.horizon, p.time_samples)
+                px = pts[moving, 0][None, :] + t[:, None] * vel[moving, 0][None, :]  # (k, n)
+                py = pts[moving, 1][None, :] + t[:, None] * vel[moving, 1][None, :]
+                d = np.minimum(d, np.sqrt((x[:, :, None] - px[None]) ** 2
+                                          + (y[:, :, None] - py[None]) ** 2).min(axis=2))
             clear_t = d - self.robot.radius  # (m, k)
             now = float(np.sqrt(pts[:, 0] ** 2 + pts[:, 1] ** 2).min()) - self.robot.radius
             # Already inside the safety band: arcs may get a little closer (never below a
@@ -141,13 +153,15 @@ class DynamicWindow:
         return v[keep], w[keep], x[keep], y[keep], heading[keep], clearance[keep]
 
     def choose(self, v0: float, w0: float, obstacles: np.ndarray, target: np.ndarray,
-               speed_cap: float = math.inf) -> tuple[float, float]:
+               speed_cap: float = math.inf,
+               velocities: np.ndarray | None = None) -> tuple[float, float]:
         """Best (v, omega) toward ``target`` (robot frame) from the current (v0, w0).
 
-        ``speed_cap`` [m/s] limits forward speed (e.g. to slow down at the goal).
+        ``speed_cap`` [m/s] limits forward speed (e.g. to slow down at the goal);
+        ``velocities`` of the obstacle points, see :meth:`candidates`.
         """
         p = self.params
-        found = self.candidates(v0, w0, obstacles, speed_cap)
+        found = self.candidates(v0, w0, obstacles, speed_cap, velocities)
         if found is None:
             self.last_clearance = 0.0
             return 0.0, 0.0

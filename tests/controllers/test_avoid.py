@@ -1,4 +1,6 @@
 """avoid: reaches goals through layouts it was not tuned on without touching anything."""
+import math
+
 import numpy as np
 
 from pathlib import Path
@@ -17,6 +19,32 @@ def test_crosses_random_cluttered_fields_without_collisions():
     assert sum(r["collisions"] for r in results) == 0
     reached = sum(r["goal_reached"] for r in results)
     assert reached >= 0.8 * len(results), [r["controller_message"] for r in results]
+
+
+def swap_case(width: float, offset: float, seed: int, max_speed: float | None = None) -> dict:
+    """Two avoid robots swap places along a line across a width-metre-wide arena (walls on both
+    sides), the second one ``offset`` metres to the side; results of both."""
+    controller = {"type": "avoid"} if max_speed is None else {"type": "avoid", "max_speed": max_speed}
+    lidar = {"beams": 180, "max_range": 5.0, "noise_std": 0.01}
+    y = 0.5 * width
+    robots = [{"name": "a", "pose": [1.0, y, 0.0], "lidar": lidar, "controller": controller,
+               "goal": {"position": [9.0, y]}},
+              {"name": "b", "pose": [9.0, y + offset, math.pi], "lidar": lidar,
+               "controller": controller, "goal": {"position": [1.0, y + offset]}}]
+    return run_until_goal(scenario((10.0, width), [], robots, seed=seed), 30.0)["robots"]
+
+
+SWAPS = [(6.0, offset, seed, speed) for offset in (0.0, 0.05, -0.1, 0.2) for seed in (0, 1)
+         for speed in (None, 0.6)] + [(2.5, offset, seed, None) for offset in (0.0, 0.05, -0.1)
+                                      for seed in (0, 1)]
+
+
+def test_two_robots_meeting_head_on_keep_right_and_pass_without_touching():
+    results = parallel(swap_case, *zip(*SWAPS))
+    failed = [(case, {n: (r["goal_reached"], r["collisions"]) for n, r in robots.items()})
+              for case, robots in zip(SWAPS, results)
+              if not all(r["goal_reached"] and r["collisions"] == 0 for r in robots.values())]
+    assert not failed
 
 
 def test_gets_stuck_in_the_u_trap_that_navigate_escapes():

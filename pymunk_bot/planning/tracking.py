@@ -1,0 +1,116 @@
+"""Telling moving things (other robots) from static ones in successive LiDAR scans.
+
+Reactive avoidance that treats everything as static lets two robots closing at 2 m/s each use
+the whole gap to brake; predicting where a moving cluster of returns will be fixes that.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+CLUSTER_GAP = 0.2  # [m] neighbouring scan points farther apart start a new cluster
+CLUSTER_SIZE = 0.5  # [m] clusters reaching farther than this from their centre are not tracked
+BASELINE = 0.3  # [s] motion is measured against the scan this long ago
+MOVED_DISTANCE = 0.08  # [m] a cluster whose returns are mostly farther from the old ones moved
+MOVING_SPEED = 0.2  # [m/s] slower clusters count as standing still
+TRACK_SPEED = 2.0  # [m/s] faster apparent motion is a mismatch, ignored
+TRACK_RANGE = 3.5  # [m] farther clusters are not tracked
+CONFIRM_DISTANCE = 0.15  # [m] a moving cluster counts once the last scan predicted it this well
+ONCOMING_TIME = 4.0  # [s] something coming at us that would meet us within this...
+PASS_MARGIN = 0.1  # [m] ...and pass closer than radii + safety + this is oncoming
+
+
+def distance_to_polyline(points: np.ndarray, scan: np.ndarray, gap: float) -> np.ndarray:
+    """Distance [m] from each of ``points`` to a scan's returns joined, in scan order, where
+    neighbours are at most ``gap`` apart (the surface that scan saw)."""
+    a, b = scan[:-1], scan[1:]
+    joined = np.hypot(*(b - a).T) <= gap
+    a = np.concatenate([a[joined], scan])  # segments, then every return (isolated ones too)
+    b = np.concatenate([b[joined], scan])
+    ab = b - a
+    length2 = np.maximum((ab * ab).sum(axis=1), 1e-12)
+    rel = points[:, None, :] - a[None, :, :]
+    u = np.clip((rel * ab[None]).sum(axis=2) / length2[None], 0.0, 1.0)
+    closest = a[None] + u[:, :, None] * ab[None]
+    return np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)).min(axis=1)
+
+
+class MovingObstacleTracker:
+    """Remembers recent scans (world frame) and finds the clusters of returns that move."""
+
+    def __init__(self) -> None:
+        self._history: list = []  # (time [s], scan points, cluster centres), world frame
+        self._moving: list = []  # (time [s], centre, velocity) of clusters that moved, world
+
+    def update(self, stamp: float, pose, points: np.ndarray, speed: float,
+               clearance: float) -> tuple[np.ndarray, tuple | None]:
+        """Velocities of the scan points (robot frame, [m/s]; zero for what stands still) and
+        the nearest thing coming at us that would pass too close: (ahead, aside, gap) [m] in the
+        robot frame, gap being the distance between centres we want when passing it.
+
+        ``stamp`` is when the scan was taken [s], ``pose`` our pose estimate, ``points`` the scan's
+        returns in the robot frame, ``speed`` our forward speed [m/s] and ``clearance`` [m] our
+        radius plus the safety margin we keep.
+
+        The scan is cut into clusters where neighbouring returns are more than CLUSTER_GAP
+        apart. A small cluster (another robot, a box) has moved when most of its points lie
+        farther than MOVED_DISTANCE from the surface the scan BASELINE seconds older saw (its
+        returns joined; world frame, by our pose estimate): a static surface seen from a new
+        place still lies on its old returns. Its velocity is then the displacement of its centre
+        from the nearest cluster centre of that scan, and it counts once the previous scan saw it
+        moving the same way. Walls and other large clusters are taken as static.
+        """
+        velocities = np.zeros_like(points)
+        x, y, theta = (float(v) for v in pose[:3])
+        c, s_ = math.cos(theta), math.sin(theta)
+        rotate = np.array([[c, -s_], [s_, c]])  # robot frame -> world
+        world = points @ rotate.T + (x, y)
+        members = []
+        if len(points):
+            jumps = np.hypot(*np.diff(points, axis=0).T) > CLUSTER_GAP
+            labels = np.concatenate([[0], np.cumsum(jumps)])
+            if labels[-1] > 0 and np.hypot(*(points[0] - points[-1])) <= CLUSTER_GAP:
+                labels[labels == labels[-1]] = 0  # the scan wraps around
+            for label in np.unique(labels):
+                index = np.flatnonzero(labels == label)
+                centre = points[index].mean(axis=0)
+                if len(index) >= 3 and np.hypot(*(points[index] - centre).T).max() <= CLUSTER_SIZE:
+                    members.append(index)
+        centres = np.array([world[index].mean(axis=0) for index in members]).reshape(-1, 2)
+        self._history = [h for h in self._history if h[0] < stamp and stamp - h[0] <= 2 * BASELINE]
+        old = [h for h in self._history if stamp - h[0] >= BASELINE - 1e-6]
+        self._history.append((stamp, world, centres))
+        if not old or not len(centres) or not len(old[-1][2]):
+            self._moving = []
+            return velocities, None
+        then, old_world, old_centres = old[-1]
+        dt = stamp - then
+        oncoming = None
+        previous, self._moving, moving = self._moving, [], []
+        for index, centre in zip(members, centres):
+            if np.hypot(*(centre - (x, y))) > TRACK_RANGE:
+                continue
+            if np.median(distance_to_polyline(world[index], old_world, CLUSTER_GAP)) < MOVED_DISTANCE:
+                continue  # still on the old returns: static
+            shift = centre - old_centres[np.argmin(np.hypot(*(old_centres - centre).T))]
+            velocity = shift / dt
+            if not MOVING_SPEED <= np.hypot(*velocity) <= TRACK_SPEED:
+                continue
+            moving.append((centre, velocity))
+            if not any(np.hypot(*(centre - c0 - v0 * (stamp - t0))) <= CONFIRM_DISTANCE
+                       for t0, c0, v0 in previous):
+                continue  # seen moving for the first time: wait for the next scan to confirm
+            local_v = rotate.T @ velocity
+            velocities[index] = local_v
+            ahead, aside = rotate.T @ (centre - (x, y))
+            if ahead <= 0.0 or local_v[0] > -MOVING_SPEED:
+                continue
+            meet = ahead / (speed - local_v[0])  # [s] until it is beside us
+            size = float(np.hypot(*(world[index] - centre).T).max())
+            gap = clearance + size + PASS_MARGIN
+            if meet < ONCOMING_TIME and abs(aside + local_v[1] * meet) < gap and (
+                    oncoming is None or ahead < oncoming[0]):
+                oncoming = (float(ahead), float(aside), gap)
+        self._moving = [(stamp, c0, v0) for c0, v0 in moving]
+        return velocities, oncoming
