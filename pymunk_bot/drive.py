@@ -76,9 +76,3 @@ class DiffDrive:
         # and, with max_bias = 0, only on velocities, so there is nothing to wind up.
         control.velocity = (speed * math.cos(heading), speed * math.sin(heading))
         control.angular_velocity = omega
-
-    @property
-    def twist(self) -> tuple[float, float]:
-        """(v [m/s], omega [rad/s]) of the wheels now."""
-        left, right = self.wheel_speeds
-        return 0.5 * (left + right), (right - left) / self.track_width

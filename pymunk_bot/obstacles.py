@@ -9,7 +9,7 @@ from pymunk import autogeometry
 
 from . import geometry as geo
 from . import physics
-from .config.schema import BoxObstacle, CircleObstacle, PolygonObstacle, WallObstacle
+from .config.schema import BoxObstacle, CircleObstacle, WallObstacle
 
 
 @dataclass

@@ -138,11 +138,12 @@ class Simulation:
         """What ``robot``'s controller knows now."""
         odometry = robot.odometry.pose
         pose = robot.pose if robot.config.localization == "ground_truth" else odometry
+        extra = robot.readings()  # the bumper's reading is built on demand: once, here
         return Observation(
             time=self.time, pose=pose, odometry=odometry, goal=robot.nav_goal,
             goal_tolerance=robot.goal_tolerance, robot=robot.spec,
             scan=robot.lidar.latest if robot.lidar is not None else None,
-            bumper=robot.bumper.touching, extra=robot.readings())
+            bumper=extra["bumper"].touching, extra=extra)
 
     def _control(self, robot: Robot, now: float) -> None:
         if robot.overridden or robot.controller is None:

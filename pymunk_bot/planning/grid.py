@@ -133,12 +133,6 @@ class ClearanceGrid:
     def center_of(self, row: int, col: int) -> tuple[float, float]:
         return (col + 0.5) * self.resolution, (row + 0.5) * self.resolution
 
-    def clearance_at(self, x: float, y: float) -> float:
-        """Clearance [m] of the cell containing a point (0 outside the arena)."""
-        if not (0.0 <= x <= self.size[0] and 0.0 <= y <= self.size[1]):
-            return 0.0
-        return float(self.clearance[self.cell_of(x, y)])
-
     def segment_clearance(self, a, b) -> float:
         """Smallest cell clearance along the straight segment a-b (sampled at res/2)."""
         ax, ay = float(a[0]), float(a[1])

@@ -1,7 +1,6 @@
 """avoid: reaches goals through layouts it was not tuned on without touching anything."""
 import math
 
-import numpy as np
 
 from pathlib import Path
 
