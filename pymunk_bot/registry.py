@@ -1,32 +1,69 @@
-"""Named extension points (controllers, drives, sensors) that refuse duplicates."""
+"""Named extension points (drives, obstacle kinds, sensors, controllers, localizers).
+
+Each entry is a factory plus the pydantic model of its YAML section; the scenario schema is
+assembled from the registries (see ``config.schema``), so a plugin's keys are validated, and
+its errors reported, like the built-ins'. Registries refuse duplicates and list valid names.
+"""
 from __future__ import annotations
 
-from typing import Callable, Generic, TypeVar
+from dataclasses import dataclass
+from typing import Any, Callable, Generic, TypeVar
 
 T = TypeVar("T")
 
 
+@dataclass(frozen=True)
+class Entry(Generic[T]):
+    """One registered name: its factory and the config model of its section (None: no keys)."""
+
+    name: str
+    factory: T
+    config: Any = None
+
+
 class Registry(Generic[T]):
-    """name -> factory; lookups of unknown names list the valid ones."""
+    """name -> (factory, config model); lookups of unknown names list the valid ones."""
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
-        self._items: dict[str, T] = {}
+        self._items: dict[str, Entry[T]] = {}
+        self.version = 0  # bumped on every change, so assembled schemas know when to rebuild
 
-    def register(self, name: str) -> Callable[[T], T]:
+    def register(self, name: str, config: Any = None) -> Callable[[T], T]:
+        """Decorator: ``@registry.register("name", ConfigModel)`` on a factory (usually a class)."""
         def decorate(item: T) -> T:
-            if name in self._items:
-                raise ValueError(f"{self.kind} '{name}' is already registered")
-            self._items[name] = item
+            self.add(name, item, config)
             return item
         return decorate
 
-    def get(self, name: str) -> T:
+    def add(self, name: str, factory: T, config: Any = None) -> None:
+        if name in self._items:
+            raise ValueError(f"{self.kind} '{name}' is already registered")
+        self._items[name] = Entry(name, factory, config)
+        self.version += 1
+
+    def remove(self, name: str) -> None:
+        """Forget a name (tests that register temporary plugins clean up with this)."""
+        self._items.pop(name, None)
+        self.version += 1
+
+    def entry(self, name: str) -> Entry[T]:
         try:
             return self._items[name]
         except KeyError:
             valid = ", ".join(sorted(self._items))
             raise KeyError(f"unknown {self.kind} '{name}'; valid: {valid}") from None
 
+    def get(self, name: str) -> T:
+        """The factory registered as ``name``."""
+        return self.entry(name).factory
+
     def names(self) -> list[str]:
         return sorted(self._items)
+
+    def entries(self) -> list[Entry[T]]:
+        """Every entry, in registration order (built-ins first)."""
+        return list(self._items.values())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._items

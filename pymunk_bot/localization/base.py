@@ -1,0 +1,62 @@
+"""The localizer seam: after the sensors read, a localizer turns odometry, scans and the map into
+the pose estimate the controller sees (``robot.localizer.pose``, ``.covariance``).
+
+Write your own by subclassing :class:`Localizer`; register it with
+``localizers.register("name", ConfigModel)`` or name it from YAML with ``type: python``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..maps.grid import OccupancyGrid
+from ..readings import LaserScan, RobotSpec
+from ..registry import Registry
+
+
+@dataclass(frozen=True)
+class LocalizerContext:
+    """What a localizer is built with."""
+
+    robot: RobotSpec
+    start_pose: np.ndarray  # [x, y, theta]: the true start pose (what ``initial: known`` means)
+    rng: np.random.Generator  # the localizer's own random stream
+    arena: tuple[float, float]  # interior width, height [m]
+    map: OccupancyGrid | None = None  # the prebuilt map, given when the class sets ``needs_map``
+    lidar_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # LiDAR mount in the robot frame
+
+
+@dataclass(frozen=True)
+class LocalizerInputs:
+    """What a localizer reads at one update (every physics tick)."""
+
+    time: float  # [s]
+    odometry: np.ndarray  # odometry pose estimate now [x, y, theta]
+    scan: LaserScan | None  # the latest LiDAR scan (new when ``scan.time == time``), if any
+    imu: Any = None  # the latest IMU reading, if the robot has one
+
+
+class Localizer:
+    """Base class: keep ``pose`` (x, y, theta) and ``covariance`` (3x3) current in :meth:`update`."""
+
+    needs_map: bool = False  # True: the context carries the scenario's map (or world.map)
+    needs_lidar: bool = False  # True: the scenario must give the robot a LiDAR
+
+    def __init__(self, config: Any, context: LocalizerContext) -> None:
+        self.config = config
+        self.context = context
+        self.pose = np.array(context.start_pose, dtype=float)
+        self.covariance = np.zeros((3, 3))
+
+    def update(self, inputs: LocalizerInputs) -> None:
+        """Fold in this tick's inputs; called after the sensors read, before controllers run."""
+        raise NotImplementedError
+
+    def debug(self) -> dict[str, Any]:
+        """Extra state for views and logs (e.g. ``particles``: (n, 3) array); empty by default."""
+        return {}
+
+
+localizers: Registry = Registry("localizer")
