@@ -10,6 +10,7 @@ from . import physics
 from .config.schema import RobotConfig
 from .drive import DiffDrive
 from .readings import RobotSpec
+from .controllers.base import wheel_speeds
 from .sensors.odometry import Odometry
 
 
@@ -89,9 +90,19 @@ class Robot:
         self._override = (float(left), float(right))
         self.drive.set_wheel_speeds(*self._override)
 
-    def clear_wheel_speeds(self) -> None:
+    def set_velocity(self, v: float, omega: float, vy: float = 0.0) -> None:
+        """Drive at body-frame forward speed v [m/s] and yaw rate omega [rad/s] until
+        :meth:`clear_command`; the controller waits. ``vy`` (lateral) is for omni drives only."""
+        if vy != 0.0:
+            raise ValueError(f"a {self.config.drive} drive cannot move sideways (vy = {vy})")
+        left, right = wheel_speeds(float(v), float(omega), self.config.track_width)
+        self.set_wheel_speeds(left, right)
+
+    def clear_command(self) -> None:
         """Give the robot back to its controller."""
         self._override = None
+
+    clear_wheel_speeds = clear_command
 
     @property
     def overridden(self) -> bool:

@@ -54,6 +54,13 @@ class Simulation:
         """Load a scenario file (path or shipped name; None = the built-in default)."""
         return cls(load_scenario(path), seed=seed, source=None if path is None else str(path))
 
+    @classmethod
+    def from_dict(cls, data: dict, seed: int | None = None,
+                  source: str = "<dict>") -> "Simulation":
+        """Build from already-parsed scenario data, with exactly the checks a file gets."""
+        from .config import parse_scenario
+        return cls(parse_scenario(data, source), seed=seed, source=source)
+
     # ------------------------------------------------------------------ state
     @property
     def robots(self) -> dict[str, Robot]:
@@ -101,13 +108,14 @@ class Simulation:
         for _ in range(round(duration / self.dt)):
             self.step()
 
-    def reset(self) -> None:
-        """Rebuild everything from the config and seed (pymunk copies are not bit-exact).
+    def reset(self, seed: int | None = None) -> None:
+        """Rebuild everything from the config and seed (pymunk copies are not bit-exact);
+        ``seed`` replaces the run's seed.
 
         Observers stay attached; those with an ``on_reset(sim)`` method are told.
         """
         observers = self.observers
-        self.__init__(self.config, self.seed, self.source)
+        self.__init__(self.config, self.seed if seed is None else seed, self.source)
         self.observers = observers
         for observer in observers:
             on_reset = getattr(observer, "on_reset", None)
