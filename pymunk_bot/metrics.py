@@ -1,5 +1,8 @@
-"""Per-robot measurements taken every tick: clearance, forbidden regions."""
+"""Per-robot measurements taken every tick, only when an expectation asks for them:
+clearance (``min_clearance``) and forbidden regions (``never_enter``)."""
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -10,23 +13,32 @@ CLEARANCE_HORIZON = 10.0  # [m]; clearances beyond this read as this
 
 
 class RobotMetrics:
-    """Closest approach to anything and entries into ``never_enter`` regions."""
+    """Closest approach to anything and entries into ``never_enter`` regions.
 
-    def __init__(self, space: pymunk.Space, robot, never_enter: list) -> None:
+    ``min_clearance`` is measured only when ``track_clearance`` is set; the query then looks no
+    farther than the closest approach so far, so it costs little once something came near."""
+
+    def __init__(self, space: pymunk.Space, robot: Any, never_enter: list,
+                 track_clearance: bool = True) -> None:
         self._space = space
         self._robot = robot
         self._filter = robot.shape.filter
+        self._radius = robot.radius
         self._regions = [np.asarray(poly, dtype=float) for poly in never_enter]
-        self.min_clearance = CLEARANCE_HORIZON  # [m] from the robot's surface
+        self.track_clearance = track_clearance
+        self.min_clearance: float | None = CLEARANCE_HORIZON if track_clearance else None  # [m]
         self.entered: list[float | None] = [None] * len(self._regions)
+        self.active = track_clearance or bool(self._regions)
 
     def update(self, time: float) -> None:
         position = self._robot.body.position
-        hit = self._space.point_query_nearest(position, CLEARANCE_HORIZON, self._filter)
-        if hit is not None:
-            clearance = max(0.0, hit.distance - self._robot.radius)
-            if clearance < self.min_clearance:
-                self.min_clearance = clearance
+        if self.track_clearance:
+            reach = self.min_clearance + self._radius
+            hit = self._space.point_query_nearest(position, reach, self._filter)
+            if hit is not None:
+                clearance = max(0.0, hit.distance - self._radius)
+                if clearance < self.min_clearance:
+                    self.min_clearance = clearance
         for i, region in enumerate(self._regions):
             if self.entered[i] is None and point_in_polygon(position, region):
                 self.entered[i] = time

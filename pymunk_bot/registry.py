@@ -6,6 +6,7 @@ its errors reported, like the built-ins'. Registries refuse duplicates and list 
 """
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Any, Callable, Generic, TypeVar
 
@@ -55,8 +56,13 @@ class Registry(Generic[T]):
             raise KeyError(f"unknown {self.kind} '{name}'; valid: {valid}") from None
 
     def get(self, name: str) -> T:
-        """The factory registered as ``name``."""
-        return self.entry(name).factory
+        """The factory registered as ``name`` (a ``"module:attr"`` string is imported now)."""
+        entry = self.entry(name)
+        if isinstance(entry.factory, str):
+            module, _, attr = entry.factory.partition(":")
+            factory = getattr(importlib.import_module(module), attr)
+            entry = self._items[name] = Entry(name, factory, entry.config)
+        return entry.factory
 
     def names(self) -> list[str]:
         return sorted(self._items)

@@ -1,61 +1,107 @@
-"""A robot: its pymunk body, drive, sensors, controller and bookkeeping."""
+"""A robot handle: what users hold (``sim.robots["r1"]``). Its state lives in the world's arrays
+and pymunk bodies; a reset rebinds the same handle to the rebuilt state, so it stays valid."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pymunk
 
-from . import physics
+from .command import Command
 from .config.schema import RobotConfig
-from .drive import DiffDrive
 from .readings import RobotSpec
-from .controllers.base import wheel_speeds
-from .sensors.odometry import Odometry
+
+
+class Fleet:
+    """Every robot's per-tick bookkeeping as arrays: distance, goal, contact episodes."""
+
+    def __init__(self, configs: list[RobotConfig]) -> None:
+        n = len(configs)
+        self.xy = np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2)  # [m]
+        self.distance = np.zeros(n)  # true path length [m]
+        self.collisions = np.zeros(n, dtype=np.int64)  # contact episodes
+        self.goal = np.full((n, 2), np.nan)  # task goal [m]; NaN: none
+        self.tolerance = np.full(n, 0.2)  # [m]
+        for i, c in enumerate(configs):
+            if c.goal is not None:
+                self.goal[i] = c.goal.position
+                self.tolerance[i] = c.goal.tolerance
+        self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
+        self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
+        self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
+        self.check_goals(self.xy, 0.0)  # a robot that starts inside its goal reached it at t = 0
+
+    def watch_goal(self, i: int) -> None:
+        self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
+        self._pending = np.union1d(self._pending, [i])
+
+    def advance(self, xy: np.ndarray, time: float) -> None:
+        """Bookkeeping after a tick, from every robot's new position (n, 2) [m]."""
+        step = xy - self.xy
+        self.distance += np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
+        self.xy = xy
+        if self._pending.shape[0]:
+            self.check_goals(xy, time)
+
+    def check_goals(self, xy: np.ndarray, time: float) -> None:
+        p = self._pending
+        d = xy[p] - self.goal[p]
+        reached = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= self.tolerance[p] ** 2
+        if reached.any():
+            done = p[reached]
+            self.time_to_goal[done] = time
+            self.distance_to_goal[done] = self.distance[done]
+            self._pending = p[~reached]
 
 
 class Robot:
-    """A differential-drive disc robot. ``pose`` is ground truth; sensors give what it knows."""
+    """A simulated robot: ``pose`` is ground truth; its sensors and localizer give what it knows.
 
-    def __init__(self, config: RobotConfig, space: pymunk.Space, group: int,
-                 rng: np.random.Generator) -> None:
-        self.config = config
-        self.name = config.name
-        self.radius = config.radius
-        self.spec = RobotSpec(config.name, config.radius, config.track_width,
-                              config.max_wheel_speed, config.max_accel)
-        x, y, theta = config.pose
-        self.body = pymunk.Body(config.mass, pymunk.moment_for_circle(config.mass, 0, config.radius))
-        self.body.position = (x, y)
-        self.body.angle = theta
-        self.shape = pymunk.Circle(self.body, config.radius)
-        self.shape.friction = config.friction
-        self.shape.collision_type = physics.ROBOT
-        # The group keeps the robot's own LiDAR from seeing its own body.
-        self.shape.filter = pymunk.ShapeFilter(group=group)
-        space.add(self.body, self.shape)
-        self.drive = DiffDrive(space, self.body, config.track_width, config.max_wheel_speed,
-                               config.max_accel)
-        self.odometry = Odometry(config.odometry, config.pose, config.track_width, rng)
+    Made by :mod:`pymunk_bot.build`; attributes: ``config``, ``name``, ``spec``, ``body`` and
+    ``shape`` (pymunk), ``drive``, ``odometry``, ``sensors`` (``lidar``, ``imu``, ``bumper``),
+    ``controller``, ``localizer``, ``metrics``.
+    """
+
+    config: RobotConfig
+    name: str
+    spec: RobotSpec
+    body: pymunk.Body
+    shape: pymunk.Shape
+    control: pymunk.Body
+    drive: Any
+    odometry: Any
+    controller: Any
+    localizer: Any
+    metrics: Any
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def _bind(self, fleet: Fleet, index: int, drive_group: Any, drive_index: int) -> None:
+        """Point this handle at freshly built state (build and reset call this)."""
+        name = self.name
+        self.__dict__.clear()
+        self.name = name
+        self._fleet, self._i = fleet, index
+        self._drive_group, self._di = drive_group, drive_index
         self.sensors: list = []  # everything with update(time), in the order they read
-        self.lidar = None  # set by sensors.attach when configured
-        self.imu = None
-        self.bumper = None
+        self.lidar: Any = None
+        self.imu: Any = None
+        self.bumper: Any = None
         self.controller = None
+        self.localizer = None
+        self.mapper: Any = None  # builds an occupancy grid from this robot's LiDAR, if configured
         self.metrics = None
-        self.goal: tuple[float, float] | None = (
-            tuple(config.goal.position) if config.goal is not None else None)
-        self.goal_tolerance = config.goal.tolerance if config.goal is not None else 0.2
-        self.nav_goal = self.goal  # where the controller drives: its own goal, else the task's
-        self.collisions = 0  # contact episodes so far
-        self.distance = 0.0  # true path length [m]
-        self.time_to_goal: float | None = None
-        self.distance_to_goal: float | None = None  # path length when the goal was reached [m]
-        self._override: tuple[float, float] | None = None
-        self._travel = [0.0, 0.0]  # wheel travel in the current tick [m]
-        self._last_position = (x, y)
+        self.nav_goal: tuple[float, float] | None = None  # where the controller drives
+        self._override = False
 
     # ------------------------------------------------------------------ state
+    @property
+    def radius(self) -> float:
+        """Radius of the disc that holds the robot's footprint [m]."""
+        return self.spec.radius
+
     @property
     def pose(self) -> np.ndarray:
         """Ground-truth pose [x, y, theta] (theta unwrapped: it counts whole turns)."""
@@ -64,65 +110,90 @@ class Robot:
 
     @property
     def velocity(self) -> np.ndarray:
-        """Ground-truth (v forward [m/s], omega [rad/s])."""
+        """Ground-truth (v forward [m/s], omega [rad/s]) of the body."""
         vx, vy = self.body.velocity
         theta = self.body.angle
         return np.array([vx * math.cos(theta) + vy * math.sin(theta), self.body.angular_velocity])
 
     @property
+    def distance(self) -> float:
+        """True path length so far [m]."""
+        return float(self._fleet.distance[self._i])
+
+    @property
+    def collisions(self) -> int:
+        """Contact episodes so far (a begin of contact with anything)."""
+        return int(self._fleet.collisions[self._i])
+
+    @property
+    def goal(self) -> tuple[float, float] | None:
+        """The task goal [m] (None: none)."""
+        g = self._fleet.goal[self._i]
+        return None if np.isnan(g[0]) else (float(g[0]), float(g[1]))
+
+    @property
+    def goal_tolerance(self) -> float:
+        return float(self._fleet.tolerance[self._i])
+
+    @property
+    def time_to_goal(self) -> float | None:
+        """Simulated time when the goal was first reached [s] (0: started inside it); None: not yet."""
+        t = self._fleet.time_to_goal[self._i]
+        return None if np.isnan(t) else float(t)
+
+    @property
+    def distance_to_goal(self) -> float | None:
+        """Path length when the goal was reached [m]; None: not yet."""
+        d = self._fleet.distance_to_goal[self._i]
+        return None if np.isnan(d) else float(d)
+
+    @property
     def goal_reached(self) -> bool:
-        return self.time_to_goal is not None
+        return not np.isnan(self._fleet.time_to_goal[self._i])
 
     def set_goal(self, position: tuple[float, float], tolerance: float | None = None) -> None:
         """A new task goal (e.g. a click in the viewer); the controller drives there too."""
-        self.goal = self.nav_goal = (float(position[0]), float(position[1]))
+        x, y = float(position[0]), float(position[1])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError(f"goal must be finite (got {position!r})")
+        if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
+            raise ValueError(f"tolerance must be a finite number > 0 (got {tolerance!r})")
+        fleet, i = self._fleet, self._i
+        fleet.goal[i] = (x, y)
         if tolerance is not None:
-            self.goal_tolerance = tolerance
-        self.time_to_goal = self.distance_to_goal = None
+            fleet.tolerance[i] = tolerance
+        self.nav_goal = (x, y)
+        fleet.watch_goal(i)
 
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""
         return {s.name: s.reading for s in self.sensors if s is not self.lidar}
 
     # ------------------------------------------------------------------ commands
-    def set_wheel_speeds(self, left: float, right: float) -> None:
-        """Drive with these wheel speeds [m/s] until ``clear_wheel_speeds``; the controller waits."""
-        self._override = (float(left), float(right))
-        self.drive.set_wheel_speeds(*self._override)
-
     def set_velocity(self, v: float, omega: float, vy: float = 0.0) -> None:
-        """Drive at body-frame forward speed v [m/s] and yaw rate omega [rad/s] until
-        :meth:`clear_command`; the controller waits. ``vy`` (lateral) is for omni drives only."""
-        if vy != 0.0:
-            raise ValueError(f"a {self.config.drive} drive cannot move sideways (vy = {vy})")
-        left, right = wheel_speeds(float(v), float(omega), self.config.track_width)
-        self.set_wheel_speeds(left, right)
+        """Drive at body-frame forward speed ``v`` [m/s], yaw rate ``omega`` [rad/s] and lateral
+        speed ``vy`` [m/s] (omni drives only) until :meth:`clear_command`; the controller waits."""
+        self.command(Command(float(v), float(omega), float(vy)))
+
+    def set_wheel_speeds(self, left: float, right: float) -> None:
+        """Diff drive: these wheel speeds [m/s] until :meth:`clear_command`; the controller waits."""
+        if not hasattr(self._drive_group, "set_wheel_speeds"):
+            raise ValueError(f"a {self.config.drive} drive has no wheel speeds; use set_velocity")
+        self._drive_group.set_wheel_speeds(self._di, left, right)  # raises before taking over
+        self._override = True
+
+    def command(self, command: Command) -> None:
+        """Drive with this :class:`Command` until :meth:`clear_command`; the controller waits."""
+        self._drive_group.set_command(self._di, command)  # raises before taking over
+        self._override = True
 
     def clear_command(self) -> None:
         """Give the robot back to its controller."""
-        self._override = None
+        self._override = False
 
-    clear_wheel_speeds = clear_command
+    clear_wheel_speeds = clear_command  # the name before every drive took body velocities
 
     @property
     def overridden(self) -> bool:
-        return self._override is not None
-
-    # ------------------------------------------------------------------ tick parts
-    def before_substep(self, h: float) -> None:
-        self.drive.before_substep(h)
-        left, right = self.drive.wheel_speeds
-        self._travel[0] += left * h
-        self._travel[1] += right * h
-
-    def after_step(self, time: float) -> None:
-        """Bookkeeping once all substeps of a tick are done."""
-        self.odometry.update(*self._travel)
-        self._travel = [0.0, 0.0]
-        p = self.body.position
-        self.distance += math.hypot(p.x - self._last_position[0], p.y - self._last_position[1])
-        self._last_position = (p.x, p.y)
-        if self.goal is not None and self.time_to_goal is None:
-            if math.hypot(p.x - self.goal[0], p.y - self.goal[1]) <= self.goal_tolerance:
-                self.time_to_goal = time
-                self.distance_to_goal = self.distance
+        """True while a command set by hand (or teleop) holds the robot."""
+        return self._override

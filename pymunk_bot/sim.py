@@ -2,52 +2,54 @@
 from __future__ import annotations
 
 import math
+import numbers
 import time as wallclock
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 
+from .build import Built, build
 from .config import ScenarioConfig, load_scenario
-from .controllers import Observation, controllers
-from .errors import ScenarioError
 from .expectations import Check, evaluate
-from .metrics import RobotMetrics
-from .planning.map import MapInfo
+from .localization.base import LocalizerInputs
+from .readings import Observation
 from .robot import Robot
-from .sensors.attach import attach_sensors
-from .world import World
+from .sensors.schedule import ScheduleArray
+
+MAX_SEED = 2 ** 63 - 1
+
+
+def check_seed(seed: Any) -> int:
+    """A seed is a whole number in [0, 2**63): anything else is a ValueError saying so."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise ValueError(f"seed must be a whole number >= 0 (got {seed!r})")
+    if not 0 <= int(seed) <= MAX_SEED:
+        raise ValueError(f"seed must be in [0, 2**63 - 1] (got {seed})")
+    return int(seed)
 
 
 class Simulation:
-    """A scenario in motion. Build it from a file or a config; reset rebuilds from the seed.
+    """A scenario in motion. Build it from a file, a dict or a config; reset rebuilds from the seed.
 
-    One tick (:meth:`step`): controllers whose period has come set wheel commands; the drives
-    and physics advance ``substeps`` times; bookkeeping (odometry, distance, goal); sensors
-    whose period has come read the world; per-tick metrics.
+    One tick (:meth:`step`):
+    1. controllers whose period has come read their observation and set a command;
+    2. actors (moving obstacles, pedestrians) set their motion;
+    3. ``substeps`` times: every drive advances and steers its control body, then pymunk steps;
+    4. bookkeeping: distance, goals, odometry from the encoders;
+    5. sensors whose period has come read the world (every body has moved);
+    6. localizers fold in odometry and scans;
+    7. metrics that an expectation needs; then the observers (loggers, recorders, views).
     """
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None) -> None:
         self.config = config
         self.source = source or f"scenario '{config.name}'"  # names the file in errors
-        self.seed = config.seed if seed is None else int(seed)
-        self.rng = np.random.default_rng(self.seed)
-        world_rng, sensor_rng = self.rng.spawn(2)
-        self.world = World(config, world_rng)
-        self.dt = config.world.dt
-        self.substeps = self.world.substeps
-        self.steps = 0
-        self.wall_time = 0.0  # [s] spent inside step()
-        expect = config.expect
-        sensor_rngs = sensor_rng.spawn(len(self.robots))
-        self._map: MapInfo | None = None  # built on demand for controllers that need a map
-        for robot, rng in zip(self.robots.values(), sensor_rngs):
-            attach_sensors(robot, self.world, rng)
-            robot.controller = self._make_controller(robot)
-            robot.metrics = RobotMetrics(self.world.space, robot,
-                                         expect[robot.name].never_enter if robot.name in expect else [])
-        self._next_control = {name: 0.0 for name in self.robots}
-        self.observers: list = []  # callables f(sim) run after every step (loggers, recorders)
+        self.seed = check_seed(config.seed if seed is None else seed)
+        self.robots: dict[str, Robot] = {}
+        self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
+        self._build()
 
     @classmethod
     def from_file(cls, path: str | Path | None = None, seed: int | None = None) -> "Simulation":
@@ -61,11 +63,26 @@ class Simulation:
         from .config import parse_scenario
         return cls(parse_scenario(data, source), seed=seed, source=source)
 
-    # ------------------------------------------------------------------ state
-    @property
-    def robots(self) -> dict[str, Robot]:
-        return self.world.robots
+    def _build(self) -> None:
+        built: Built = build(self.config, self.seed, self.source, handles=self.robots)
+        self._built = built
+        self.robots.clear()
+        self.robots.update(built.robots)  # the same dict and the same handles after a reset
+        self.world = built.world
+        self.dt = self.config.world.dt
+        self.substeps = self.world.substeps
+        self.steps = 0
+        self.wall_time = 0.0  # [s] spent inside step()
+        self._robots = list(self.robots.values())
+        self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
+        self._control = ScheduleArray([built.control_schedules[i] for i in self._controlled])
+        self._lidars = [r.lidar for r in self._robots if r.lidar is not None]
+        self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self._lidars])
+        self._sensors = [s for r in self._robots for s in r.sensors
+                         if s is not r.lidar and not getattr(s, "passive", False)]
+        self._localized = [r for r in self._robots if not getattr(r.localizer, "passive", False)]
 
+    # ------------------------------------------------------------------ state
     @property
     def space(self):
         return self.world.space
@@ -79,88 +96,81 @@ class Simulation:
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
         started = wallclock.perf_counter()
+        built, world = self._built, self.world
         now = self.time
-        for robot in self.robots.values():
-            self._control(robot, now)
+        self._run_controllers(now)
+        for actor in world.actors:
+            actor.before_step(now, self.dt)
         h = self.dt / self.substeps
-        space = self.world.space
-        robots = list(self.robots.values())
+        space, propulsion = world.space, built.propulsion
         for _ in range(self.substeps):
-            for robot in robots:
-                robot.before_substep(h)
+            propulsion.substep(h)
             space.step(h)
         self.steps += 1
-        now = self.time
-        for robot in robots:
-            robot.after_step(now)
-        for robot in robots:
-            for sensor in robot.sensors:
-                sensor.update(now)
-            robot.metrics.update(now)
+        now = world.time = self.time
+        built.fleet.advance(propulsion.positions(), now)
+        for (drive, _), (odometry, _) in zip(built.drive_groups, built.odometry_groups):
+            odometry.update(drive.take_travel())
+        self._read_sensors(now)
+        for robot in self._localized:
+            robot.localizer.update(self._localizer_inputs(robot, now))
+        for metrics in built.metrics:
+            metrics.update(now)
         self.wall_time += wallclock.perf_counter() - started
         for observer in self.observers:
             observer(self)
 
     def run(self, duration: float) -> None:
         """Advance ``duration`` simulated seconds (rounded to whole steps)."""
-        if not (math.isfinite(duration) and duration >= 0):
-            raise ValueError(f"duration must be a finite number >= 0 (got {duration})")
+        if not (isinstance(duration, numbers.Real) and math.isfinite(duration) and duration >= 0):
+            raise ValueError(f"duration must be a finite number >= 0 (got {duration!r})")
         for _ in range(round(duration / self.dt)):
             self.step()
 
     def reset(self, seed: int | None = None) -> None:
-        """Rebuild everything from the config and seed (pymunk copies are not bit-exact);
-        ``seed`` replaces the run's seed.
+        """Rebuild everything from the config (pymunk copies are not bit-exact); ``seed``
+        replaces the run's seed. Robot handles and ``robots`` stay valid and see the new state.
 
         Observers stay attached; those with an ``on_reset(sim)`` method are told.
         """
-        observers = self.observers
-        self.__init__(self.config, self.seed if seed is None else seed, self.source)
-        self.observers = observers
-        for observer in observers:
+        if seed is not None:
+            self.seed = check_seed(seed)
+        self._build()
+        for observer in self.observers:
             on_reset = getattr(observer, "on_reset", None)
             if on_reset is not None:
                 on_reset(self)
 
-    # ------------------------------------------------------------------ control
-    def _make_controller(self, robot: Robot):
-        config = robot.config.controller
-        if config is None:
-            return None
-        goal = getattr(config, "goal", None)
-        if goal is not None:
-            robot.nav_goal = tuple(goal)
-        index = [r.name for r in self.config.robots].index(robot.name)
-        try:
-            controller = controllers.get(config.type)(config, robot.spec)
-        except ValueError as exc:  # e.g. a user's class refusing its params
-            raise ScenarioError(self.source, f"robots[{index}].controller", str(exc)) from None
-        if getattr(controller, "needs_map", False):
-            # What a real robot's prebuilt map holds: the arena and obstacles as the file says.
-            if self._map is None:
-                self._map = MapInfo.from_scenario(self.config)
-            controller.set_map(self._map)
-        return controller
+    # ------------------------------------------------------------------ tick parts
+    def _run_controllers(self, now: float) -> None:
+        # Schedules advance even while a robot is driven by hand, so a controller given back
+        # resumes at its own rate instead of catching up on every period it missed.
+        robots = self._robots
+        for k in self._control.due(now).tolist():
+            robot = robots[self._controlled[k]]
+            if not robot._override:
+                command = robot.controller.compute(self.observe(robot))
+                robot._drive_group.set_command(robot._di, command)
+
+    def _read_sensors(self, now: float) -> None:
+        for k in self._lidar_schedule.due(now).tolist():
+            lidar = self._lidars[k]
+            lidar.record(now, lidar.true_ranges())
+        for sensor in self._sensors:
+            sensor.update(now)
+
+    def _localizer_inputs(self, robot: Robot, now: float) -> LocalizerInputs:
+        imu = robot.imu.reading if robot.imu is not None else None
+        scan = robot.lidar.latest if robot.lidar is not None else None
+        return LocalizerInputs(time=now, odometry=robot.odometry.pose, scan=scan, imu=imu)
 
     def observe(self, robot: Robot) -> Observation:
         """What ``robot``'s controller knows now."""
-        odometry = robot.odometry.pose
-        pose = robot.pose if robot.config.localization == "ground_truth" else odometry
-        extra = robot.readings()  # the bumper's reading is built on demand: once, here
         return Observation(
-            time=self.time, pose=pose, odometry=odometry, goal=robot.nav_goal,
-            goal_tolerance=robot.goal_tolerance, robot=robot.spec,
+            time=self.time, pose=robot.localizer.pose, odometry=robot.odometry.pose,
+            goal=robot.nav_goal, goal_tolerance=robot.goal_tolerance, robot=robot.spec,
             scan=robot.lidar.latest if robot.lidar is not None else None,
-            bumper=extra["bumper"].touching, extra=extra)
-
-    def _control(self, robot: Robot, now: float) -> None:
-        if robot.overridden or robot.controller is None:
-            return
-        if now + 1e-9 < self._next_control[robot.name]:
-            return
-        self._next_control[robot.name] += 1.0 / robot.controller.rate
-        left, right = robot.controller.compute(self.observe(robot))
-        robot.drive.set_wheel_speeds(left, right)
+            read_extra=robot.readings)
 
     # ------------------------------------------------------------------ results
     def check_expectations(self) -> list[Check]:
@@ -169,7 +179,7 @@ class Simulation:
     def _mean_speed(self, robot: Robot) -> float:
         """Up to the goal if reached (not diluted by waiting there), else over the whole run."""
         if robot.time_to_goal:
-            return robot.distance_to_goal / robot.time_to_goal
+            return (robot.distance_to_goal or 0.0) / robot.time_to_goal
         return robot.distance / self.time if self.time > 0 else 0.0
 
     def result(self) -> dict:
@@ -179,7 +189,7 @@ class Simulation:
         robots = {}
         for name, r in self.robots.items():
             pose = r.pose
-            odometry_error = float(np.hypot(*(r.odometry.pose[:2] - pose[:2])))
+            odometry = r.odometry.pose
             robots[name] = {
                 "pose": [float(pose[0]), float(pose[1]), float(pose[2])],
                 "distance": r.distance,
@@ -189,8 +199,8 @@ class Simulation:
                 "path_length": r.distance,
                 "mean_speed": self._mean_speed(r),
                 "min_clearance": r.metrics.min_clearance,
-                "odometry_pose": [float(v) for v in r.odometry.pose],
-                "odometry_error": odometry_error,
+                "odometry_pose": [float(v) for v in odometry],
+                "odometry_error": float(np.hypot(*(odometry[:2] - pose[:2]))),
                 "controller_status": r.controller.status if r.controller is not None else None,
                 "controller_message": r.controller.message if r.controller is not None else "",
             }

@@ -1,34 +1,36 @@
-"""The physical world: one pymunk Space with the arena, obstacles and robots, and contact bookkeeping."""
+"""The physical world: one pymunk Space with the arena, obstacles and robot bodies, and the
+contact bookkeeping. Build order is fixed (arena, obstacles, robots) for determinism."""
 from __future__ import annotations
 
-import numpy as np
+from typing import Any, Callable
+
 import pymunk
 
 from . import physics
 from .config.schema import ScenarioConfig
 from .config.substeps import ARENA_WALL_THICKNESS, required_substeps
-from .obstacles import Obstacle, build_obstacle
-from .robot import Robot
+from .obstacles import Obstacle
+from .plugins import obstacles as obstacle_kinds
+
 
 class World:
-    """Owns the Space. Build order is fixed (arena, obstacles, robots) for determinism."""
+    """Owns the Space. ``actors`` move things before every tick (moving obstacles, pedestrians):
+    objects with ``before_step(time, dt)``."""
 
-    def __init__(self, config: ScenarioConfig, rng: np.random.Generator) -> None:
+    def __init__(self, config: ScenarioConfig) -> None:
         self.config = config
         self.width, self.height = config.world.size
         self.space = physics.new_space()
         self.arena_shapes = self._build_arena()
-        self.obstacles: list[Obstacle] = [build_obstacle(self.space, o) for o in config.obstacles]
-        robot_rngs = rng.spawn(len(config.robots))
-        # Group ids start at 1: group 0 means "no group" to pymunk.
-        self.robots: dict[str, Robot] = {
-            rc.name: Robot(rc, self.space, group=i + 1, rng=robot_rngs[i])
-            for i, rc in enumerate(config.robots)
-        }
-        self._robot_of_shape = {r.shape: r for r in self.robots.values()}
+        self.obstacles: list[Obstacle] = [
+            obstacle_kinds.get(o.type)(self.space, o) for o in config.obstacles]
+        self.actors: list[Any] = []
+        self.time = 0.0  # simulated time [s], kept by the simulation
+        self.substeps = config.world.substeps or required_substeps(config)
+        self._caster: Any = None
+        self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
         for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
             self.space.on_collision(physics.ROBOT, other, begin=self._begin)
-        self.substeps = config.world.substeps or required_substeps(config)
 
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
@@ -42,10 +44,21 @@ class World:
         self.space.add(*shapes)
         return shapes
 
-    # ------------------------------------------------------------------ contacts
-    def _begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
+    def ray_caster(self) -> Any:
+        """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:
+        only worlds with a LiDAR pay for its geometry tables)."""
+        if self._caster is None:
+            from .sensors.raycast import RayCaster
+            self._caster = RayCaster(self.space)
+        return self._caster
+
+    def count_contacts(self, shape: pymunk.Shape, on_begin: Callable[[], None]) -> None:
+        """Call ``on_begin`` whenever a contact episode of ``shape`` (a robot's) begins."""
+        self._on_contact[shape] = on_begin
+
+    def _begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
         """A contact episode starts: count it for every robot in it (both, robot on robot)."""
         for shape in arbiter.shapes:
-            robot = self._robot_of_shape.get(shape)
-            if robot is not None:
-                robot.collisions += 1
+            on_begin = self._on_contact.get(shape)
+            if on_begin is not None:
+                on_begin()

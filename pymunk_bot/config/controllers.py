@@ -5,7 +5,7 @@ docs/navigation.md lists every key with its unit and default; keep the two in st
 from __future__ import annotations
 
 import re
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field
 
@@ -30,6 +30,16 @@ class WheelsControllerConfig(Section):
     type: Literal["wheels"]
     left: Float = 0.0  # [m/s]
     right: Float = 0.0  # [m/s]
+    rate: PositiveFloat = 10.0  # [Hz]
+
+
+class VelocityControllerConfig(Section):
+    """A constant body velocity, for any drive."""
+
+    type: Literal["velocity"]
+    v: Float = 0.0  # forward [m/s]
+    omega: Float = 0.0  # yaw rate [rad/s]
+    vy: Float = 0.0  # lateral [m/s], omni drives only
     rate: PositiveFloat = 10.0  # [Hz]
 
 
@@ -122,10 +132,3 @@ class PythonControllerConfig(Section):
     params: dict[str, Any] = {}  # keyword arguments for the class's constructor
     rate: PositiveFloat | None = None  # [Hz]; None = the class's own ``rate`` (default 10)
     goal: Vec2 | None = None  # [m]; None = the robot's goal
-
-
-ControllerConfig = Annotated[
-    Union[WheelsControllerConfig, GoToGoalControllerConfig, WaypointsControllerConfig,
-          AvoidControllerConfig, NavigateControllerConfig, PythonControllerConfig],
-    Field(discriminator="type"),
-]

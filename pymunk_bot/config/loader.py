@@ -8,6 +8,7 @@ from pydantic import ValidationError
 
 from ..errors import ScenarioError
 from . import semantics
+from .assemble import scenario_model
 from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
 from .yaml_source import line_of, parse_yaml
@@ -56,22 +57,23 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
     if not isinstance(data, dict):
         raise ScenarioError(source, "", "the file must be a YAML mapping of scenario keys "
                                         f"(got {type(data).__name__})")
+    model = scenario_model()
     try:
-        config = ScenarioConfig.model_validate(data)
+        config = model.model_validate(data)
     except ValidationError as exc:
         errors = exc.errors()
         first = most_helpful(errors)
         loc = first["loc"]
         if first["type"] == "missing" and loc and isinstance(loc[-1], int):
             loc = loc[:-1]  # a short list: name the list, not its absent item
-        path, clean_loc, owner = walk(ScenarioConfig, loc)
+        path, clean_loc, owner = walk(model, loc)
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise ScenarioError(source, path, describe(first, owner) + more,
                             line_of(node, clean_loc)) from None
     try:
         semantics.check(config)
     except semantics.SemanticError as exc:
-        path, clean_loc, _ = walk(ScenarioConfig, exc.loc)
+        path, clean_loc, _ = walk(model, exc.loc)
         raise ScenarioError(source, path, exc.problem, line_of(node, clean_loc)) from None
     return config
 

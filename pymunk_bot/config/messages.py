@@ -24,6 +24,9 @@ def _unwrap(tp: Any) -> Any:
             return tp
 
 
+_DISCRIMINATORS = ("type", "drive")  # the keys that pick a section's model
+
+
 def _tagged_members(tp: Any) -> dict[str, type[BaseModel]] | None:
     """For a discriminated union of models on ``type``: tag -> model."""
     if typing.get_origin(tp) not in (typing.Union, types.UnionType):
@@ -31,9 +34,12 @@ def _tagged_members(tp: Any) -> dict[str, type[BaseModel]] | None:
     members = {}
     for arg in typing.get_args(tp):
         arg = _unwrap(arg)
-        if isinstance(arg, type) and issubclass(arg, BaseModel) and "type" in arg.model_fields:
-            for tag in typing.get_args(arg.model_fields["type"].annotation):
-                members[tag] = arg
+        if isinstance(arg, type) and issubclass(arg, BaseModel):
+            for key in _DISCRIMINATORS:
+                if key in arg.model_fields:
+                    for tag in typing.get_args(arg.model_fields[key].annotation):
+                        members[tag] = arg
+                    break
     return members or None
 
 

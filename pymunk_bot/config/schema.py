@@ -5,11 +5,10 @@ docs/scenario-format.md documents each key; keep the two in step.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, Union
+from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
-from .controllers import ControllerConfig
 from .types import (
     Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
     Probability, Section, Vec2,
@@ -65,11 +64,6 @@ class WallObstacle(Section):
     friction: NonNegativeFloat = 0.5
 
 
-ObstacleConfig = Annotated[
-    Union[BoxObstacle, CircleObstacle, PolygonObstacle, WallObstacle],
-    Field(discriminator="type"),
-]
-OBSTACLE_TYPES = ("box", "circle", "polygon", "wall")
 
 # ---------------------------------------------------------------------------- sensors
 
@@ -113,21 +107,37 @@ class GoalConfig(Section):
 
 
 class RobotConfig(Section):
+    """Keys every robot has, whatever its drive; each drive's model adds its own (see drives)."""
+
     name: Name
-    drive: Literal["diff"] = "diff"
+    drive: str = "diff"  # a registered drive: diff (built in), or a plugin's
     pose: Pose  # x [m], y [m], theta [rad]
     radius: Length = 0.2  # [m]
     mass: Mass = 5.0  # [kg]
+    friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
+    # The pose estimate controllers see: a registered localizer's name or {type: name, ...}.
+    localization: Any = "odometry"
+    lidar: LidarConfig | None = None
+    imu: ImuConfig | None = None
+    controller: Any = None  # a registered controller's section; None: the robot stands still
+    goal: GoalConfig | None = None
+
+    def top_speed(self) -> float:
+        """Fastest the robot's centre can move [m/s] (substeps are chosen from it)."""
+        raise NotImplementedError
+
+
+class DiffRobotConfig(RobotConfig):
+    """A differential-drive robot: two wheels ``track_width`` apart."""
+
+    drive: Literal["diff"] = "diff"
     track_width: Length = 0.3  # wheel separation [m]
     max_wheel_speed: PositiveFloat = 1.0  # [m/s]
     max_accel: PositiveFloat = 3.0  # per wheel [m/s^2]
-    friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
-    localization: Literal["odometry", "ground_truth"] = "odometry"  # the pose controllers see
-    lidar: LidarConfig | None = None
     odometry: OdometryConfig = OdometryConfig()
-    imu: ImuConfig | None = None
-    controller: ControllerConfig | None = None  # None: the robot stands still
-    goal: GoalConfig | None = None
+
+    def top_speed(self) -> float:
+        return self.max_wheel_speed
 
 
 # ---------------------------------------------------------------------------- expectations
@@ -147,10 +157,22 @@ class RobotExpectation(Section):
 
 
 class ScenarioConfig(Section):
+    """A whole scenario. Validate data with :func:`pymunk_bot.config.parse_scenario`: the model
+    actually used is assembled from the registries (see ``config.assemble``), and the checks
+    that span several keys run after it."""
+
     name: Name
     description: str = ""
     seed: Annotated[Int, Field(ge=0)] = 0
     world: WorldConfig
-    obstacles: list[ObstacleConfig] = []
+    obstacles: list[Any] = []  # each a registered obstacle kind's section
     robots: list[RobotConfig] = Field(min_length=1)
     expect: dict[str, RobotExpectation] = {}
+
+    @classmethod
+    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> "ScenarioConfig":  # type: ignore[override]
+        """On this base class: the full validation a file gets (a ScenarioError on bad data)."""
+        if cls is ScenarioConfig:
+            from .loader import parse_scenario
+            return parse_scenario(obj, "<data>")
+        return super().model_validate(obj, *args, **kwargs)

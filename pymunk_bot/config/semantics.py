@@ -110,7 +110,7 @@ def check(scenario: ScenarioConfig) -> None:
         needed = required_substeps(scenario)
         if needed > MAX_SUBSTEPS:
             fastest = max(range(len(scenario.robots)),
-                          key=lambda i: scenario.robots[i].max_wheel_speed)
+                          key=lambda i: scenario.robots[i].top_speed())
             raise SemanticError(
                 ("robots", fastest, "max_wheel_speed"),
                 f"too fast for world.dt = {scenario.world.dt:g} s: it would need {needed} "

@@ -32,7 +32,7 @@ def required_substeps(scenario: ScenarioConfig) -> int:
     """Substeps for the fastest robot against the thinnest obstacle (and robots head-on)."""
     dt = scenario.world.dt
     robots = scenario.robots
-    fastest = max(r.max_wheel_speed for r in robots)
+    fastest = max(r.top_speed() for r in robots)
     smallest = min(r.radius for r in robots)
     thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles])
     substeps = substeps_against_tunnelling(dt, fastest, smallest, thinnest)

@@ -14,7 +14,7 @@ import numpy as np
 from ..config.controllers import AvoidControllerConfig, DwaConfig
 from ..planning.dwa import DwaParams, DynamicWindow, free_runs, scan_points
 from ..planning.tracking import MovingObstacleTracker
-from .base import Controller, Observation, RobotSpec, controllers, wheel_speeds
+from .base import STOP, Command, Controller, Observation, RobotSpec
 
 PROGRESS_WINDOW = 10.0  # [s] without getting closer to the goal before the message says so
 PROGRESS_STEP = 0.1  # [m] of progress that counts
@@ -45,7 +45,6 @@ def to_robot_frame(pose, point) -> np.ndarray:
     return np.array([c * dx + s * dy, -s * dx + c * dy])
 
 
-@controllers.register("avoid")
 class AvoidController(Controller):
     """Drives to the goal around whatever the LiDAR sees; needs a ``lidar`` on the robot."""
 
@@ -60,21 +59,21 @@ class AvoidController(Controller):
         self.tracker = MovingObstacleTracker()
         self._side: tuple | None = None  # (-1 right or +1 left, last time [s]) of an encounter
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
+    def compute(self, obs: Observation) -> Command:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             self.status, self.message = "failed", "no goal: set controller.goal or the robot's goal"
-            return 0.0, 0.0
+            return STOP
         if obs.scan is None:
             self.status, self.message = "failed", "avoid needs a lidar on the robot"
-            return 0.0, 0.0
+            return STOP
         target = to_robot_frame(obs.pose, goal)
         distance = float(np.hypot(*target))
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         if distance <= 0.5 * tolerance:
             self.status, self.message = "arrived", ""
             self.command = (0.0, 0.0)
-            return 0.0, 0.0
+            return STOP
         self.status = "running"
         self._watch_progress(distance, obs.time)
         # Approach the goal so as to stop on it: v <= sqrt(2 a d), gentler in the last metre.
@@ -89,7 +88,7 @@ class AvoidController(Controller):
         self._stalled_since = None if v > STALL_SPEED else (
             obs.time if self._stalled_since is None else self._stalled_since)
         self.command = (v, omega)
-        return wheel_speeds(v, omega, obs.robot.track_width)
+        return Command(v, omega)
 
     def _passing_target(self, obs: Observation, oncoming: tuple | None,
                         target: np.ndarray) -> np.ndarray:

@@ -2,14 +2,19 @@
 
 A controller is called at its own ``rate`` with an :class:`Observation` (the robot's sensor
 readings and its pose estimate, never ground truth unless the scenario asks for it) and returns
-wheel speeds. Write your own by subclassing :class:`Controller`.
+a :class:`~pymunk_bot.command.Command` (body velocity), which every drive takes. A controller
+written for the diff drive may still return (left, right) wheel speeds [m/s]; new code should
+return a Command, so it works on every drive. Write your own by subclassing :class:`Controller`.
 """
 from __future__ import annotations
 
+from ..command import STOP, Command
+from ..drives.diff import wheel_speeds
+from ..plugins import controllers
 from ..readings import LaserScan, Observation, RobotSpec
-from ..registry import Registry
 
-__all__ = ["Controller", "LaserScan", "Observation", "RobotSpec", "controllers", "wheel_speeds"]
+__all__ = ["STOP", "Command", "Controller", "LaserScan", "Observation", "RobotSpec", "controllers",
+           "wheel_speeds"]
 
 
 class Controller:
@@ -31,11 +36,11 @@ class Controller:
             self.config = config
             self.rate = getattr(config, "rate", None) or self.rate
         if robot is not None:
-            wanted = getattr(config, "max_speed", None) or robot.max_wheel_speed
-            self.max_speed = min(wanted, robot.max_wheel_speed)
+            wanted = getattr(config, "max_speed", None) or robot.max_speed
+            self.max_speed = min(wanted, robot.max_speed)
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
-        """Left and right wheel speeds [m/s] for the next control period."""
+    def compute(self, obs: Observation) -> Command | tuple[float, float]:
+        """The body velocity for the next control period (or diff wheel speeds, left and right)."""
         raise NotImplementedError
 
     def set_map(self, world_map) -> None:
@@ -45,12 +50,3 @@ class Controller:
     def debug_path(self) -> list[tuple[float, float]] | None:
         """A path the controller is following, for views (None if it has none)."""
         return None
-
-
-controllers: Registry[type] = Registry("controller")
-
-
-def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
-    """(v, omega) -> (left, right) wheel speeds."""
-    half = 0.5 * omega * track_width
-    return v - half, v + half

@@ -10,21 +10,20 @@ import math
 
 from ..config.controllers import GoToGoalControllerConfig
 from ..geometry import wrap_angle
-from .base import Controller, Observation, RobotSpec, controllers, wheel_speeds
+from .base import STOP, Command, Controller, Observation, RobotSpec
 
 
-@controllers.register("go_to_goal")
 class GoToGoalController(Controller):
     """Steers straight at one goal point and stops inside the tolerance."""
 
     def __init__(self, config: GoToGoalControllerConfig, robot: RobotSpec) -> None:
         super().__init__(config, robot)
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
+    def compute(self, obs: Observation) -> Command:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             self.status, self.message = "failed", "no goal: set controller.goal or the robot's goal"
-            return 0.0, 0.0
+            return STOP
         x, y, theta = obs.pose
         dx, dy = goal[0] - x, goal[1] - y
         distance = math.hypot(dx, dy)
@@ -32,9 +31,9 @@ class GoToGoalController(Controller):
         # Stop a little inside the tolerance so a slightly noisy estimate still lands inside it.
         if distance <= 0.5 * tolerance:
             self.status = "arrived"
-            return 0.0, 0.0
+            return STOP
         self.status = "running"
         bearing = wrap_angle(math.atan2(dy, dx) - theta)
         v = min(self.max_speed, self.config.k_rho * distance) * max(0.0, math.cos(bearing))
         omega = self.config.k_alpha * bearing
-        return wheel_speeds(v, omega, obs.robot.track_width)
+        return Command(v, omega)

@@ -23,7 +23,7 @@ from ..planning.grid import ClearanceGrid
 from ..planning.map import MapInfo
 from ..planning.paths import shortcut
 from .avoid import dwa_params
-from .base import Controller, Observation, RobotSpec, controllers, wheel_speeds
+from .base import STOP, Command, Controller, Observation, RobotSpec
 from .waypoints import PathFollower, pursuit_gains
 
 LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
@@ -33,7 +33,6 @@ PROGRESS_STEP = 0.1  # [m] along the path that counts as progress
 PATH_CORNER_RADIUS = 0.25  # [m] fillets on planned paths (small: they cut toward obstacles)
 
 
-@controllers.register("navigate")
 class NavigateController(Controller):
     """Plans on the map, follows the plan, avoids and replans around what the map missed."""
 
@@ -68,7 +67,7 @@ class NavigateController(Controller):
         return self.path
 
     # ------------------------------------------------------------------ the control step
-    def compute(self, obs: Observation) -> tuple[float, float]:
+    def compute(self, obs: Observation) -> Command:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
         if goal is None:
             return self._fail("no goal: set controller.goal or the robot's goal", permanent=True)
@@ -100,7 +99,7 @@ class NavigateController(Controller):
             # The LiDAR vetoes arcs that would hit something the map did not show.
             v, omega = self.window.track(*self.command, points, v, omega)
         self.command = (v, omega)
-        return wheel_speeds(v, omega, obs.robot.track_width)
+        return Command(v, omega)
 
     # ------------------------------------------------------------------ planning
     def _reset(self, goal: tuple[float, float]) -> None:
@@ -207,11 +206,11 @@ class NavigateController(Controller):
                 del self.unmapped[key]
 
     # ------------------------------------------------------------------ helpers
-    def _fail(self, message: str, permanent: bool) -> tuple[float, float]:
+    def _fail(self, message: str, permanent: bool) -> Command:
         self.status, self.message = "failed", message
         self._permanent = permanent
         return self._stop()
 
-    def _stop(self) -> tuple[float, float]:
+    def _stop(self) -> Command:
         self.command = (0.0, 0.0)
-        return 0.0, 0.0
+        return STOP

@@ -14,11 +14,21 @@ import os
 import sys
 
 from ..config.controllers import PythonControllerConfig
-from .base import Controller, Observation, RobotSpec, controllers
+from .base import Command, Controller, Observation, RobotSpec
 
 
 def import_class(class_path: str) -> type:
-    """The class named by 'package.module:ClassName'; ValueError with a one-line reason."""
+    """The controller class named by 'package.module:ClassName'; ValueError with a one-line reason."""
+    obj = import_module_attr(class_path)
+    if not inspect.isclass(obj):
+        raise ValueError(f"'{class_path}' is not a class")
+    if not callable(getattr(obj, "compute", None)):
+        raise ValueError(f"'{class_path}' has no compute(observation) method")
+    return obj
+
+
+def import_module_attr(class_path: str) -> object:
+    """The object named by 'package.module:Name'; ValueError with a one-line reason."""
     module_name, _, attr = class_path.partition(":")
     try:
         module = _import(module_name)
@@ -31,10 +41,6 @@ def import_class(class_path: str) -> type:
         if not hasattr(obj, part):
             raise ValueError(f"module '{module_name}' has no attribute '{attr}'")
         obj = getattr(obj, part)
-    if not inspect.isclass(obj):
-        raise ValueError(f"'{class_path}' is not a class")
-    if not callable(getattr(obj, "compute", None)):
-        raise ValueError(f"'{class_path}' has no compute(observation) method")
     return obj
 
 
@@ -50,7 +56,6 @@ def _import(module_name: str):
         return importlib.import_module(module_name)
 
 
-@controllers.register("python")
 class PythonController(Controller):
     """Wraps a user's controller instance: checks what it returns, forwards status and message."""
 
@@ -66,10 +71,13 @@ class PythonController(Controller):
         if not self.rate > 0:
             raise ValueError(f"{config.class_path}.rate must be > 0 (got {self.rate})")
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
-        left, right = self.inner.compute(obs)
+    def compute(self, obs: Observation) -> Command | tuple[float, float]:
+        command = self.inner.compute(obs)
         self.status = getattr(self.inner, "status", self.status)
         self.message = getattr(self.inner, "message", self.message)
+        if isinstance(command, Command):
+            return command
+        left, right = command  # the older form: wheel speeds of a diff robot [m/s]
         return float(left), float(right)
 
     def debug_path(self):

@@ -8,7 +8,7 @@ import numpy as np
 from ..config.controllers import PursuitConfig, WaypointsControllerConfig
 from ..geometry import wrap_angle
 from ..planning.pursuit import PathTracker, PursuitGains, pursue, round_corners
-from .base import Controller, Observation, RobotSpec, controllers, wheel_speeds
+from .base import STOP, Command, Controller, Observation, RobotSpec
 
 
 def pursuit_gains(config: PursuitConfig, robot: RobotSpec, max_speed: float,
@@ -60,7 +60,6 @@ class PathFollower:
         return speed * max(0.0, math.cos(bearing)), g.k_turn * bearing, to_end
 
 
-@controllers.register("waypoints")
 class WaypointsController(Controller):
     """Follows ``points`` in order from wherever the robot starts; stops at the last one."""
 
@@ -76,7 +75,7 @@ class WaypointsController(Controller):
         path = list(self.points)
         return path + [path[0]] if self.config.loop and len(path) > 1 else path
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
+    def compute(self, obs: Observation) -> Command:
         x, y, _ = obs.pose
         if self.follower is None:
             start = (float(x), float(y))
@@ -98,8 +97,8 @@ class WaypointsController(Controller):
         if follower is self.follower and not self.config.loop and (
                 left <= 0.5 * tolerance or (left <= tolerance and follower.tracker.remaining() < 1e-6)):
             self.status, self.message = "arrived", "reached the last waypoint"
-            return 0.0, 0.0
+            return STOP
         self.status = "running"
         if self.config.loop and self.lead_in is None:
             self.message = f"patrolling, lap {self.follower.tracker.laps + 1}"
-        return wheel_speeds(v, omega, obs.robot.track_width)
+        return Command(v, omega)

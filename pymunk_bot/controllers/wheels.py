@@ -1,11 +1,10 @@
-"""Constant wheel speeds."""
+"""Constant wheel speeds (diff drive); ``velocity`` holds a body velocity on any drive."""
 from __future__ import annotations
 
 from ..config.controllers import WheelsControllerConfig
-from .base import Controller, Observation, RobotSpec, controllers
+from .base import Controller, Observation, RobotSpec
 
 
-@controllers.register("wheels")
 class WheelsController(Controller):
     """Drives both wheels at fixed speeds forever."""
 
@@ -14,4 +13,4 @@ class WheelsController(Controller):
         self.speeds = (config.left, config.right)
 
     def compute(self, obs: Observation) -> tuple[float, float]:
-        return self.speeds
+        return self.speeds  # wheel speeds: the diff drive takes them as they are

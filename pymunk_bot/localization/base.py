@@ -13,7 +13,7 @@ import numpy as np
 
 from ..maps.grid import OccupancyGrid
 from ..readings import LaserScan, RobotSpec
-from ..registry import Registry
+
 
 
 @dataclass(frozen=True)
@@ -59,4 +59,4 @@ class Localizer:
         return {}
 
 
-localizers: Registry = Registry("localizer")
+

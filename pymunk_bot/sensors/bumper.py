@@ -25,9 +25,13 @@ class Bumper:
 
     name = "bumper"
 
-    def __init__(self, body: pymunk.Body, episodes: Callable[[], int]) -> None:
+    passive = True  # needs no update per tick when it has a clock: its reading is built on demand
+
+    def __init__(self, body: pymunk.Body, episodes: Callable[[], int],
+                 clock: Callable[[], float] | None = None) -> None:
         self._body = body
         self._episodes = episodes
+        self._clock = clock  # the simulation's time [s]; without one, update() sets the time
         self._time: float | None = None  # when the simulation last asked for a reading [s]
 
     @property
@@ -37,7 +41,8 @@ class Bumper:
         Built on demand: contacts change only inside a physics step and update() runs after
         every step, so reading the body's arbiters now gives what update() time saw, without
         paying for it on every tick of every robot."""
-        if self._time is None:
+        time = self._clock() if self._clock is not None else self._time
+        if time is None:
             return None
         world_normals: list[tuple[float, float]] = []
 
@@ -53,7 +58,7 @@ class Bumper:
         angle = self._body.angle
         c, s = math.cos(angle), math.sin(angle)
         normals = tuple((c * nx + s * ny, -s * nx + c * ny) for nx, ny in world_normals)
-        return BumperReading(time=self._time, touching=bool(normals), normals=normals,
+        return BumperReading(time=time, touching=bool(normals), normals=normals,
                              episodes=self._episodes())
 
     @property

@@ -101,19 +101,30 @@ class Lidar:
         """Cast the beams now at the current pose: ranges [m] with the configured errors."""
         return self._measure(self._on_demand_rng)
 
+    @property
+    def schedule(self) -> Schedule:
+        """When periodic scans are due (the simulation checks every LiDAR's at once)."""
+        return self._schedule
+
     def update(self, time: float) -> None:
         """Take a scan if one is due at ``time`` [s] (called after every tick)."""
         if self._schedule.due(time):
-            ranges = self._measure(self._periodic_rng)
-            ranges.setflags(write=False)
-            c = self.config
-            self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
-                                    max_range=c.max_range, offset=self.offset, time=time)
+            self.record(time, self.true_ranges())
+
+    def record(self, time: float, true_ranges: np.ndarray) -> None:
+        """Store the periodic scan taken at ``time`` [s] from these noise-free ranges [m]."""
+        ranges = self._apply_model(true_ranges, self._periodic_rng)
+        ranges.setflags(write=False)
+        c = self.config
+        self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
+                                max_range=c.max_range, offset=self.offset, time=time)
 
     # ------------------------------------------------------------------ model
     def _measure(self, rng: np.random.Generator) -> np.ndarray:
+        return self._apply_model(self.true_ranges(), rng)
+
+    def _apply_model(self, true: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         c = self.config
-        true = self.true_ranges()
         no_return = (true < c.min_range) | (true >= c.max_range)
         if c.noise_std > 0.0:
             ranges = true + c.noise_std * rng.standard_normal(true.shape[0])

@@ -17,94 +17,127 @@ cannot know its scale and track errors, so their systematic drift is not in it.
 """
 from __future__ import annotations
 
-import math
+from typing import Any, Sequence
 
 import numpy as np
 
-from ..config.schema import OdometryConfig
-from ..drive import sinc_half
+
+def sinc_half(x: np.ndarray) -> np.ndarray:
+    """sin(x/2) / (x/2), elementwise: the chord of an arc over its length."""
+    half = 0.5 * np.asarray(x, dtype=float)
+    small = np.abs(half) < 1e-4
+    safe = np.where(small, 1.0, half)
+    return np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
+
+
+class DiffOdometryGroup:
+    """Dead reckoning of every diff-drive robot of a world, as arrays; fed each tick's true
+    wheel travel. Random draws come from each robot's own generator, in a fixed order, so a
+    robot's odometry does not depend on which other robots exist."""
+
+    def __init__(self, configs: Sequence[Any], start_poses: Sequence[Sequence[float]],
+                 track_widths: Sequence[float], rngs: Sequence[np.random.Generator]) -> None:
+        self.configs = list(configs)
+        n = len(self.configs)
+        self._rngs = list(rngs)
+        self.pose = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
+        self.believed_track = np.array(
+            [t * (1.0 + c.track_width_error) for t, c in zip(track_widths, configs)])  # [m]
+        self.scale = np.array([(1.0 + c.left_scale_error, 1.0 + c.right_scale_error)
+                               for c in configs]).reshape(n, 2)
+        self.noise_var = np.array([c.wheel_noise_std ** 2 for c in configs])  # [m^2 per m]
+        self.resolution = np.array([c.encoder_resolution for c in configs])  # [m per tick]
+        self._noisy = np.flatnonzero(self.noise_var > 0.0).tolist()
+        self._quantised = np.flatnonzero(self.resolution > 0.0)
+        self._cumulative = np.zeros((n, 2))  # measured travel before quantisation [m]
+        self._ticks = np.zeros((n, 2))  # whole encoder ticks counted so far
+        self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
+        self.covariance = np.zeros((n, 3, 3))
+
+    def _measure(self, travel: np.ndarray) -> np.ndarray:
+        measured = travel * self.scale
+        for i in self._noisy:
+            rng, var = self._rngs[i], self.noise_var[i]
+            for wheel in (0, 1):
+                if travel[i, wheel] != 0.0:
+                    measured[i, wheel] += np.sqrt(var * abs(travel[i, wheel])) * rng.standard_normal()
+        q = self._quantised
+        if q.shape[0]:
+            self._cumulative[q] += measured[q]
+            ticks = np.floor(self._cumulative[q] / self.resolution[q, None])
+            measured[q] = (ticks - self._ticks[q]) * self.resolution[q, None]
+            self._ticks[q] = ticks
+        return measured
+
+    def update(self, travel: np.ndarray) -> None:
+        """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
+        wheels = self._measure(travel)
+        self.wheel_travel += wheels
+        left, right = wheels[:, 0], wheels[:, 1]
+        ds = 0.5 * (left + right)
+        dtheta = (right - left) / self.believed_track
+        chord = ds * sinc_half(dtheta)
+        heading = self.pose[:, 2] + 0.5 * dtheta
+        cos_h, sin_h = np.cos(heading), np.sin(heading)
+        if self._noisy:
+            self._propagate(chord, cos_h, sin_h, ds, np.abs(wheels))
+        self.pose[:, 0] += chord * cos_h
+        self.pose[:, 1] += chord * sin_h
+        self.pose[:, 2] += dtheta
+
+    def _propagate(self, chord: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray,
+                   ds: np.ndarray, abs_wheels: np.ndarray) -> None:
+        """P <- F_pose P F_pose^T + F_wheels diag(q_l, q_r) F_wheels^T (midpoint-heading model)."""
+        i = np.array(self._noisy)
+        c, s, track = cos_h[i], sin_h[i], self.believed_track[i]
+        f = np.zeros((len(i), 3, 3))
+        f[:, 0, 0] = f[:, 1, 1] = f[:, 2, 2] = 1.0
+        f[:, 0, 2] = -chord[i] * s  # d(x, y)/d theta
+        f[:, 1, 2] = chord[i] * c
+        # d(x, y, theta)/d(left, right): half the travel each, plus the heading's effect on x, y.
+        k = ds[i] / (2.0 * track)
+        g = np.zeros((len(i), 3, 2))
+        g[:, :, 0] = np.stack((0.5 * c + k * s, 0.5 * s - k * c, -1.0 / track), axis=1)
+        g[:, :, 1] = np.stack((0.5 * c - k * s, 0.5 * s + k * c, 1.0 / track), axis=1)
+        q = self.noise_var[i, None] * abs_wheels[i]  # (m, 2)
+        p = self.covariance[i]
+        self.covariance[i] = f @ p @ f.transpose(0, 2, 1) + (g * q[:, None, :]) @ g.transpose(0, 2, 1)
+
+
+    def handle(self, i: int) -> "Odometry":
+        """Robot ``i``'s view (``robot.odometry``)."""
+        return Odometry(self.configs[i], self.pose[i], 0.0, self._rngs[i], group=self, index=i)
 
 
 class Odometry:
-    """Dead reckoning from the left and right wheel encoders, fed each tick's true wheel travel."""
+    """One robot's odometry (``robot.odometry``); standalone, it dead-reckons by itself:
+    ``Odometry(config, start_pose, track_width, rng).update(left_travel, right_travel)``."""
 
-    def __init__(self, config: OdometryConfig, start_pose, track_width: float,
-                 rng: np.random.Generator) -> None:
+    def __init__(self, config: Any, start_pose: Sequence[float], track_width: float,
+                 rng: np.random.Generator, *, group: DiffOdometryGroup | None = None,
+                 index: int = 0) -> None:
         self.config = config
-        self._rng = rng
-        self._x, self._y, self._theta = (float(v) for v in start_pose)
-        self._believed_track = track_width * (1.0 + config.track_width_error)  # [m]
-        self._scale = (1.0 + config.left_scale_error, 1.0 + config.right_scale_error)
-        self._noise_var = config.wheel_noise_std ** 2  # [m^2 per m travelled]
-        self._cumulative = [0.0, 0.0]  # measured travel before quantisation [m]
-        self._ticks = [0, 0]  # whole encoder ticks counted so far
-        self._wheel_travel = [0.0, 0.0]  # what odometry has integrated per wheel [m]
-        # Upper triangle of the 3x3 pose covariance: xx, xy, xt, yy, yt, tt.
-        self._cov = [0.0] * 6
+        self._group = group or DiffOdometryGroup([config], [start_pose], [track_width], [rng])
+        self._i = index
 
     @property
     def pose(self) -> np.ndarray:
         """The odometry estimate [x, y, theta] (theta unwrapped)."""
-        return np.array([self._x, self._y, self._theta])
+        return self._group.pose[self._i].copy()
 
     @property
     def wheel_travel(self) -> tuple[float, float]:
         """Measured (left, right) wheel travel since the start [m], as the encoders report it."""
-        return (self._wheel_travel[0], self._wheel_travel[1])
+        left, right = self._group.wheel_travel[self._i]
+        return (float(left), float(right))
 
     @property
     def covariance(self) -> np.ndarray:
         """3x3 covariance of [x, y, theta] that the encoder noise model predicts [m^2, m rad, rad^2]."""
-        xx, xy, xt, yy, yt, tt = self._cov
-        return np.array([[xx, xy, xt], [xy, yy, yt], [xt, yt, tt]])
-
-    def _measure(self, wheel: int, travel: float) -> float:
-        measured = travel * self._scale[wheel]
-        if self._noise_var > 0.0 and travel != 0.0:
-            measured += math.sqrt(self._noise_var * abs(travel)) * self._rng.standard_normal()
-        resolution = self.config.encoder_resolution
-        if resolution <= 0.0:
-            return measured
-        self._cumulative[wheel] += measured
-        ticks = math.floor(self._cumulative[wheel] / resolution)
-        delta, self._ticks[wheel] = ticks - self._ticks[wheel], ticks
-        return delta * resolution
+        return self._group.covariance[self._i].copy()
 
     def update(self, left_travel: float, right_travel: float) -> None:
-        """Integrate one tick's true wheel travel [m]."""
-        left = self._measure(0, left_travel)
-        right = self._measure(1, right_travel)
-        self._wheel_travel[0] += left
-        self._wheel_travel[1] += right
-        ds = 0.5 * (left + right)
-        dtheta = (right - left) / self._believed_track
-        chord = ds * sinc_half(dtheta)
-        heading = self._theta + 0.5 * dtheta
-        cos_h, sin_h = math.cos(heading), math.sin(heading)
-        if self._noise_var > 0.0:
-            self._propagate(chord, cos_h, sin_h, ds, abs(left), abs(right))
-        self._x += chord * cos_h
-        self._y += chord * sin_h
-        self._theta += dtheta
-
-    def _propagate(self, chord: float, cos_h: float, sin_h: float, ds: float,
-                   abs_left: float, abs_right: float) -> None:
-        """P <- F_pose P F_pose^T + F_wheels diag(q_l, q_r) F_wheels^T (midpoint-heading model)."""
-        xx, xy, xt, yy, yt, tt = self._cov
-        a, b = -chord * sin_h, chord * cos_h  # d(x, y)/d theta
-        xx, xy, xt = xx + 2.0 * a * xt + a * a * tt, xy + a * yt + b * xt + a * b * tt, xt + a * tt
-        yy, yt = yy + 2.0 * b * yt + b * b * tt, yt + b * tt
-        # d(x, y, theta)/d(left, right): half the travel each, plus the heading's effect on x, y.
-        k = ds / (2.0 * self._believed_track)
-        g = 1.0 / self._believed_track
-        jl = (0.5 * cos_h + k * sin_h, 0.5 * sin_h - k * cos_h, -g)
-        jr = (0.5 * cos_h - k * sin_h, 0.5 * sin_h + k * cos_h, g)
-        ql, qr = self._noise_var * abs_left, self._noise_var * abs_right
-        self._cov = [
-            xx + ql * jl[0] * jl[0] + qr * jr[0] * jr[0],
-            xy + ql * jl[0] * jl[1] + qr * jr[0] * jr[1],
-            xt + ql * jl[0] * jl[2] + qr * jr[0] * jr[2],
-            yy + ql * jl[1] * jl[1] + qr * jr[1] * jr[1],
-            yt + ql * jl[1] * jl[2] + qr * jr[1] * jr[2],
-            tt + ql * jl[2] * jl[2] + qr * jr[2] * jr[2],
-        ]
+        """Integrate one tick's true wheel travel [m] (standalone use only)."""
+        travel = np.zeros((self._group.pose.shape[0], 2))
+        travel[self._i] = (left_travel, right_travel)
+        self._group.update(travel)

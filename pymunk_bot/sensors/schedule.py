@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 # [s]; simulated times are sums of dt, so k * period can miss a tick by a rounding error
 TIME_TOLERANCE = 1e-9
 
@@ -32,3 +34,27 @@ class Schedule:
         # Skip every due time this tick has already passed.
         self._next = math.floor((elapsed + TIME_TOLERANCE) / self.period) + 1
         return True
+
+
+class ScheduleArray:
+    """Many schedules checked at once: the same due rule as :class:`Schedule`, as arrays.
+
+    Built from existing schedules (taking over their state); their own ``due`` must not be
+    called afterwards."""
+
+    def __init__(self, schedules: list[Schedule]) -> None:
+        self.period = np.array([np.inf if s.period is None else s.period for s in schedules])
+        self.every_tick = np.array([s.period is None for s in schedules], dtype=bool)
+        self.start = np.array([s.start for s in schedules], dtype=float)
+        self.next = np.array([s._next for s in schedules], dtype=float)  # index k of the next due time
+
+    def due(self, time: float) -> np.ndarray:
+        """Indices of the schedules due at ``time`` [s] (each then advances to its next due time)."""
+        elapsed = time - self.start + TIME_TOLERANCE
+        with np.errstate(invalid="ignore"):
+            due = (elapsed >= self.next * self.period) | self.every_tick
+        index = np.flatnonzero(due)
+        if index.shape[0]:
+            finite = index[~self.every_tick[index]]
+            self.next[finite] = np.floor(elapsed[finite] / self.period[finite]) + 1
+        return index

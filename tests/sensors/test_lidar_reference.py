@@ -15,13 +15,13 @@ from builders import robot, scenario
 
 from pymunk_bot import Simulation
 from pymunk_bot.config import parse_scenario
-from pymunk_bot.config.schema import ObstacleConfig
+from pymunk_bot.config.assemble import obstacle_union
 from pymunk_bot.config.semantics import distance_to_obstacle
 from pymunk_bot.errors import ScenarioError
 from pymunk_bot.sensors.raycast import reference_cast
 
 SIZE = 20.0  # [m]
-OBSTACLE = TypeAdapter(ObstacleConfig)
+OBSTACLE = TypeAdapter(obstacle_union())
 
 
 def random_obstacle(rng: np.random.Generator) -> dict:

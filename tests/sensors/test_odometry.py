@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from builders import robot, wheels
 
-from pymunk_bot.drive import sinc_half
+from pymunk_bot.propulsion import _sinc_half as sinc_half
 
 TRACK = 0.3  # [m], the robot default
 

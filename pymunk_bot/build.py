@@ -1,0 +1,197 @@
+"""The build layer: a validated config and a seed -> the world, robots, drives, sensors,
+controllers and localizers of one run. ``Simulation`` keeps only the clock and the tick order.
+
+Random streams: one ``numpy.random.Generator`` from the seed, spawned down the tree in a fixed
+order (world -> per-robot odometry; sensors -> per robot -> per sensor kind; then controllers
+and localizers), so adding a sensor to one robot never changes another's draws.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pymunk
+
+from . import physics
+from .config.schema import ScenarioConfig
+from .errors import ScenarioError
+from .localization.base import LocalizerContext
+from .maps.grid import OccupancyGrid
+from .metrics import RobotMetrics
+from .planning.map import MapInfo
+from .plugins import controllers, drives, localizers
+from .propulsion import Propulsion
+from .readings import RobotSpec
+from .robot import Fleet, Robot
+from .sensors.attach import attach_sensors
+from .sensors.schedule import Schedule
+from .world import World
+
+LOCALIZER_MAP_RESOLUTION = 0.05  # [m] of the prebuilt occupancy grid localizers are given
+
+
+@dataclass
+class Built:
+    """Everything one run is made of."""
+
+    world: World
+    robots: dict[str, Robot]
+    fleet: Fleet
+    drive_groups: list[tuple[Any, list[int]]]  # each group with its robots' indices
+    odometry_groups: list[tuple[Any, list[int]]]
+    propulsion: Propulsion
+    control_schedules: list[Schedule | None]
+    maps: "MapSource"
+    metrics: list[RobotMetrics] = field(default_factory=list)  # the robots that measure any
+
+
+class MapSource:
+    """What a robot may know in advance: the scenario's map, built once on first request."""
+
+    def __init__(self, config: ScenarioConfig) -> None:
+        self.config = config
+        self._info: MapInfo | None = None
+        self._grid: OccupancyGrid | None = None
+
+    def info(self) -> MapInfo:
+        """Arena and obstacles as geometry (for planners)."""
+        if self._info is None:
+            self._info = MapInfo.from_scenario(self.config)
+        return self._info
+
+    def grid(self) -> OccupancyGrid:
+        """The static geometry as an occupancy grid (for localizers)."""
+        if self._grid is None:
+            from .maps.rasterize import grid_from_map
+            self._grid = grid_from_map(self.info().without_movable(), LOCALIZER_MAP_RESOLUTION)
+        return self._grid
+
+
+def build(config: ScenarioConfig, seed: int, source: str,
+          handles: dict[str, Robot] | None = None) -> Built:
+    """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew."""
+    rng = np.random.default_rng(seed)
+    world_rng, sensor_rng = rng.spawn(2)
+    (mind_rng,) = rng.spawn(1)  # controllers and localizers
+    world = World(config)
+    fleet = Fleet(list(config.robots))
+    n = len(config.robots)
+    robots: dict[str, Robot] = {}
+    by_drive: dict[str, list[int]] = {}
+    for i, rc in enumerate(config.robots):
+        by_drive.setdefault(rc.drive, []).append(i)
+    drive_groups = [(drives.get(name)([config.robots[i] for i in idx]), idx)
+                    for name, idx in by_drive.items()]
+    handles = handles or {}
+    for group, idx in drive_groups:
+        for j, i in enumerate(idx):
+            rc = config.robots[i]
+            robot = handles.get(rc.name) or Robot(rc.name)
+            robot._bind(fleet, i, group, j)
+            _make_body(robot, rc, world, group, j, group_id=i + 1)
+            robot.drive = group.handle(j)
+            robots[rc.name] = robot
+    robots = {rc.name: robots[rc.name] for rc in config.robots}  # scenario order
+    ordered = list(robots.values())
+    odometry_rngs = world_rng.spawn(n)
+    odometry_groups = []
+    for group, idx in drive_groups:
+        odometry = group.make_odometry([odometry_rngs[i] for i in idx])
+        for j, i in enumerate(idx):
+            ordered[i].odometry = odometry.handle(j)
+        odometry_groups.append((odometry, idx))
+    for robot, child in zip(ordered, sensor_rng.spawn(n)):
+        attach_sensors(robot, world, child)
+    maps = MapSource(config)
+    schedules: list[Schedule | None] = []
+    mind_rngs = mind_rng.spawn(n)
+    for index, (robot, child) in enumerate(zip(ordered, mind_rngs)):
+        controller_rng, localizer_rng = child.spawn(2)
+        robot.controller = _make_controller(robot, index, maps, source)
+        schedules.append(None if robot.controller is None else Schedule(robot.controller.rate))
+        robot.localizer = _make_localizer(robot, index, maps, source, localizer_rng, config)
+    built = Built(world, robots, fleet, drive_groups, odometry_groups,
+                  Propulsion(world.space, [r.body for r in ordered], [r.control for r in ordered],
+                             [(g, idx) for g, idx in drive_groups]),
+                  schedules, maps)
+    for robot in ordered:
+        expectation = config.expect.get(robot.name)
+        robot.metrics = RobotMetrics(
+            world.space, robot, expectation.never_enter if expectation else [],
+            track_clearance=expectation is not None and expectation.min_clearance is not None)
+        if robot.metrics.active:
+            built.metrics.append(robot.metrics)
+    return built
+
+
+def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id: int) -> None:
+    """The robot's dynamic body and shape, and the control body and joints that pull it."""
+    robot.config = rc
+    robot.spec = group.spec(j) if hasattr(group, "spec") else RobotSpec(
+        rc.name, rc.radius, getattr(rc, "track_width", 0.0), rc.top_speed(),
+        getattr(rc, "max_accel", 0.0), drive=rc.drive)
+    x, y, theta = rc.pose
+    body = pymunk.Body(rc.mass, pymunk.moment_for_circle(rc.mass, 0, rc.radius))
+    body.position = (x, y)
+    body.angle = theta
+    shape = pymunk.Circle(body, rc.radius)
+    shape.friction = rc.friction
+    shape.collision_type = physics.ROBOT
+    # The group keeps the robot's own LiDAR from seeing its own body.
+    shape.filter = pymunk.ShapeFilter(group=group_id)
+    control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+    control.position = (x, y)
+    control.angle = theta
+    force, torque = group.joint_limits(j, rc.mass)
+    pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
+    pivot.max_bias = 0.0  # velocity-only: a blocked robot never winds up
+    pivot.max_force = force
+    gear = pymunk.GearJoint(control, body, 0.0, 1.0)
+    gear.max_bias = 0.0
+    gear.max_force = torque
+    world.space.add(body, shape, control, pivot, gear)
+    robot.body, robot.shape, robot.control = body, shape, control
+    fleet, i = robot._fleet, robot._i
+
+    def count() -> None:
+        fleet.collisions[i] += 1
+
+    world.count_contacts(shape, count)
+
+
+def _make_controller(robot: Robot, index: int, maps: MapSource, source: str) -> Any:
+    config = robot.config.controller
+    if config is None:
+        return None
+    goal = getattr(config, "goal", None)
+    robot.nav_goal = tuple(goal) if goal is not None else robot.goal
+    try:
+        controller = controllers.get(config.type)(config, robot.spec)
+    except ValueError as exc:  # e.g. a user's class refusing its params
+        raise ScenarioError(source, f"robots[{index}].controller", str(exc)) from None
+    if getattr(controller, "needs_map", False):
+        # What a real robot's prebuilt map holds: the arena and obstacles as the file says.
+        controller.set_map(maps.info())
+    return controller
+
+
+def _make_localizer(robot: Robot, index: int, maps: MapSource, source: str,
+                    rng: np.random.Generator, config: ScenarioConfig) -> Any:
+    section = robot.config.localization
+    factory = localizers.get(section.type)
+    needs_map = bool(getattr(factory, "needs_map", False))
+    lidar = robot.lidar
+    context = LocalizerContext(
+        robot=robot.spec, start_pose=np.array(robot.config.pose, dtype=float), rng=rng,
+        arena=tuple(config.world.size), map=maps.grid() if needs_map else None,
+        lidar_offset=lidar.offset if lidar is not None else (0.0, 0.0, 0.0))
+    kwargs: dict[str, Any] = {}
+    if section.type == "ground_truth":
+        kwargs["truth"] = lambda: robot.pose
+    elif section.type == "odometry":
+        kwargs["odometry"] = robot.odometry
+    try:
+        return factory(section, context, **kwargs)
+    except ValueError as exc:
+        raise ScenarioError(source, f"robots[{index}].localization", str(exc)) from None

@@ -1,0 +1,16 @@
+"""A constant body velocity, on any drive."""
+from __future__ import annotations
+
+from ..config.controllers import VelocityControllerConfig
+from .base import Command, Controller, Observation, RobotSpec
+
+
+class VelocityController(Controller):
+    """Holds (v, omega, vy) forever; the drive limits it to what the robot can do."""
+
+    def __init__(self, config: VelocityControllerConfig, robot: RobotSpec) -> None:
+        super().__init__(config)
+        self.command = Command(config.v, config.omega, config.vy)
+
+    def compute(self, obs: Observation) -> Command:
+        return self.command

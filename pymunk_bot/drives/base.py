@@ -1,0 +1,80 @@
+"""The drive seam: commands in, an acceleration-limited body twist out, for all robots of a kind.
+
+A :class:`DriveGroup` holds every robot of one drive kind in a world as arrays, so the batched
+tick advances them together. Each substep it returns the twist the robot body should have
+(forward and lateral speed of the body's origin in the robot frame [m/s], yaw rate [rad/s]); the
+simulation turns that into the kinematic control body's velocity (the tank pattern, see
+docs/physics.md). Its odometry model lives beside it, because what encoders measure depends on
+the drive.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..command import Command
+
+# Below this many robots, drives and the tick work robot by robot in plain Python: numpy's
+# per-call overhead costs more than it saves for a handful of robots.
+SMALL_GROUP = 24
+
+
+class DriveGroup:
+    """All robots of one drive kind. Subclasses set ``name`` and implement the methods below."""
+
+    name = ""
+    holonomic = False  # True: accepts a lateral speed vy
+
+    def __init__(self, configs: Sequence[Any]) -> None:
+        self.configs = list(configs)
+        self.n = len(self.configs)
+
+    # ------------------------------------------------------------------ commands
+    def set_command(self, i: int, command: Any) -> None:
+        """Robot ``i`` drives with this :class:`Command` (limited to what the drive can do)."""
+        raise NotImplementedError
+
+    def command_of(self, i: int) -> Command:
+        """The body velocity robot ``i`` is asked for now, after the drive's limits."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ physics
+    def advance(self, h: float) -> tuple[Any, Any, Any]:
+        """Advance the motors by one substep of ``h`` [s]: body twists (ux, uy, omega), each an
+        array of shape (n,) (or a list of floats for fewer than SMALL_GROUP robots).
+
+        Also accumulates what the encoders see during the substep (see :meth:`take_travel`).
+        """
+        raise NotImplementedError
+
+    def take_travel(self) -> np.ndarray:
+        """Encoder input accumulated since the last call (drive-specific columns), then reset."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ set-up
+    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
+        """(max force [N], max torque [N m]) of the joints that pull robot ``i``."""
+        raise NotImplementedError
+
+    def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
+        """This drive's odometry for every robot of the group: an object with ``update(travel)``
+        (the array :meth:`take_travel` returns) and ``handle(i)`` (``robot.odometry``: ``pose``,
+        ``covariance``)."""
+        raise NotImplementedError
+
+    def handle(self, i: int) -> Any:
+        """The per-robot view users see as ``robot.drive``."""
+        raise NotImplementedError
+
+    def max_speed(self, i: int) -> float:
+        """Fastest any point of robot ``i``'s body origin can move [m/s] (for substep choice)."""
+        raise NotImplementedError
+
+
+def limit_step(current: np.ndarray, target: np.ndarray, step: np.ndarray | float) -> np.ndarray:
+    """Move ``current`` toward ``target`` by at most ``step`` (in place), elementwise."""
+    delta = target - current
+    np.clip(delta, -step, step, out=delta)
+    current += delta
+    return current

@@ -1,0 +1,152 @@
+"""Differential drive: two wheels ``track_width`` apart, each limited in speed and acceleration.
+
+pymunk integrates positions before it solves velocities, so a velocity given to the control body
+in one substep moves the robot in the next. The wheel speeds the encoders see in a substep are
+therefore the ones commanded one substep earlier: the motor lags its command by one substep.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..command import Command
+from .base import SMALL_GROUP, DriveGroup, limit_step
+
+
+def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
+    """(v [m/s], omega [rad/s]) -> (left, right) wheel speeds [m/s]."""
+    half = 0.5 * omega * track_width
+    return v - half, v + half
+
+
+class DiffDriveGroup(DriveGroup):
+    """Every differential-drive robot of a world; commands are wheel speeds or a :class:`Command`."""
+
+    name = "diff"
+
+    def __init__(self, configs: Sequence[Any]) -> None:
+        super().__init__(configs)
+        self.track = np.array([c.track_width for c in configs], dtype=float)  # [m]
+        self.max_wheel = np.array([c.max_wheel_speed for c in configs], dtype=float)  # [m/s]
+        self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2] per wheel
+        self.target = np.zeros((self.n, 2))  # commanded wheel speeds after the speed limit [m/s]
+        self.commanded = np.zeros((self.n, 2))  # acceleration-limited speeds sent to the motors
+        self.turning = np.zeros((self.n, 2))  # speeds the wheels turn at in this substep [m/s]
+        self._travel = np.zeros((self.n, 2))  # wheel travel since take_travel [m]
+
+    def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
+        """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
+        limit, so the turn radius is kept."""
+        left, right = float(left), float(right)
+        if not (math.isfinite(left) and math.isfinite(right)):
+            raise ValueError(f"wheel speeds must be finite (got {left}, {right})")
+        peak = max(abs(left), abs(right))
+        limit = self.max_wheel[i]
+        if peak > limit:
+            scale = limit / peak
+            left, right = left * scale, right * scale
+        self.target[i] = (left, right)
+
+    def set_command(self, i: int, command: Any) -> None:
+        """A :class:`Command`, or a (left, right) pair of wheel speeds [m/s] (the older form)."""
+        if isinstance(command, Command):
+            if command.vy != 0.0:
+                raise ValueError(f"a diff drive cannot move sideways (vy = {command.vy:g})")
+            self.set_wheel_speeds(i, *wheel_speeds(command.v, command.omega, self.track[i]))
+        else:
+            left, right = command
+            self.set_wheel_speeds(i, left, right)
+
+    def command_of(self, i: int) -> Command:
+        left, right = self.target[i]
+        return Command(0.5 * (left + right), (right - left) / self.track[i])
+
+    def advance(self, h: float) -> tuple[Any, Any, Any]:
+        if self.n < SMALL_GROUP:
+            return self._advance_each(h)
+        self.turning[:] = self.commanded
+        self._travel += self.turning * h
+        limit_step(self.commanded, self.target, (self.max_accel * h)[:, None])
+        left, right = self.commanded[:, 0], self.commanded[:, 1]
+        return 0.5 * (left + right), np.zeros(self.n), (right - left) / self.track
+
+    def _advance_each(self, h: float) -> tuple[list[float], list[float], list[float]]:
+        """The same arithmetic robot by robot: cheaper than numpy for a few robots."""
+        ux, uy, omega = [], [], []
+        targets = self.target.tolist()
+        for i, (l0, r0) in enumerate(self.commanded.tolist()):
+            self.turning[i] = (l0, r0)
+            self._travel[i, 0] += l0 * h
+            self._travel[i, 1] += r0 * h
+            step = float(self.max_accel[i]) * h
+            lt, rt = targets[i]
+            left = l0 + min(step, max(-step, lt - l0))
+            right = r0 + min(step, max(-step, rt - r0))
+            self.commanded[i] = (left, right)
+            ux.append(0.5 * (left + right))
+            uy.append(0.0)
+            omega.append((right - left) / float(self.track[i]))
+        return ux, uy, omega
+
+    def take_travel(self) -> np.ndarray:
+        travel = self._travel.copy()
+        self._travel[:] = 0.0
+        return travel
+
+    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
+        # Enough force to follow the fastest allowed change of speed and the tightest turn, with
+        # margin: the tangential wheel acceleration plus the centripetal v*omega <= v_max^2 / L.
+        force = mass * (2.0 * self.max_accel[i] + self.max_wheel[i] ** 2 / self.track[i])
+        return force, force * self.track[i] / 2.0
+
+    def max_speed(self, i: int) -> float:
+        return float(self.max_wheel[i])
+
+    def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
+        """Wheel-encoder odometry for every robot of the group (one generator each)."""
+        from ..sensors.odometry import DiffOdometryGroup
+        return DiffOdometryGroup([c.odometry for c in self.configs], [c.pose for c in self.configs],
+                                 self.track, rngs)
+
+    def handle(self, i: int) -> "DiffDrive":
+        return DiffDrive(self, i)
+
+
+class DiffDrive:
+    """One robot's view of its differential drive (``robot.drive``)."""
+
+    def __init__(self, group: DiffDriveGroup, index: int) -> None:
+        self._group = group
+        self._i = index
+        self.track_width = float(group.track[index])  # [m]
+        self.max_wheel_speed = float(group.max_wheel[index])  # [m/s]
+        self.max_accel = float(group.max_accel[index])  # [m/s^2]
+
+    @property
+    def target(self) -> tuple[float, float]:
+        """Commanded (left, right) wheel speeds after the speed limit [m/s]."""
+        left, right = self._group.target[self._i]
+        return (float(left), float(right))
+
+    @property
+    def commanded(self) -> tuple[float, float]:
+        """Acceleration-limited (left, right) speeds sent to the motors [m/s]."""
+        left, right = self._group.commanded[self._i]
+        return (float(left), float(right))
+
+    @property
+    def wheel_speeds(self) -> tuple[float, float]:
+        """(left, right) speeds the wheels turned at in the last substep [m/s]."""
+        left, right = self._group.turning[self._i]
+        return (float(left), float(right))
+
+    @property
+    def command(self) -> Command:
+        """The body velocity asked for now."""
+        return self._group.command_of(self._i)
+
+    def set_wheel_speeds(self, left: float, right: float) -> None:
+        """Command wheel speeds [m/s] (scaled by one factor to the speed limit)."""
+        self._group.set_wheel_speeds(self._i, left, right)

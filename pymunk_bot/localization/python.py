@@ -1,0 +1,17 @@
+"""A user's own localizer, imported from ``class_path: 'package.module:ClassName'``."""
+from __future__ import annotations
+
+from typing import Any
+
+from ..controllers.python import import_module_attr
+from .base import Localizer, LocalizerContext
+
+
+def PythonLocalizer(config: Any, context: LocalizerContext) -> Localizer:
+    """Build the user's :class:`Localizer` subclass named by ``config.class_path``."""
+    cls = import_module_attr(config.class_path)
+    if not (isinstance(cls, type) and issubclass(cls, Localizer)):
+        raise ValueError(f"'{config.class_path}' is not a pymunk_bot.localization.Localizer subclass")
+    if cls.update is Localizer.update:
+        raise ValueError(f"'{config.class_path}' does not implement update(inputs)")
+    return cls(config, context)

@@ -1,0 +1,90 @@
+"""The extension points and what fills them: the built-ins, then third-party plugins.
+
+Five registries: ``drives``, ``obstacles``, ``sensors``, ``controllers``, ``localizers``. Each
+entry is a factory (or a ``"module:attr"`` string, imported on first use, which keeps
+``import pymunk_bot`` light) plus the pydantic model of its YAML section.
+
+A third-party package adds entries through the entry-point group ``pymunk_bot.plugins``: each
+entry point names a callable that is called once, with no arguments, and registers what it
+brings, e.g. ``plugins.controllers.add("spiral", SpiralController, SpiralConfig)``.
+"""
+from __future__ import annotations
+
+import importlib.metadata
+
+from .registry import Registry
+
+ENTRY_POINT_GROUP = "pymunk_bot.plugins"
+
+drives: Registry = Registry("drive")
+obstacles: Registry = Registry("obstacle type")
+sensors: Registry = Registry("sensor")
+controllers: Registry = Registry("controller")
+localizers: Registry = Registry("localizer")
+
+_loaded = False
+
+
+def state() -> tuple[int, ...]:
+    """Changes whenever any registry does (assembled schemas compare it)."""
+    return tuple(r.version for r in (drives, obstacles, sensors, controllers, localizers))
+
+
+def load() -> None:
+    """Register the built-ins and every installed plugin (once per process)."""
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    _register_builtins()
+    load_entry_points()
+
+
+def load_entry_points() -> list[str]:
+    """Call every ``pymunk_bot.plugins`` entry point not loaded yet; returns their names.
+
+    A plugin that fails to load is a bug in that plugin: the error says which one."""
+    names = []
+    for entry_point in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        if entry_point.name in _entry_points_loaded:
+            continue
+        _entry_points_loaded.add(entry_point.name)
+        try:
+            register = entry_point.load()
+            register()
+        except Exception as exc:
+            raise RuntimeError(f"pymunk-bot plugin '{entry_point.name}' ({entry_point.value}) "
+                               f"failed to load: {type(exc).__name__}: {exc}") from exc
+        names.append(entry_point.name)
+    return names
+
+
+_entry_points_loaded: set[str] = set()
+
+
+def _register_builtins() -> None:
+    from .config import controllers as c
+    from .config import localization as loc
+    from .config import schema as s
+
+    drives.add("diff", "pymunk_bot.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
+    for name, model in (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
+                        ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle)):
+        obstacles.add(name, "pymunk_bot.obstacles:build_obstacle", model)
+    # Registration order fixes each sensor's random stream: keep new sensors after these.
+    sensors.add("lidar", "pymunk_bot.sensors.attach:make_lidar", s.LidarConfig)
+    sensors.add("imu", "pymunk_bot.sensors.attach:make_imu", s.ImuConfig)
+    for name, cls, model in (
+            ("wheels", "wheels:WheelsController", c.WheelsControllerConfig),
+            ("velocity", "velocity:VelocityController", c.VelocityControllerConfig),
+            ("go_to_goal", "go_to_goal:GoToGoalController", c.GoToGoalControllerConfig),
+            ("waypoints", "waypoints:WaypointsController", c.WaypointsControllerConfig),
+            ("avoid", "avoid:AvoidController", c.AvoidControllerConfig),
+            ("navigate", "navigate:NavigateController", c.NavigateControllerConfig),
+            ("python", "python:PythonController", c.PythonControllerConfig)):
+        controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
+    for name, cls, model in (
+            ("ground_truth", "simple:GroundTruthLocalizer", loc.GroundTruthLocalizerConfig),
+            ("odometry", "simple:OdometryLocalizer", loc.OdometryLocalizerConfig),
+            ("python", "python:PythonLocalizer", loc.PythonLocalizerConfig)):
+        localizers.add(name, f"pymunk_bot.localization.{cls}", model)

@@ -1,0 +1,105 @@
+"""Every substep: each drive's body twist -> its robot's kinematic control body velocity.
+
+The tank pattern (docs/physics.md): the control body's velocity is what the joints pull the robot
+toward. pymunk integrates positions before it solves velocities, so the velocity set now moves
+the robot during the next substep: we aim it along the chord of that substep's arc, at the
+heading the robot will have half a substep after this one, scaled by sinc(omega h / 2), which
+keeps a robot in free space exactly on its commanded arc.
+
+With many robots the bodies are read and written in one call each through ``pymunk.batch``;
+with few, property access per robot is cheaper. Both paths use the same formulas.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+import pymunk
+import pymunk.batch as batch
+
+from .drives.base import SMALL_GROUP
+from .sensors.odometry import sinc_half
+
+_READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+_WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+
+
+def _sinc_half(x: float) -> float:
+    half = 0.5 * x
+    return 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+
+
+class Propulsion:
+    """Steers every robot's control body; ``groups`` pairs each drive group with the indices
+    (into ``bodies``) of its robots, in the group's order."""
+
+    def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body],
+                 controls: Sequence[pymunk.Body], groups: Sequence[tuple[Any, Sequence[int]]]) -> None:
+        self.space = space
+        self.bodies, self.controls = list(bodies), list(controls)
+        self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
+        self.n = len(self.bodies)
+        self.batched = self.n >= SMALL_GROUP
+        if self.batched:
+            self._read, self._write = batch.Buffer(), batch.Buffer()
+            self._rows = -1  # bodies the last index was built for
+
+    def substep(self, h: float) -> None:
+        """Advance every drive by one substep of ``h`` [s] and set the control velocities."""
+        if not self.batched:
+            self._each(h)
+            return
+        ux, uy, omega = np.empty(self.n), np.empty(self.n), np.empty(self.n)
+        for group, idx in self.groups:
+            ux[idx], uy[idx], omega[idx] = group.advance(h)
+        self._read.clear()
+        batch.get_space_bodies(self.space, _READ, self._read)
+        state = np.frombuffer(self._read.float_buf()).reshape(-1, 4)
+        if state.shape[0] != self._rows:
+            self._index(state.shape[0])
+        robot, control = self._robot_rows, self._control_rows
+        heading = state[robot, 0] + state[robot, 3] * h + (0.5 * h) * omega
+        chord = sinc_half(omega * h)
+        c, s = np.cos(heading), np.sin(heading)
+        out = self._out
+        out[:, :2] = state[:, 1:3]
+        out[:, 2] = state[:, 3]
+        out[control, 0] = (ux * c - uy * s) * chord
+        out[control, 1] = (ux * s + uy * c) * chord
+        out[control, 2] = omega
+        batch.set_space_bodies(self.space, _WRITE, self._write)
+
+    def positions(self) -> np.ndarray:
+        """Every robot body's position now, shape (n, 2) [m]."""
+        if not self.batched:
+            return np.array([tuple(b.position) for b in self.bodies]).reshape(self.n, 2)
+        self._read.clear()
+        batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._read)
+        xy = np.frombuffer(self._read.float_buf()).reshape(-1, 2)
+        if xy.shape[0] != self._rows:
+            self._index(xy.shape[0])
+        return xy[self._robot_rows]
+
+    def _each(self, h: float) -> None:
+        twists: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * self.n
+        for group, idx in self.groups:
+            for k, twist in zip(idx.tolist(), zip(*group.advance(h))):
+                twists[k] = twist
+        for body, control, (ux, uy, omega) in zip(self.bodies, self.controls, twists):
+            heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
+            chord = _sinc_half(omega * h)
+            c, s = math.cos(heading), math.sin(heading)
+            control.velocity = ((ux * c - uy * s) * chord, (ux * s + uy * c) * chord)
+            control.angular_velocity = omega
+
+    def _index(self, rows: int) -> None:
+        """Where each robot's body and control body sit in pymunk's body order."""
+        ids = batch.Buffer()
+        batch.get_space_bodies(self.space, batch.BodyFields.BODY_ID, ids)
+        order = {int(b): k for k, b in enumerate(np.frombuffer(ids.int_buf(), dtype=np.uintp))}
+        self._robot_rows = np.array([order[b.id] for b in self.bodies], dtype=np.intp)
+        self._control_rows = np.array([order[b.id] for b in self.controls], dtype=np.intp)
+        self._out = np.zeros((rows, 3))
+        self._write.set_float_buf(self._out)
+        self._rows = rows
