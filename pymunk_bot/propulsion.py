@@ -70,10 +70,10 @@ class Propulsion:
         out[control, 2] = omega
         batch.set_space_bodies(self.space, _WRITE, self._write)
 
-    def positions(self) -> np.ndarray:
-        """Every robot body's position now, shape (n, 2) [m]."""
+    def positions(self) -> Any:
+        """Every robot body's position now, (n, 2) [m]: an array, or a list of (x, y) when few."""
         if not self.batched:
-            return np.array([tuple(b.position) for b in self.bodies]).reshape(self.n, 2)
+            return [b.position for b in self.bodies]
         self._read.clear()
         batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._read)
         xy = np.frombuffer(self._read.float_buf()).reshape(-1, 2)

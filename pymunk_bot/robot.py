@@ -10,16 +10,19 @@ import pymunk
 
 from .command import Command
 from .config.schema import RobotConfig
+from .drives.base import SMALL_GROUP
 from .readings import RobotSpec
 
 
 class Fleet:
-    """Every robot's per-tick bookkeeping as arrays: distance, goal, contact episodes."""
+    """Every robot's per-tick bookkeeping: distance, goal, contact episodes. Arrays, or for a
+    few robots lists of floats (numpy's per-call cost dominates there); both index by robot."""
 
     def __init__(self, configs: list[RobotConfig]) -> None:
         n = len(configs)
-        self.xy = np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2)  # [m]
-        self.distance = np.zeros(n)  # true path length [m]
+        self.small = n < SMALL_GROUP
+        self.xy: Any = [tuple(c.pose[:2]) for c in configs]  # [m]
+        self.distance: Any = [0.0] * n  # true path length [m]
         self.collisions = np.zeros(n, dtype=np.int64)  # contact episodes
         self.goal = np.full((n, 2), np.nan)  # task goal [m]; NaN: none
         self.tolerance = np.full(n, 0.2)  # [m]
@@ -30,19 +33,27 @@ class Fleet:
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
-        self.check_goals(self.xy, 0.0)  # a robot that starts inside its goal reached it at t = 0
+        if not self.small:
+            self.xy, self.distance = np.array(self.xy, dtype=float).reshape(n, 2), np.zeros(n)
+        self.check_goals(np.array(self.xy, dtype=float).reshape(n, 2), 0.0)  # started inside: t = 0
 
     def watch_goal(self, i: int) -> None:
         self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
         self._pending = np.union1d(self._pending, [i])
 
-    def advance(self, xy: np.ndarray, time: float) -> None:
-        """Bookkeeping after a tick, from every robot's new position (n, 2) [m]."""
-        step = xy - self.xy
-        self.distance += np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
+    def advance(self, xy: Any, time: float) -> None:
+        """Bookkeeping after a tick, from every robot's new position [m]: an (n, 2) array, or a
+        list of (x, y) for a small fleet."""
+        if self.small:
+            distance = self.distance
+            for i, ((x, y), (x0, y0)) in enumerate(zip(xy, self.xy)):
+                distance[i] += math.hypot(x - x0, y - y0)
+        else:
+            step = xy - self.xy
+            self.distance += np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
         self.xy = xy
         if self._pending.shape[0]:
-            self.check_goals(xy, time)
+            self.check_goals(np.array(xy, dtype=float).reshape(-1, 2) if self.small else xy, time)
 
     def check_goals(self, xy: np.ndarray, time: float) -> None:
         p = self._pending
@@ -51,7 +62,7 @@ class Fleet:
         if reached.any():
             done = p[reached]
             self.time_to_goal[done] = time
-            self.distance_to_goal[done] = self.distance[done]
+            self.distance_to_goal[done] = np.asarray(self.distance, dtype=float)[done]
             self._pending = p[~reached]
 
 

@@ -48,8 +48,9 @@ class DriveGroup:
         """
         raise NotImplementedError
 
-    def take_travel(self) -> np.ndarray:
-        """Encoder input accumulated since the last call (drive-specific columns), then reset."""
+    def take_travel(self) -> Any:
+        """Encoder input accumulated since the last call (rows per robot, drive-specific columns:
+        an array, or lists for a small group), then reset."""
         raise NotImplementedError
 
     # ------------------------------------------------------------------ set-up

@@ -31,10 +31,17 @@ class DiffDriveGroup(DriveGroup):
         self.track = np.array([c.track_width for c in configs], dtype=float)  # [m]
         self.max_wheel = np.array([c.max_wheel_speed for c in configs], dtype=float)  # [m/s]
         self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2] per wheel
-        self.target = np.zeros((self.n, 2))  # commanded wheel speeds after the speed limit [m/s]
-        self.commanded = np.zeros((self.n, 2))  # acceleration-limited speeds sent to the motors
-        self.turning = np.zeros((self.n, 2))  # speeds the wheels turn at in this substep [m/s]
-        self._travel = np.zeros((self.n, 2))  # wheel travel since take_travel [m]
+        # Per robot (left, right): rows of an array, or for a small group lists of floats
+        # (cheaper to touch one by one); both index the same way.
+        self.small = self.n < SMALL_GROUP
+        zeros = (lambda: [[0.0, 0.0] for _ in range(self.n)]) if self.small else (
+            lambda: np.zeros((self.n, 2)))
+        self.target = zeros()  # commanded wheel speeds after the speed limit [m/s]
+        self.commanded = zeros()  # acceleration-limited speeds sent to the motors [m/s]
+        self.turning = zeros()  # speeds the wheels turn at in this substep [m/s]
+        self._travel = zeros()  # wheel travel since take_travel [m]
+        self._accel = self.max_accel.tolist()
+        self._track = self.track.tolist()
 
     def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
@@ -47,7 +54,7 @@ class DiffDriveGroup(DriveGroup):
         if peak > limit:
             scale = limit / peak
             left, right = left * scale, right * scale
-        self.target[i] = (left, right)
+        self.target[i] = [left, right]
 
     def set_command(self, i: int, command: Any) -> None:
         """A :class:`Command`, or a (left, right) pair of wheel speeds [m/s] (the older form)."""
@@ -61,10 +68,10 @@ class DiffDriveGroup(DriveGroup):
 
     def command_of(self, i: int) -> Command:
         left, right = self.target[i]
-        return Command(0.5 * (left + right), (right - left) / self.track[i])
+        return Command(float(0.5 * (left + right)), float((right - left) / self.track[i]))
 
     def advance(self, h: float) -> tuple[Any, Any, Any]:
-        if self.n < SMALL_GROUP:
+        if self.small:
             return self._advance_each(h)
         self.turning[:] = self.commanded
         self._travel += self.turning * h
@@ -75,24 +82,27 @@ class DiffDriveGroup(DriveGroup):
     def _advance_each(self, h: float) -> tuple[list[float], list[float], list[float]]:
         """The same arithmetic robot by robot: cheaper than numpy for a few robots."""
         ux, uy, omega = [], [], []
-        targets = self.target.tolist()
-        for i, (l0, r0) in enumerate(self.commanded.tolist()):
-            self.turning[i] = (l0, r0)
-            self._travel[i, 0] += l0 * h
-            self._travel[i, 1] += r0 * h
-            step = float(self.max_accel[i]) * h
-            lt, rt = targets[i]
+        for i, (l0, r0) in enumerate(self.commanded):
+            self.turning[i] = [l0, r0]
+            travel = self._travel[i]
+            travel[0] += l0 * h
+            travel[1] += r0 * h
+            step = self._accel[i] * h
+            lt, rt = self.target[i]
             left = l0 + min(step, max(-step, lt - l0))
             right = r0 + min(step, max(-step, rt - r0))
-            self.commanded[i] = (left, right)
+            self.commanded[i] = [left, right]
             ux.append(0.5 * (left + right))
             uy.append(0.0)
-            omega.append((right - left) / float(self.track[i]))
+            omega.append((right - left) / self._track[i])
         return ux, uy, omega
 
-    def take_travel(self) -> np.ndarray:
-        travel = self._travel.copy()
-        self._travel[:] = 0.0
+    def take_travel(self) -> Any:
+        travel = self._travel
+        if self.small:
+            self._travel = [[0.0, 0.0] for _ in range(self.n)]
+            return travel
+        self._travel = np.zeros((self.n, 2))
         return travel
 
     def joint_limits(self, i: int, mass: float) -> tuple[float, float]:

@@ -17,9 +17,12 @@ cannot know its scale and track errors, so their systematic drift is not in it.
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 import numpy as np
+
+from ..drives.base import SMALL_GROUP
 
 
 def sinc_half(x: np.ndarray) -> np.ndarray:
@@ -53,6 +56,14 @@ class DiffOdometryGroup:
         self._ticks = np.zeros((n, 2))  # whole encoder ticks counted so far
         self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
+        # A few noise-free robots are integrated one by one on lists of floats (numpy's per-call
+        # cost dominates there); otherwise as arrays. Both index as pose[i] -> (x, y, theta).
+        self.scalar = n < SMALL_GROUP and not self._noisy and self._quantised.shape[0] == 0
+        if self.scalar:
+            self.pose = self.pose.tolist()
+            self.wheel_travel = self.wheel_travel.tolist()
+            self._scale_list = self.scale.tolist()
+            self._track_list = self.believed_track.tolist()
 
     def _measure(self, travel: np.ndarray) -> np.ndarray:
         measured = travel * self.scale
@@ -69,8 +80,12 @@ class DiffOdometryGroup:
             self._ticks[q] = ticks
         return measured
 
-    def update(self, travel: np.ndarray) -> None:
+    def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
+        if self.scalar:
+            self._update_each(travel)
+            return
+        travel = np.asarray(travel, dtype=float)
         wheels = self._measure(travel)
         self.wheel_travel += wheels
         left, right = wheels[:, 0], wheels[:, 1]
@@ -84,6 +99,24 @@ class DiffOdometryGroup:
         self.pose[:, 0] += chord * cos_h
         self.pose[:, 1] += chord * sin_h
         self.pose[:, 2] += dtheta
+
+    def _update_each(self, travel: Sequence[Sequence[float]]) -> None:
+        """The noise-free update robot by robot, on lists (see ``scalar``)."""
+        for i, (lt, rt) in enumerate(travel):
+            scale = self._scale_list[i]
+            left, right = lt * scale[0], rt * scale[1]
+            wheels = self.wheel_travel[i]
+            wheels[0] += left
+            wheels[1] += right
+            ds = 0.5 * (left + right)
+            dtheta = (right - left) / self._track_list[i]
+            half = 0.5 * dtheta
+            chord = ds * (1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half)
+            pose = self.pose[i]
+            heading = pose[2] + half
+            pose[0] += chord * math.cos(heading)
+            pose[1] += chord * math.sin(heading)
+            pose[2] += dtheta
 
     def _propagate(self, chord: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray,
                    ds: np.ndarray, abs_wheels: np.ndarray) -> None:
@@ -106,7 +139,7 @@ class DiffOdometryGroup:
 
     def handle(self, i: int) -> "Odometry":
         """Robot ``i``'s view (``robot.odometry``)."""
-        return Odometry(self.configs[i], self.pose[i], 0.0, self._rngs[i], group=self, index=i)
+        return Odometry(self.configs[i], (0.0, 0.0, 0.0), 0.0, self._rngs[i], group=self, index=i)
 
 
 class Odometry:
@@ -123,13 +156,13 @@ class Odometry:
     @property
     def pose(self) -> np.ndarray:
         """The odometry estimate [x, y, theta] (theta unwrapped)."""
-        return self._group.pose[self._i].copy()
+        return np.array(self._group.pose[self._i], dtype=float)
 
     @property
     def wheel_travel(self) -> tuple[float, float]:
         """Measured (left, right) wheel travel since the start [m], as the encoders report it."""
         left, right = self._group.wheel_travel[self._i]
-        return (float(left), float(right))
+        return (float(left), float(right))  # a row of an array or of a list
 
     @property
     def covariance(self) -> np.ndarray:
@@ -138,6 +171,6 @@ class Odometry:
 
     def update(self, left_travel: float, right_travel: float) -> None:
         """Integrate one tick's true wheel travel [m] (standalone use only)."""
-        travel = np.zeros((self._group.pose.shape[0], 2))
+        travel = np.zeros((len(self._group.configs), 2))
         travel[self._i] = (left_travel, right_travel)
-        self._group.update(travel)
+        self._group.update(travel.tolist() if self._group.scalar else travel)

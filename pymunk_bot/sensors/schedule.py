@@ -7,6 +7,7 @@ import numpy as np
 
 # [s]; simulated times are sums of dt, so k * period can miss a tick by a rounding error
 TIME_TOLERANCE = 1e-9
+SMALL_ARRAY = 24  # below this many schedules, ScheduleArray asks each one
 
 
 class Schedule:
@@ -43,18 +44,35 @@ class ScheduleArray:
     called afterwards."""
 
     def __init__(self, schedules: list[Schedule]) -> None:
+        self._each = schedules if len(schedules) < SMALL_ARRAY else None
         self.period = np.array([np.inf if s.period is None else s.period for s in schedules])
         self.every_tick = np.array([s.period is None for s in schedules], dtype=bool)
         self.start = np.array([s.start for s in schedules], dtype=float)
         self.next = np.array([s._next for s in schedules], dtype=float)  # index k of the next due time
+        self._none = np.empty(0, dtype=np.intp)
+        self._earliest = self._first_due()
+
+    def _first_due(self) -> float:
+        """The earliest time [s] anything is due (so most ticks need no array work)."""
+        if self.every_tick.any():
+            return -np.inf
+        if self.next.shape[0] == 0:
+            return np.inf
+        return float((self.start + self.next * self.period).min())
 
     def due(self, time: float) -> np.ndarray:
         """Indices of the schedules due at ``time`` [s] (each then advances to its next due time)."""
+        if time + TIME_TOLERANCE < self._earliest:
+            return self._none
+        if self._each is not None:  # a few: the schedules themselves are cheaper than numpy
+            due = [k for k, schedule in enumerate(self._each) if schedule.due(time)]
+            self._earliest = min((s.start + s._next * s.period if s.period is not None else -math.inf
+                                  for s in self._each), default=math.inf)
+            return np.array(due, dtype=np.intp)
         elapsed = time - self.start + TIME_TOLERANCE
-        with np.errstate(invalid="ignore"):
-            due = (elapsed >= self.next * self.period) | self.every_tick
+        due = self.every_tick | (elapsed >= self.next * np.where(self.every_tick, 0.0, self.period))
         index = np.flatnonzero(due)
-        if index.shape[0]:
-            finite = index[~self.every_tick[index]]
-            self.next[finite] = np.floor(elapsed[finite] / self.period[finite]) + 1
+        finite = index[~self.every_tick[index]]
+        self.next[finite] = np.floor(elapsed[finite] / self.period[finite]) + 1
+        self._earliest = self._first_due()
         return index
