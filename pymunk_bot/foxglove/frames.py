@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 
 WORLD_FRAME = "world"
+DEFAULT_HOST = "127.0.0.1"  # the live server listens on this machine only unless told otherwise
+DEFAULT_PORT = 8765  # Foxglove's usual WebSocket port
 NS_PER_S = 1_000_000_000
 
 # Topics shared by the whole run

@@ -13,9 +13,7 @@ import time
 import foxglove
 
 from ..errors import ScenarioError
-
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_PORT = 8765
+from .frames import DEFAULT_HOST, DEFAULT_PORT
 MAX_SPEED = 1000.0  # x real time
 MAX_LAG = 0.25  # [s] wall: further behind than this, the pace restarts instead of rushing
 
