@@ -135,7 +135,7 @@ def test_events_goals_paths_grids_and_moving_obstacles(tmp_path):
     _, messages = read_mcap(tmp_path / "run.mcap")
     lines = [m.message for _, _, m in messages["/log"]]
     assert any("contact begins" in line for line in lines)  # the crate
-    assert "r1: controller running -> done" in lines
+    assert "r1: controller running -> arrived (reached the last waypoint)" in lines
     reached = [t for t, _, m in messages["/log"] if "goal reached" in m.message]
     assert reached == [round(r1.time_to_goal * 1e9)]
     # Moving obstacles are re-sent when they move (more often than the 1 s refresh).
