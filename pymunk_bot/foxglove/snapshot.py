@@ -5,6 +5,7 @@ MCAP and a converted log carry the same channels with the same meaning.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any, Iterator
 
@@ -132,7 +133,11 @@ def geometry_of_log(log) -> RunGeometry:
     movable = [(int(m["obstacle"]), shapes)
                for m, shapes in zip(log.meta["movable"], log.movable_shapes())]
     width, height = log.size
-    return RunGeometry(width, height, log.fixed_shapes(), movable, dict(log.meta))
+    meta = json.loads(json.dumps(log.meta))  # a deep copy, completed with the LiDAR mounts
+    for robot in meta["robots"]:
+        if robot.get("lidar") is not None:
+            robot["lidar"]["offset"] = list(_log_offset(log, robot["name"]))
+    return RunGeometry(width, height, log.fixed_shapes(), movable, meta)
 
 
 def snapshots_of_log(log) -> Iterator[Snapshot]:
