@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 from builders import robot, scenario, wheels
-from conftest import read_mcap
+from foxglove_helpers import read_mcap
 
 from pymunk_bot import Simulation
 from pymunk_bot.cli import main
