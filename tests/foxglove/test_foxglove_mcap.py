@@ -173,3 +173,28 @@ def test_logging_a_minute_costs_less_than_the_run(tmp_path):
     elapsed = time.perf_counter() - started
     assert elapsed < 10.0 / 5  # well under the simulated time (measured: ~0.2 s)
     assert math.isclose(read_mcap(tmp_path / "run.mcap")[1]["/tf"][-1][0], 10e9)
+
+
+def test_the_shipped_layout_shows_channels_the_default_scenario_has(tmp_path):
+    import json
+    import re
+    from pathlib import Path
+
+    layout = json.loads((Path(__file__).parents[2] / "docs" / "foxglove-layout.json").read_text())
+    panels = {key.split("!")[0] for key in layout["configById"]}
+    assert panels == {"3D", "Plot", "RosOut"}  # the 3D view, the speed plot, the log
+    sim = Simulation.from_file(None)
+    logger = McapLogger(tmp_path / "run.mcap").attach(sim)
+    sim.run(0.5)
+    logger.save()
+    summary, messages = read_mcap(tmp_path / "run.mcap")
+    topics = {c.topic for c in summary.channels.values()}
+    three_d = layout["configById"]["3D!pymunkbot"]["topics"]
+    optional = {"/r1/localization", "/r1/map"}  # only with a localizer or a mapper
+    assert set(three_d) - optional <= topics
+    for series in layout["configById"]["Plot!speeds"]["paths"]:
+        topic, field, index = re.fullmatch(r"(/\w+/\w+)\.(\w+)(?:\[(\d)\])?",
+                                           series["value"]).groups()
+        value = messages[topic][-1][2][field]
+        assert isinstance(value[int(index)] if index else value, float)
+    assert layout["configById"]["RosOut!events"]["topicToRender"] == "/log"
