@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from .errors import ScenarioError
 
@@ -61,8 +62,8 @@ def _require_all(option: str) -> None:
 class FoxgloveOutputs:
     """An MCAP log and/or a live server for one run, fed by one publisher."""
 
-    mcap: object = None  # McapLogger
-    server: object = None  # LiveServer
+    mcap: Any = None  # McapLogger
+    server: Any = None  # LiveServer
     speed: float = 1.0
     closers: list = field(default_factory=list)
 
@@ -120,7 +121,7 @@ def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None
                                         DEFAULT_PORT if args.port is None else args.port)
             print(f"foxglove: serving the run at {outputs.server.url} "
                   "(in Foxglove: Open connection -> Foxglove WebSocket)")
-        if mcap:
+        if mcap and log_path is not None:
             outputs.mcap = McapLogger(log_path, context).attach(sim)  # feeds the server too
         else:
             SimPublisher(Publisher(context)).attach(sim)

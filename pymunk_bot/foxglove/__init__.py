@@ -14,13 +14,14 @@ Topic and frame names are in :mod:`.frames` and docs/foxglove.md. The optional p
 from __future__ import annotations
 
 import importlib
+from typing import Any
 
 from ..errors import ScenarioError
 
 INSTALL_HINT = "pip install 'pymunk-bot[foxglove]'"
 
 
-def require(module: str, option: str) -> object:
+def require(module: str, option: str) -> Any:
     """Import ``module`` (e.g. "foxglove"), or raise a ScenarioError naming the install command."""
     try:
         return importlib.import_module(module)

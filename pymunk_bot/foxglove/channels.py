@@ -7,6 +7,7 @@ what the speed plot shows) and the movable obstacles' poses.
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import foxglove
 from foxglove import channels as fc
@@ -63,9 +64,9 @@ class Channels:
 
     def __init__(self, context: foxglove.Context) -> None:
         self.context = context
-        self._channels: dict[str, object] = {}
+        self._channels: dict[str, Any] = {}
 
-    def get(self, topic: str, kind: str):
+    def get(self, topic: str, kind: str | dict) -> Any:
         """The channel for ``topic``; ``kind`` is a Foxglove schema name (without the
         ``foxglove.`` prefix) or a JSON schema dict."""
         channel = self._channels.get(topic)
@@ -80,7 +81,7 @@ class Channels:
             self._channels[topic] = channel
         return channel
 
-    def wanted(self, topic: str, kind) -> object | None:
+    def wanted(self, topic: str, kind: str | dict) -> Any:
         """The channel if anyone listens (a file or a subscribed client), else None, so
         nobody pays for messages that no one receives."""
         channel = self.get(topic, kind)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import foxglove
 
@@ -33,7 +34,7 @@ class LiveServer:
         if not 0 <= port <= 65535:
             raise ScenarioError("--port", "", f"must be 0..65535 (got {port})")
         try:
-            self.server = foxglove.start_server(name=name, host=host, port=port, context=context)
+            self.server: Any = foxglove.start_server(name=name, host=host, port=port, context=context)
         except (RuntimeError, OSError, ValueError) as exc:
             reason = str(exc).split(": ", 1)[-1]  # drop the SDK's "FoxgloveError: " prefix
             raise ScenarioError("--foxglove", "", f"cannot serve on {host}:{port}: {reason}"

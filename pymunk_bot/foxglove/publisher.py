@@ -175,7 +175,7 @@ class Publisher:
             entities.append(scene.arena_entity(geometry.fixed, t))
             entities.extend(scene.robot_entity(r.name, self._index.get(r.name, 0), r.radius, t)
                             for r in snap.robots)
-        for (index, shapes), pose, k in zip(geometry.movable, poses, range(len(poses))):
+        for k, ((index, shapes), pose) in enumerate(zip(geometry.movable, poses)):
             last = self._last_obstacles[k] if k < len(self._last_obstacles) else None
             if refresh or last is None or max(abs(a - b) for a, b in zip(pose, last)) > MOVED:
                 entities.append(scene.obstacle_entity(index, shapes, pose, t))

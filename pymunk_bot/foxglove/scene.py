@@ -85,8 +85,8 @@ def _prism(points: np.ndarray, height: float) -> list[Point3]:
     return out
 
 
-def _entity(entity_id: str, t: float, frame: str = WORLD_FRAME, frame_locked: bool = False,
-            **primitives) -> SceneEntity:
+def _entity(entity_id: str, t: float, primitives: dict[str, list], frame: str = WORLD_FRAME,
+            frame_locked: bool = False) -> SceneEntity:
     return SceneEntity(timestamp=timestamp(t), frame_id=frame, id=entity_id,
                        frame_locked=frame_locked, **primitives)
 
@@ -105,14 +105,14 @@ def arena_entity(fixed: list[ShapeGeometry], t: float) -> SceneEntity:
     for g in fixed:
         height, rgb = (WALL_HEIGHT, palette.WALL) if g.wall else (OBSTACLE_HEIGHT, palette.STATIC)
         parts.append(shape_primitives(g, (0.0, 0.0, 0.0), height, rgb))
-    return _entity("arena", t, **_merge(parts))
+    return _entity("arena", t, _merge(parts))
 
 
 def obstacle_entity(index: int, shapes: list[ShapeGeometry], pose: tuple[float, float, float],
                     t: float) -> SceneEntity:
     """A movable obstacle at ``pose`` (its shapes are in its body frame)."""
     parts = [shape_primitives(g, pose, OBSTACLE_HEIGHT, palette.MOVABLE) for g in shapes]
-    return _entity(f"obstacle/{index}", t, **_merge(parts))
+    return _entity(f"obstacle/{index}", t, _merge(parts))
 
 
 def robot_entity(name: str, index: int, radius: float, t: float) -> SceneEntity:
@@ -127,8 +127,8 @@ def robot_entity(name: str, index: int, radius: float, t: float) -> SceneEntity:
                             color=_color(palette.HEADING))
     label = TextPrimitive(pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT + 0.15), billboard=True,
                           font_size=14.0, scale_invariant=True, color=_color(rgb), text=name)
-    return _entity(f"robot/{name}", t, frame=base_frame(name), frame_locked=True,
-                   cylinders=[body], lines=[heading], texts=[label])
+    return _entity(f"robot/{name}", t, {"cylinders": [body], "lines": [heading], "texts": [label]},
+                   frame=base_frame(name), frame_locked=True)
 
 
 def goal_entity(name: str, index: int, goal: tuple[float, float], tolerance: float,
@@ -142,7 +142,7 @@ def goal_entity(name: str, index: int, goal: tuple[float, float], tolerance: flo
     label = TextPrimitive(pose=pose_msg(goal[0], goal[1], 0.0, 0.1), billboard=True,
                           font_size=12.0, scale_invariant=True, color=_color(rgb),
                           text=f"{name} goal" + (" (reached)" if reached else ""))
-    return _entity(f"goal/{name}", t, cylinders=[disc], texts=[label])
+    return _entity(f"goal/{name}", t, {"cylinders": [disc], "texts": [label]})
 
 
 def deletion(entity_id: str, t: float) -> SceneEntityDeletion:
