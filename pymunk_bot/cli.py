@@ -27,7 +27,6 @@ def _display_available() -> bool:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .config import load_scenario
-    from .results import write_json
     from .sim import Simulation
 
     config = load_scenario(args.scenario)
@@ -38,6 +37,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .viewer.commands import prepare_outputs
 
     outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
+    try:
+        return _run_with_outputs(args, sim, duration, outputs)
+    finally:
+        outputs.close()  # an unfinished MCAP is removed, a live server stopped
+
+
+def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -> int:
+    from .results import write_json
+
     interactive = not args.headless and outputs.record is None and _display_available()
     if interactive:
         from .viewer import ViewerUnavailable, run_window
@@ -52,7 +60,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     elif not interactive:
         if not args.headless and not _display_available():
             print("note: no display found; running headless (pass --headless to silence this)")
-        sim.run(duration)
+        outputs.run_headless(sim, duration)
     result = sim.result()
     outputs.finish()
     if args.out:
@@ -150,8 +158,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, help="override the scenario's seed")
     run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
     _add_video_options(run, "render the run offscreen to a video (.mp4 or .gif); no window")
-    run.add_argument("--log", type=Path, metavar="RUN.npz",
-                     help="save poses, odometry, commands and LiDAR scans over time")
+    run.add_argument("--log", type=Path, metavar="RUN.npz|RUN.mcap",
+                     help="save poses, odometry, commands and LiDAR scans over time (.mcap: "
+                          "Foxglove schemas, see docs/foxglove.md)")
+    from .cli_foxglove import add_parser as add_convert_parser, add_run_options
+
+    add_run_options(run)  # --foxglove --port --host --speed
     run.set_defaults(func=_cmd_run)
     plot = sub.add_parser("plot", help="plot a run log (trajectories, speed, LiDAR ranges)")
     plot.add_argument("log", type=Path, help="a run log written by `run --log`")
@@ -176,6 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
 
     add_test_parser(sub)
+    add_convert_parser(sub)  # `pymunk-bot convert`
     return parser
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from ..errors import ScenarioError
 
 VIDEO_FORMATS = (".mp4", ".gif")
-LOG_FORMATS = (".npz",)
+LOG_FORMATS = (".npz", ".mcap")
 PLOT_FORMATS = (".png", ".pdf", ".svg")
 MAX_FPS = 240.0  # [Hz]
 
@@ -75,6 +75,19 @@ class RunOutputs:
     size: tuple[int, int] | None = None
     log_path: Path | None = None
     logger: object = None
+    foxglove: object = None  # cli_foxglove.FoxgloveOutputs: an MCAP log and/or a live server
+
+    def run_headless(self, sim, duration: float) -> None:
+        """Run ``sim`` for ``duration`` (paced at real time while serving Foxglove live)."""
+        if self.foxglove is not None:
+            self.foxglove.run_headless(sim, duration)
+        else:
+            sim.run(duration)
+
+    def close(self) -> None:
+        """After an error or Ctrl-C: drop unfinished files, stop servers."""
+        if self.foxglove is not None:
+            self.foxglove.close()
 
     def record_run(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
@@ -93,6 +106,8 @@ class RunOutputs:
             self.logger.save(self.log_path)
             steps = len(self.logger.log().time) - 1
             print(f"wrote {self.log_path} ({steps} steps)")
+        if self.foxglove is not None:
+            self.foxglove.finish()
 
 
 def prepare_outputs(args, sim) -> RunOutputs:
@@ -102,7 +117,11 @@ def prepare_outputs(args, sim) -> RunOutputs:
         from ..runlog import RunLogger
 
         outputs.log_path = check_output("--log", Path(args.log), LOG_FORMATS)
-        outputs.logger = RunLogger().attach(sim)
+        if outputs.log_path.suffix.lower() == ".npz":
+            outputs.logger = RunLogger().attach(sim)
+    from ..cli_foxglove import prepare_foxglove
+
+    outputs.foxglove = prepare_foxglove(args, sim, outputs.log_path)  # .mcap, --foxglove
     return outputs
 
 
@@ -111,8 +130,8 @@ def prepare_outputs(args, sim) -> RunOutputs:
 
 def cmd_plot(args) -> int:
     """`pymunk-bot plot LOG [-o OUT] [--kind K] [--robot NAME]`."""
+    from ..foxglove.reader import load_any as load_log  # .npz or .mcap
     from ..plots import save_plot
-    from ..runlog import load_log
 
     log_path = Path(args.log)
     if args.output is not None:
@@ -129,7 +148,7 @@ def cmd_plot(args) -> int:
 
 def cmd_replay(args, display_available: bool) -> int:
     """`pymunk-bot replay LOG [--record VIDEO]`: play a run log in the window or to a video."""
-    from ..runlog import load_log
+    from ..foxglove.reader import load_any as load_log  # .npz or .mcap
     from . import ViewerUnavailable
 
     record = _check_video_options(args)

@@ -1,0 +1,131 @@
+"""The Foxglove side of the command line: ``run --log run.mcap``, ``run --foxglove`` and
+``pymunk-bot convert``. cli.py and viewer/commands.py only hook these in."""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import ScenarioError
+
+LOG_FORMATS = (".npz", ".mcap")
+
+
+def add_run_options(run: argparse.ArgumentParser) -> None:
+    """``--foxglove [--port] [--host] [--speed]`` on ``run``."""
+    from .foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+
+    group = run.add_argument_group("live view in Foxglove")
+    group.add_argument("--foxglove", action="store_true",
+                       help="serve the run live to Foxglove over WebSocket (see docs/foxglove.md)")
+    group.add_argument("--port", type=int,
+                       help=f"WebSocket port (default {DEFAULT_PORT}; 0 picks a free one)")
+    group.add_argument("--host",
+                       help=f"address to bind (default {DEFAULT_HOST}: this machine only)")
+    group.add_argument("--speed", type=float,
+                       help="headless pace with --foxglove, x real time (default 1.0)")
+
+
+def add_parser(sub) -> None:
+    """``pymunk-bot convert IN OUT``."""
+    convert = sub.add_parser("convert", help="convert a run log between .npz and .mcap")
+    convert.add_argument("source", type=Path, help="a run log (.npz or .mcap)")
+    convert.add_argument("target", type=Path, help="the file to write (.mcap or .npz)")
+    convert.set_defaults(func=cmd_convert)
+
+
+def cmd_convert(args: argparse.Namespace) -> int:
+    from .viewer.commands import check_output
+
+    source, target = Path(args.source), Path(args.target)
+    if source.suffix.lower() not in LOG_FORMATS:
+        raise ScenarioError(str(source), "", f"unsupported file type; use {' or '.join(LOG_FORMATS)}")
+    check_output("target", target, LOG_FORMATS)
+    if target.suffix.lower() == ".mcap" or source.suffix.lower() == ".mcap":
+        _require_all("convert")
+    from .foxglove.convert import convert
+
+    log = convert(source, target)
+    print(f"wrote {target} ({len(log.time) - 1} steps, {log.time[-1]:.2f} s)")
+    return 0
+
+
+def _require_all(option: str) -> None:
+    from .foxglove import require
+
+    for module in ("foxglove", "mcap", "mcap_protobuf"):
+        require(module, option)
+
+
+@dataclass
+class FoxgloveOutputs:
+    """An MCAP log and/or a live server for one run, fed by one publisher."""
+
+    mcap: Any = None  # McapLogger
+    server: Any = None  # LiveServer
+    speed: float = 1.0
+    closers: list = field(default_factory=list)
+
+    def run_headless(self, sim, duration: float) -> None:
+        """Run ``sim``; paced at real time x speed while serving live."""
+        if self.server is None:
+            sim.run(duration)
+            return
+        from .foxglove.live import run_paced
+
+        run_paced(sim, duration, self.speed)
+
+    def finish(self) -> None:
+        """Complete the MCAP file and stop the server."""
+        if self.mcap is not None:
+            self.mcap.save()
+            print(f"wrote {self.mcap.path} ({self.mcap.steps} steps)")
+            self.mcap = None
+        self.close()
+
+    def close(self) -> None:
+        """Drop an unfinished MCAP file and stop the server (after an error or Ctrl-C too)."""
+        if self.mcap is not None:
+            self.mcap.abort()
+            self.mcap = None
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+
+def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None:
+    """Start what ``--log *.mcap`` and ``--foxglove`` ask for; None if neither."""
+    live = getattr(args, "foxglove", False)
+    mcap = log_path is not None and log_path.suffix.lower() == ".mcap"
+    if not live:
+        for option in ("port", "host", "speed"):
+            if getattr(args, option, None) is not None:
+                raise ScenarioError(f"--{option}", "", "only applies with --foxglove")
+    if not (live or mcap):
+        return None
+    _require_all("--foxglove" if live else "--log")
+    import foxglove
+
+    from .foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+    from .foxglove.live import LiveServer, check_speed
+    from .foxglove.mcap_log import McapLogger
+    from .foxglove.publisher import Publisher, SimPublisher
+
+    speed = 1.0 if args.speed is None else args.speed
+    outputs = FoxgloveOutputs(speed=check_speed(speed) if live else 1.0)
+    context = foxglove.Context()
+    try:
+        if live:
+            outputs.server = LiveServer(context, args.host or DEFAULT_HOST,
+                                        DEFAULT_PORT if args.port is None else args.port)
+            print(f"foxglove: serving the run at {outputs.server.url} "
+                  "(in Foxglove: Open connection -> Foxglove WebSocket)")
+        if mcap and log_path is not None:
+            outputs.mcap = McapLogger(log_path, context).attach(sim)  # feeds the server too
+        else:
+            SimPublisher(Publisher(context)).attach(sim)
+    except BaseException:
+        outputs.close()
+        raise
+    return outputs
