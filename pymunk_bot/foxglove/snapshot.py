@@ -97,6 +97,8 @@ def _robot_of_sim(robot) -> RobotSnapshot:
     controller = robot.controller
     path = controller.debug_path() if controller is not None else None
     localizer = getattr(robot, "localizer", None)
+    if getattr(localizer, "passive", False):
+        localizer = None  # ground truth or odometry: already on their own topics
     mapper = getattr(robot, "mapper", None)
     drive = getattr(robot, "drive", None)  # the diff drive's wheel state, when there is one
     lidar = robot.lidar

@@ -126,7 +126,13 @@ def test_events_goals_paths_grids_and_moving_obstacles(tmp_path):
     r1 = sim.robots["r1"]
     grid = OccupancyGrid(np.full((4, 8), -1, dtype=np.int8), 0.5, (0.0, 0.0))
     r1.mapper = SimpleNamespace(grid=grid)
-    r1.localizer = SimpleNamespace(pose=np.array([0.25, 0.5, 0.1]))
+
+    class OffsetLocalizer:  # a stand-in estimate 5 cm beside the truth (the controller sees it)
+        @property
+        def pose(self):
+            return r1.pose + [0.05, 0.0, 0.0]
+
+    r1.localizer = OffsetLocalizer()
     logger = McapLogger(tmp_path / "run.mcap").attach(sim)
     sim.run(1.5)
     grid.data[0, 0] = 100  # the map learns something: it is sent again
@@ -148,7 +154,7 @@ def test_events_goals_paths_grids_and_moving_obstacles(tmp_path):
     assert len(grids) == 2 and grids[0].column_count == 8 and grids[0].cell_size.x == 0.5
     assert grids[0].data[0] == 255 and grids[1].data[0] == 100  # int8 -1, then 100
     estimate = pose_xyt(messages["/r1/localization"][-1][2])
-    assert np.allclose(estimate, [0.25, 0.5, 0.1])
+    assert np.allclose(estimate, r1.pose + [0.05, 0.0, 0.0], atol=1e-9)
     path = messages["/r1/path"][0][2]
     assert path.frame_id == "world"
     assert [(p.position.x, p.position.y) for p in path.poses] == [(1.5, 1.0), (2.0, 1.0)]
