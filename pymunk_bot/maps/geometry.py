@@ -26,13 +26,34 @@ MAX_DECOMPOSE_VERTICES = 2000  # larger islands stay segment chains (decompositi
 
 
 @dataclass(frozen=True)
+class FilledArea:
+    """A painted area of a vector map: closed outlines (n, 2) [m] and SVG's fill rule."""
+
+    outlines: tuple[np.ndarray, ...]
+    nonzero: bool = True  # False: even-odd
+
+    def contains(self, x: float, y: float) -> bool:
+        """Whether the point (x, y) [m] is painted."""
+        winding = 0
+        crossings = 0
+        for outline in self.outlines:
+            a, b = outline, np.roll(outline, -1, axis=0)
+            up = (a[:, 1] <= y) & (b[:, 1] > y)
+            down = (a[:, 1] > y) & (b[:, 1] <= y)
+            side = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])
+            winding += int(np.count_nonzero(up & (side > 0)) - np.count_nonzero(down & (side < 0)))
+            crossings += int(np.count_nonzero((up & (side > 0)) | (down & (side < 0))))
+        return winding != 0 if self.nonzero else crossings % 2 == 1
+
+
+@dataclass(frozen=True)
 class MapGeometry:
     """Static obstacles of a map, ready for pymunk (all in world metres).
 
     ``polygons``: convex pieces, counter-clockwise, each (n, 2). ``segments``: (m, 4) rows of
     x0, y0, x1, y1 with ``segment_radius`` (m,). ``extent``: (x0, y0, x1, y1), the map's area;
     nothing can pass its edge. ``solid``: for a grid map, the (rows, cols) mask of solid cells
-    of ``grid``. ``filled``: for vector maps, each painted area as outlines (even-odd rule).
+    of ``grid``. ``filled``: for vector maps, the painted areas.
     """
 
     polygons: tuple[np.ndarray, ...]
@@ -41,7 +62,7 @@ class MapGeometry:
     extent: tuple[float, float, float, float]
     grid: OccupancyGrid | None = None
     solid: np.ndarray | None = None
-    filled: tuple[tuple[np.ndarray, ...], ...] = field(default=())
+    filled: tuple[FilledArea, ...] = field(default=())
 
     @property
     def size(self) -> tuple[float, float]:
@@ -75,7 +96,7 @@ def geometry_from_grid(grid: OccupancyGrid, occupied_thresh: float = OCCUPIED_TH
     polygons: list[np.ndarray] = []
     chains: list[np.ndarray] = []
     for i in islands:
-        pieces = None if i in enclosing else _convex_pieces(loops[i])
+        pieces = None if i in enclosing else convex_pieces(loops[i])
         if pieces is None:
             chains.append(loops[i])
         else:
@@ -85,8 +106,7 @@ def geometry_from_grid(grid: OccupancyGrid, occupied_thresh: float = OCCUPIED_TH
     res = grid.resolution
     offset = np.array(grid.origin) - 0.5 * res
     polygons = [offset + p * res for p in polygons]
-    segments = np.concatenate([np.hstack([c[:-1], c[1:]]) for c in chains]) if chains \
-        else np.empty((0, 4))
+    segments = np.concatenate([edge_chain(c) for c in chains]) if chains else np.empty((0, 4))
     segments = segments * res + np.tile(offset, 2)
     x0, y0 = grid.origin
     width, height = grid.size
@@ -173,6 +193,11 @@ def _simplify(loop: np.ndarray) -> np.ndarray:
     return out
 
 
+def edge_chain(points: np.ndarray) -> np.ndarray:
+    """(n - 1, 4) segments x0, y0, x1, y1 joining consecutive points (n, 2)."""
+    return np.hstack([points[:-1], points[1:]])
+
+
 def _signed_area(loop: np.ndarray) -> float:
     x, y = loop[:, 0], loop[:, 1]
     return 0.5 * float(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
@@ -199,7 +224,7 @@ def _islands_enclosing(loops: list[np.ndarray], islands: list[int], rims: list[i
     return enclosing
 
 
-def _convex_pieces(loop: np.ndarray) -> list[np.ndarray] | None:
+def convex_pieces(loop: np.ndarray) -> list[np.ndarray] | None:
     """Convex pieces of a closed counter-clockwise loop, or None to keep it as segments."""
     if len(loop) > MAX_DECOMPOSE_VERTICES:
         return None
@@ -255,15 +280,7 @@ def free_disc(geometry: MapGeometry, x: float, y: float, radius: float) -> bool:
         cross = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (b[:, 1] - a[:, 1]) * (x - a[:, 0])
         if (cross >= 0).all() or (_point_segment_distance(p, a, b) < radius).any():
             return False
-    if geometry.filled:
-        from ..planning.grid import points_in_polygon
-
-        for outlines in geometry.filled:
-            inside = sum(bool(points_in_polygon(np.array([x]), np.array([y]), o)[0])
-                         for o in outlines)
-            if inside % 2:
-                return False
-    return True
+    return not any(area.contains(x, y) for area in geometry.filled)
 
 
 def _touches_solid_cell(grid: OccupancyGrid, solid: np.ndarray, x: float, y: float,
