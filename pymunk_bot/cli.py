@@ -176,6 +176,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
 
     add_test_parser(sub)
+    from .cli_maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
+
+    add_map_parsers(sub)
     return parser
 
 

@@ -226,5 +226,5 @@ def write_ros_map(grid: OccupancyGrid, out_yaml: str | Path,
         "occupied_thresh": float(occupied_thresh),
         "free_thresh": float(free_thresh),
     }
-    write_atomic(out_yaml, yaml.safe_dump(meta, sort_keys=False).encode("utf-8"))
+    write_atomic(out_yaml, yaml.safe_dump(meta, sort_keys=False, default_flow_style=None).encode("utf-8"))
     return image_path
