@@ -179,6 +179,8 @@ def _read_image(image_path: Path, fail: _Problem) -> tuple[np.ndarray, np.ndarra
             return _pixels(img)
     except ScenarioError:
         raise
+    except Image.DecompressionBombError:
+        raise fail("image", f"{image_path.name} has more than {MAX_CELLS:,} pixels") from None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
         raise fail("image", f"cannot read {image_path.name} as an image: {exc}") from None
 
