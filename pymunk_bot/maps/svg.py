@@ -85,11 +85,11 @@ def _read_shapes(svg, se, to_user: np.ndarray, tolerance_px: float, fail) -> lis
                 "hidden", "collapse"):
             continue
         filled = _painted(element.fill) and not isinstance(element, se.SimpleLine)
-        stroke = float(element.stroke_width or 0.0) * unit if _painted(element.stroke) else 0.0
+        stroke = float(element.implicit_stroke_width or 0.0) * unit if _painted(element.stroke) else 0.0
         if not filled and stroke <= 0:
             continue
         subpaths = []
-        for sub in se.Path(element).as_subpaths():
+        for sub in abs(se.Path(element)).as_subpaths():  # abs(): transform applied
             points, closed = _sample(se.Path(sub), se, tolerance_px)
             if len(points) < 2:
                 continue
