@@ -105,3 +105,20 @@ def test_diagonal_wall_has_no_gaps_between_touching_corners():
     for x in np.linspace(0.3, 1.7, 29):
         hit = cast(space, (x, 0.05), math.pi / 2, 3.0)
         assert hit < x + RES
+
+
+def test_shipped_office_map_and_floor_plan_draft():
+    from pathlib import Path
+
+    import yaml
+
+    from pymunk_bot.maps.files import load_world_map
+
+    draft_path = Path("scenarios/drafts/floor_plan.yaml")
+    draft = yaml.safe_load(draft_path.read_text())
+    geometry = load_world_map(draft_path.parent / draft["world"]["map"])
+    assert geometry.grid.unknown().any()  # SLAM-like: unknown beyond the walls
+    robot = draft["robots"][0]
+    assert free_disc(geometry, *robot["pose"][:2], 0.2)
+    assert free_disc(geometry, *robot["goal"]["position"], 0.2)
+    assert not free_disc(geometry, -0.8, -0.8, 0.1)  # the unknown border
