@@ -96,7 +96,7 @@ def geometry_from_grid(grid: OccupancyGrid, occupied_thresh: float = OCCUPIED_TH
     polygons: list[np.ndarray] = []
     chains: list[np.ndarray] = []
     for i in islands:
-        pieces = None if i in enclosing else convex_pieces(loops[i])
+        pieces = None if i in enclosing else convex_pieces(loops[i], 0.5)  # half a cell
         if pieces is None:
             chains.append(loops[i])
         else:
@@ -224,14 +224,22 @@ def _islands_enclosing(loops: list[np.ndarray], islands: list[int], rims: list[i
     return enclosing
 
 
-def convex_pieces(loop: np.ndarray) -> list[np.ndarray] | None:
-    """Convex pieces of a closed counter-clockwise loop, or None to keep it as segments."""
+def convex_pieces(loop: np.ndarray, tolerance: float = 0.01) -> list[np.ndarray] | None:
+    """Convex pieces of a closed counter-clockwise loop, or None to keep it as segments; a loop
+    with every vertex within ``tolerance`` of its convex hull's outline is one piece."""
     if len(loop) > MAX_DECOMPOSE_VERTICES:
         return None
     points = [tuple(p) for p in loop]
     if not autogeometry.is_closed(points) or autogeometry.area_for_poly(points) <= 0:
         return None
-    hulls = autogeometry.convex_decomposition(points, 0.01)
+    hull = autogeometry.to_convex_hull(points, 0.0)
+    corners = np.array([(v.x, v.y) for v in hull])
+    a, b = corners[:-1], corners[1:]
+    gap = np.min([_point_segment_distance(p, a, b) for p in loop[:-1]], axis=1)
+    if gap.max() <= tolerance:  # convex within the tolerance (a box, a pillar): one piece
+        hulls = [hull]
+    else:
+        hulls = autogeometry.convex_decomposition(points, tolerance)
     pieces = []
     for hull in hulls:
         piece = np.array([(v.x, v.y) for v in hull])
