@@ -91,12 +91,10 @@ def lidar_ratio(n_boxes: int = 100, size: float = 20.0, poses: int = 30, repeats
     rng = np.random.default_rng(seed)
     data = _box_world(rng, size, n_boxes)
     sim = Simulation(parse_scenario(data, "bench"))
-    robot_shapes = {s for r in sim.robots.values() for s in r.body.shapes} \
-        if hasattr(next(iter(sim.robots.values())), "body") else set()
-    boxes = pymunk.Space()
+    boxes = pymunk.Space()  # the arena walls and boxes; robots (dynamic bodies) left out
     for shape in sim.world.space.shapes:
-        if shape.body.body_type == pymunk.Body.STATIC and shape not in robot_shapes:
-            boxes.add(shape.copy() if False else _static_copy(shape, boxes))
+        if shape.body.body_type == pymunk.Body.STATIC:
+            boxes.add(_static_copy(shape, boxes))
     with tempfile.TemporaryDirectory() as tmp:
         import yaml
 
