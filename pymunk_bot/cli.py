@@ -189,6 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_test_parser(sub)
     add_convert_parser(sub)  # `pymunk-bot convert`
+    from .cli_maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
+
+    add_map_parsers(sub)
     return parser
 
 
