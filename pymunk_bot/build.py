@@ -143,7 +143,7 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     control.position = (x, y)
     control.angle = theta
-    force, torque = group.joint_limits(j, rc.mass)
+    force, torque = group.joint_limits(j, rc.mass, body.moment)
     pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
     pivot.max_bias = 0.0  # velocity-only: a blocked robot never winds up
     pivot.max_force = force

@@ -14,14 +14,24 @@ MOVABLE = 3
 GRAVITY = 9.81  # [m/s^2], only for the floor friction of movable obstacles
 COLLISION_SLOP = 0.005  # [m]; pymunk's default 0.1 is tuned for pixels
 SOLVER_ITERATIONS = 10
+# A light crate squeezed between a robot and a wall is a chain of contacts with a large mass
+# ratio; the solver needs more iterations to keep it from sinking into the wall (measured at
+# 5 g of drive force: 30 keep the squeeze under 1 cm where 10 let 2.3 cm through).
+PUSHING_ITERATIONS = 30
+# Share of an overlap removed per 1/60 s. pymunk's default (10 %) let a robot that keeps pushing
+# sink deeper; 30 % holds every measured contact within 1 cm without visible jitter.
+OVERLAP_CORRECTION = 0.3
 
 
-def new_space() -> pymunk.Space:
-    """A top-down Space in SI units: no gravity, fixed solver settings, no threads."""
+def new_space(pushable: bool = False) -> pymunk.Space:
+    """A top-down Space in SI units: no gravity, fixed solver settings, no threads.
+
+    ``pushable``: the world has bodies robots can push (more solver iterations)."""
     space = pymunk.Space()
     space.gravity = (0.0, 0.0)
-    space.iterations = SOLVER_ITERATIONS
+    space.iterations = PUSHING_ITERATIONS if pushable else SOLVER_ITERATIONS
     space.collision_slop = COLLISION_SLOP
+    space.collision_bias = (1.0 - OVERLAP_CORRECTION) ** 60
     return space
 
 

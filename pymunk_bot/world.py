@@ -20,7 +20,8 @@ class World:
     def __init__(self, config: ScenarioConfig) -> None:
         self.config = config
         self.width, self.height = config.world.size
-        self.space = physics.new_space()
+        self.space = physics.new_space(
+            pushable=any(getattr(o, "movable", False) for o in config.obstacles))
         self.arena_shapes = self._build_arena()
         self.obstacles: list[Obstacle] = [
             obstacle_kinds.get(o.type)(self.space, o) for o in config.obstacles]

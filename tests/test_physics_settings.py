@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 from builders import robot
 
-from pymunk_bot.config.substeps import substeps_against_tunnelling
+from pymunk_bot.config.substeps import substeps_against_overlap, substeps_against_tunnelling
 
 
 def test_formula():
@@ -17,7 +17,20 @@ def test_formula():
 def test_world_uses_the_thinnest_wall_and_fastest_robot(make_sim):
     wall = {"type": "wall", "start": [5, 1], "end": [5, 9], "thickness": 0.01}
     sim = make_sim([robot([1, 5, 0], radius=0.05, max_wheel_speed=20.0)], [wall], size=(10, 10))
-    assert sim.substeps == substeps_against_tunnelling(1 / 60, 20.0, 0.05, 0.005)
+    assert sim.substeps >= substeps_against_tunnelling(1 / 60, 20.0, 0.05, 0.005)
+    # 20 m/s moves 33 cm per step: contact must start within 8 mm, so 42 substeps
+    assert sim.substeps == substeps_against_overlap(1 / 60, 20.0) == 42
+
+
+def test_a_pushed_crate_counts_as_a_mover(make_sim):
+    wall = {"type": "wall", "start": [5, 1], "end": [5, 9], "thickness": 0.01}
+    pellet = {"type": "circle", "center": [3, 5], "radius": 0.005, "movable": True, "mass": 0.01}
+    pusher = robot([1, 5, 0], radius=0.3, max_wheel_speed=1.0)
+    alone = make_sim([pusher], [wall], size=(10, 10)).substeps
+    with_pellet = make_sim([pusher], [wall, pellet], size=(10, 10)).substeps
+    # a 5 mm pellet pushed at 1 m/s must not skip a 1 cm wall: (0.005 + 0.005) / 2 per substep
+    assert with_pellet == substeps_against_tunnelling(1 / 60, 1.0, 0.005, 0.005) == 4
+    assert alone == substeps_against_overlap(1 / 60, 1.0) == 3
 
 
 def test_explicit_substeps_are_respected(make_sim):

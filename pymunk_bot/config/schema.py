@@ -17,6 +17,8 @@ from .types import (
 # ---------------------------------------------------------------------------- world
 
 MAX_SUBSTEPS = 100
+MAX_SPEED = 20.0  # [m/s]: faster than any ground robot this simulator is for
+MAX_ACCEL = 50.0  # [m/s^2]: 5 g, beyond what wheels on a floor can transmit
 
 
 class WorldConfig(Section):
@@ -132,8 +134,8 @@ class DiffRobotConfig(RobotConfig):
 
     drive: Literal["diff"] = "diff"
     track_width: Length = 0.3  # wheel separation [m]
-    max_wheel_speed: PositiveFloat = 1.0  # [m/s]
-    max_accel: PositiveFloat = 3.0  # per wheel [m/s^2]
+    max_wheel_speed: Annotated[PositiveFloat, Field(le=MAX_SPEED)] = 1.0  # [m/s]
+    max_accel: Annotated[PositiveFloat, Field(le=MAX_ACCEL)] = 3.0  # per wheel [m/s^2]
     odometry: OdometryConfig = OdometryConfig()
 
     def top_speed(self) -> float:

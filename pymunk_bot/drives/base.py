@@ -54,7 +54,7 @@ class DriveGroup:
         raise NotImplementedError
 
     # ------------------------------------------------------------------ set-up
-    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
+    def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         """(max force [N], max torque [N m]) of the joints that pull robot ``i``."""
         raise NotImplementedError
 

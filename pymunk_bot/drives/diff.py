@@ -11,6 +11,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .. import physics
 from ..command import Command
 from .base import SMALL_GROUP, DriveGroup, limit_step
 
@@ -105,11 +106,16 @@ class DiffDriveGroup(DriveGroup):
         self._travel = np.zeros((self.n, 2))
         return travel
 
-    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
-        # Enough force to follow the fastest allowed change of speed and the tightest turn, with
-        # margin: the tangential wheel acceleration plus the centripetal v*omega <= v_max^2 / L.
-        force = mass * (2.0 * self.max_accel[i] + self.max_wheel[i] ** 2 / self.track[i])
-        return force, force * self.track[i] / 2.0
+    def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
+        # Force for the fastest allowed change of speed plus turns (the centripetal
+        # v*omega <= v_max^2 / L), but never more sideways grip than a wheel's traction on a
+        # floor, about 1 g: a faster, tighter turn skids, as on a real floor. A larger cap lets
+        # the joints out-push contacts (see docs/physics.md). The torque follows the fastest
+        # spin-up, wheels accelerating in opposite directions: alpha = 2 a / L, with margin.
+        a, track = self.max_accel[i], self.track[i]
+        force = mass * (a + min(self.max_wheel[i] ** 2 / track, physics.GRAVITY))
+        torque = max(force * track / 2.0, 2.0 * moment * 2.0 * a / track)
+        return force, torque
 
     def max_speed(self, i: int) -> float:
         return float(self.max_wheel[i])
