@@ -176,6 +176,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
 
     add_test_parser(sub)
+    from .cli_sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
+
+    add_sweep_parser(sub)
     return parser
 
 
