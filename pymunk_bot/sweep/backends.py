@@ -13,6 +13,7 @@ from .grid import Run
 from .runner import run_chunk
 
 BACKENDS = ("serial", "process", "dask", "ray")
+CONNECT_TIMEOUT = 10.0  # [s] to reach a cluster's scheduler
 Rows = list[dict]
 
 
@@ -74,7 +75,7 @@ def _dask(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
                                    processes=True, host="127.0.0.1", dashboard_address=None)
             client = Client(cluster)
         else:
-            client = Client(address, timeout="10s")
+            client = Client(address, timeout=f"{CONNECT_TIMEOUT}s")
     except (OSError, TimeoutError) as exc:
         if cluster is not None:
             cluster.close()

@@ -25,8 +25,9 @@ def flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
         for i, item in enumerate(value):
             flatten(f"{prefix}[{i}]", item, out)
     else:
-        # numpy scalars -> Python: rows must be JSON- and pickle-plain on every backend
-        out[prefix] = value.item() if hasattr(value, "item") else value
+        # numpy scalars -> Python: rows must be JSON- and pickle-plain on every backend;
+        # "" -> None: an empty CSV cell reads back as None, so both mean "no value"
+        out[prefix] = value.item() if hasattr(value, "item") else (None if value == "" else value)
 
 
 def result_row(run: Run, result: dict) -> dict[str, Any]:
