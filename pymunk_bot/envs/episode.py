@@ -19,13 +19,15 @@ SEED_BOUND = 2**31 - 1  # simulation seeds drawn from the episode's generator li
 
 
 def advance(sims: Sequence[Simulation], steps: int) -> None:
-    """Advance every simulation by ``steps`` physics steps, in lockstep.
+    """Advance every simulation by ``steps`` physics steps: one control period for all.
 
     The one place where the environments move their worlds: a batched core (one call that
-    steps many worlds and casts all their LiDAR beams at once) replaces this loop.
+    steps many worlds and casts all their LiDAR beams at once) replaces this loop. Until then
+    each world runs its steps in one go: interleaving the worlds tick by tick measured 1.6x
+    slower (16 worlds), each Space falling out of the caches between its ticks.
     """
-    for _ in range(steps):
-        for sim in sims:
+    for sim in sims:
+        for _ in range(steps):
             sim.step()
 
 
