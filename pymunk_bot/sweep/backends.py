@@ -103,7 +103,8 @@ def _ray(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
     started = False
     if not ray.is_initialized():
         if address is None:
-            # A local instance on loopback, without the dashboard.
+            # A local instance without the dashboard; its node address is loopback, but Ray
+            # 2.60's own servers still listen on every interface (see docs/sweeps.md).
             ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
                      _node_ip_address="127.0.0.1", log_to_driver=False)
         else:

@@ -235,6 +235,10 @@ def test_dask_local_cluster_on_loopback_gives_the_serial_rows():
     assert comparable(local) == comparable(serial)
 
 
+@pytest.mark.skipif(os.environ.get("PYMUNK_BOT_TEST_RAY") != "1",
+                    reason="Ray's servers listen on every interface (measured with Ray 2.60 and "
+                           "_node_ip_address=127.0.0.1), so it runs only when asked for: "
+                           "PYMUNK_BOT_TEST_RAY=1")
 def test_ray_backend_gives_the_serial_rows():
     pytest.importorskip("ray")
     serial = run_sweep(sprint(), SPEEDS, seeds=range(2), duration=0.5)
