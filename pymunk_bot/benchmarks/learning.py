@@ -114,8 +114,8 @@ def sweep_scenario() -> dict:
 
 def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
                    workers: int = 2) -> list[dict]:
-    """Wall time of the same sweep per backend, and the overhead each adds per task:
-    (wall - serial wall / workers) * workers / tasks."""
+    """Wall time of the same sweep per backend, chunked automatically and one run per task;
+    the difference between the two gives the backend's overhead per task."""
     from pymunk_bot.sweep import chunk_runs, run_sweep
     from pymunk_bot.sweep.grid import Run
 
@@ -123,20 +123,26 @@ def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
     seeds = range(runs // 2)
     rows, serial_wall = [], None
     for backend in backends:
-        started = time.perf_counter()
-        try:
-            run_sweep(sweep_scenario(), grid, seeds, backend=backend, workers=workers)
-        except Exception as exc:  # a missing extra: say so, measure the rest
-            rows.append({"backend": backend, "error": str(exc)})
-            continue
-        wall = time.perf_counter() - started
         n = 1 if backend == "serial" else workers
-        tasks = len(chunk_runs([Run(i, (), 0) for i in range(runs)], n))
-        if backend == "serial":
-            serial_wall = wall
-        overhead = (wall - serial_wall / n) * n / tasks if serial_wall else 0.0
-        rows.append({"backend": backend, "runs": runs, "tasks": tasks, "wall_s": wall,
-                     "speedup": serial_wall / wall, "overhead_per_task_ms": 1e3 * overhead})
+        auto_tasks = len(chunk_runs([Run(i, (), 0) for i in range(runs)], n))
+        walls = {}
+        for chunk_size in (None, 1) if backend != "serial" else (None,):
+            started = time.perf_counter()
+            try:
+                run_sweep(sweep_scenario(), grid, seeds, backend=backend, workers=workers,
+                          chunk_size=chunk_size)
+            except Exception as exc:  # a missing extra: say so, measure the rest
+                rows.append({"backend": backend, "error": str(exc)})
+                break
+            walls[chunk_size] = time.perf_counter() - started
+        if None not in walls:
+            continue
+        serial_wall = walls[None] if backend == "serial" else serial_wall
+        per_task = ((walls[1] - walls[None]) / (runs - auto_tasks) if 1 in walls else 0.0)
+        rows.append({"backend": backend, "runs": runs, "tasks": auto_tasks,
+                     "wall_s": walls[None], "speedup": serial_wall / walls[None],
+                     "wall_one_run_per_task_s": walls.get(1, walls[None]),
+                     "overhead_per_task_ms": 1e3 * per_task})
     return rows
 
 
@@ -154,14 +160,17 @@ def run(quick: bool = False) -> dict:
         print(f"  {n} envs: vector env {vector:8.0f}   {n} separate envs {separate:8.0f}   "
               f"ratio {vector / separate:.2f}x")
         results[f"vector_{n}"] = (vector, separate)
-    print("Sweep of 200 runs (2 s simulated each), 2 workers")
+    print(f"Sweep of {60 if quick else 200} runs (2 s simulated each), 2 workers "
+          "(wall times include starting the workers)")
     sweep = sweep_backends(60 if quick else 200)
     for row in sweep:
         if "error" in row:
             print(f"  {row['backend']:<8} unavailable: {row['error']}")
         else:
-            print(f"  {row['backend']:<8} {row['wall_s']:7.2f} s  speedup {row['speedup']:4.2f}x  "
-                  f"{row['tasks']:3d} tasks, overhead {row['overhead_per_task_ms']:6.1f} ms/task")
+            print(f"  {row['backend']:<8} {row['wall_s']:6.2f} s in {row['tasks']:2d} tasks "
+                  f"(speedup {row['speedup']:4.2f}x); one run per task "
+                  f"{row['wall_one_run_per_task_s']:6.2f} s: "
+                  f"{row['overhead_per_task_ms']:5.1f} ms overhead per task")
     results["sweep"] = sweep
     return results
 

@@ -6,6 +6,7 @@ it was running.
 """
 from __future__ import annotations
 
+import logging
 import os
 from typing import Callable, Iterator
 
@@ -72,7 +73,8 @@ def _dask(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
         if address is None:
             # Loopback only: a sweep on one machine opens no port to the network.
             cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                                   processes=True, host="127.0.0.1", dashboard_address=None)
+                                   processes=True, host="127.0.0.1", dashboard_address=None,
+                                   silence_logs=logging.CRITICAL)  # no shutdown chatter
             client = Client(cluster)
         else:
             client = Client(address, timeout=f"{CONNECT_TIMEOUT}s")
