@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .errors import ScenarioError
 
-EXIT_OK, EXIT_SOME_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_SOME_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 3
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -44,8 +44,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import BackendUnavailable, format_table, parse_assignment, parse_seeds, \
-        plot_summary, run_sweep, summarize
+    from .sweep import BackendUnavailable, SweepInterrupted, format_table, parse_assignment, \
+        parse_seeds, plot_summary, run_sweep, summarize
 
     source = args.scenario
     grid: dict[str, list] = {}
@@ -69,6 +69,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                          progress=not args.no_progress)
     except (ValueError, BackendUnavailable) as exc:
         raise ScenarioError(source, "", str(exc)) from None
+    except SweepInterrupted as exc:
+        print(f"error: {exc}".replace("\n", " "), file=sys.stderr)
+        return EXIT_INTERRUPTED
     groups = summarize(rows, list(grid))
     print(format_table(groups))
     passed = sum(bool(r["passed"]) for r in rows)

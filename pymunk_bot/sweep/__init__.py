@@ -19,6 +19,10 @@ from .grid import Run, build_grid, parse_assignment, parse_seeds
 from .output import Journal, check_output, journal_path, read_journal, read_table, write_table
 from .summary import Group, format_table, plot_summary, summarize
 
+class SweepInterrupted(RuntimeError):
+    """A run or a worker failed mid-sweep; the finished rows are kept for ``resume``."""
+
+
 MAX_CHUNK = 32  # runs per task at most: keeps the progress bar and the journal moving
 TASKS_PER_WORKER = 4  # enough tasks that a slow chunk does not leave workers idle
 
@@ -108,6 +112,12 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
             for row in rows:
                 done[row["run"]] = row
             bar.update(len(rows))
+    except (ScenarioError, BackendUnavailable, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # a worker died, a run raised: say where the finished rows are
+        kept = f"; {len(done)} finished rows are in {journal.path}, rerun with --resume to " \
+               "finish" if journal is not None else ""
+        raise SweepInterrupted(f"the sweep stopped: {type(exc).__name__}: {exc}{kept}") from exc
     finally:
         bar.close()
         if journal is not None:
@@ -119,5 +129,5 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     return rows
 
 
-__all__ = ["BACKENDS", "BackendUnavailable", "Group", "Run", "format_table", "parse_assignment",
+__all__ = ["BACKENDS", "BackendUnavailable", "SweepInterrupted", "Group", "Run", "format_table", "parse_assignment",
            "parse_seeds", "plot_summary", "run_sweep", "summarize"]

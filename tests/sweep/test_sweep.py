@@ -251,3 +251,33 @@ def _write(tmp_path: Path, data: dict) -> Path:
     path = tmp_path / "sprint.yaml"
     path.write_text(json.dumps(data))
     return path
+
+
+def test_a_dead_worker_loses_no_finished_rows(tmp_path, capsys):
+    scenario = sprint()
+    scenario["robots"][0]["controller"] = {"type": "python",
+                                           "class_path": "crashing_controller:DiesWhenTold"}
+    path = _write(tmp_path, scenario)
+    out = tmp_path / "rows.csv"
+    argv = ["sweep", str(path), "--seeds", "0:3", "--set",
+            "robots[0].controller.params={die: false},{die: true}", "--duration", "0.5",
+            "--backend", "process", "--workers", "1", "--chunk-size", "1", "--out", str(out),
+            "--no-progress"]
+    status = cli_main(argv)
+    err = capsys.readouterr().err
+    assert status == 3 and err.count("\n") == 1 and "--resume" in err
+    kept = [json.loads(line) for line in journal_path(out).read_text().splitlines()]
+    assert sorted(r["run"] for r in kept) == [0, 1, 2]  # every run before the crash
+    assert not out.exists()
+    assert cli_main(argv + ["--resume"]) == 3  # the same runs die again; nothing is lost
+    assert len(journal_path(out).read_text().splitlines()) == 3
+
+
+def test_bad_input_found_inside_a_worker_is_still_one_line_exit_2(tmp_path, capsys):
+    scenario = sprint()
+    scenario["robots"][0]["controller"] = {"type": "python", "class_path": "no_such_module:X"}
+    status = cli_main(["sweep", str(_write(tmp_path, scenario)), "--backend", "process",
+                       "--workers", "1", "--out", str(tmp_path / "rows.csv"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1
+    assert "robots[0].controller" in err and "no_such_module" in err
