@@ -31,6 +31,20 @@ def advance(sims: Sequence[Simulation], steps: int) -> None:
             sim.step()
 
 
+def episode_timing(config: ScenarioConfig, control_period: float,
+                   max_episode_time: float | None) -> tuple[int, float, float]:
+    """(physics steps per action, control period [s], time limit [s]), checked."""
+    if not (math.isfinite(control_period) and 0 < control_period <= MAX_CONTROL_PERIOD):
+        raise ValueError(f"control_period must be in (0, {MAX_CONTROL_PERIOD}] s "
+                         f"(got {control_period})")
+    steps = max(1, round(control_period / config.world.dt))
+    limit = config.world.duration if max_episode_time is None else float(max_episode_time)
+    if not (math.isfinite(limit) and 0 < limit <= MAX_EPISODE_TIME):
+        raise ValueError(f"max_episode_time must be in (0, {MAX_EPISODE_TIME:g}] s "
+                         f"(got {max_episode_time})")
+    return steps, steps * config.world.dt, limit
+
+
 class NavigationEpisode:
     """A scenario prepared for one learning robot, and its current episode.
 
@@ -46,17 +60,9 @@ class NavigationEpisode:
                  random_goal: bool = False, pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False) -> None:
         config, self.source = load_config(scenario)
-        if not (math.isfinite(control_period) and 0 < control_period <= MAX_CONTROL_PERIOD):
-            raise ValueError(f"control_period must be in (0, {MAX_CONTROL_PERIOD}] s "
-                             f"(got {control_period})")
-        dt = config.world.dt
-        self.steps_per_action = max(1, round(control_period / dt))
-        self.control_period = self.steps_per_action * dt  # [s]
-        limit = config.world.duration if max_episode_time is None else float(max_episode_time)
-        if not (math.isfinite(limit) and 0 < limit <= MAX_EPISODE_TIME):
-            raise ValueError(f"max_episode_time must be in (0, {MAX_EPISODE_TIME:g}] s "
-                             f"(got {max_episode_time})")
-        self.time_limit = limit  # [s]
+        # control period and time limit [s]
+        self.steps_per_action, self.control_period, self.time_limit = episode_timing(
+            config, control_period, max_episode_time)
         self.config, (self.robot_name,) = prepare_scenario(
             config, self.source, None if robot is None else [robot], lidar, self.control_period,
             need_goal=not random_goal)

@@ -8,7 +8,6 @@ All agents are truncated together at the time limit.
 from __future__ import annotations
 
 import functools
-import math
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -22,7 +21,7 @@ from gymnasium.utils import seeding
 
 from ..config import ScenarioConfig
 from ..sim import Simulation
-from .episode import MAX_CONTROL_PERIOD, MAX_EPISODE_TIME, SEED_BOUND, advance
+from .episode import SEED_BOUND, advance, episode_timing
 from .navigation import RENDER_MODES, make_spaces
 from .task import RewardWeights, RobotTask, load_config, prepare_scenario, robot_result
 
@@ -48,16 +47,9 @@ class MultiRobotEnv(ParallelEnv):
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
         config, self.source = load_config(scenario)
-        if not (math.isfinite(control_period) and 0 < control_period <= MAX_CONTROL_PERIOD):
-            raise ValueError(f"control_period must be in (0, {MAX_CONTROL_PERIOD}] s "
-                             f"(got {control_period})")
-        self.steps_per_action = max(1, round(control_period / config.world.dt))
-        self.control_period = self.steps_per_action * config.world.dt  # [s]
-        limit = config.world.duration if max_episode_time is None else float(max_episode_time)
-        if not (math.isfinite(limit) and 0 < limit <= MAX_EPISODE_TIME):
-            raise ValueError(f"max_episode_time must be in (0, {MAX_EPISODE_TIME:g}] s "
-                             f"(got {max_episode_time})")
-        self.time_limit = limit  # [s]
+        # control period and time limit [s]
+        self.steps_per_action, self.control_period, self.time_limit = episode_timing(
+            config, control_period, max_episode_time)
         names = [r.name for r in config.robots]
         self.config, _ = prepare_scenario(config, self.source, names, lidar, self.control_period)
         weights = RewardWeights.from_any(reward)

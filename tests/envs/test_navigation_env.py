@@ -52,6 +52,9 @@ def test_observation_means_what_the_docs_say():
     assert obs[9] == pytest.approx(1.0) and obs[10] == pytest.approx(0.0, abs=1e-9)
     assert obs[11] == 0.0 and obs[12] == 0.0  # standing still
     assert env.observation_space.contains(obs)
+    env.step(np.zeros(2, np.float32))
+    scan = env.sim.robots["r1"].lidar.latest
+    assert scan.time == pytest.approx(env.sim.time) == pytest.approx(0.1)  # fresh every step
 
 
 def test_full_speed_ahead_reaches_the_goal_with_the_documented_reward():
