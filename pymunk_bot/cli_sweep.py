@@ -47,17 +47,19 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from .sweep import BackendUnavailable, SweepInterrupted, format_table, parse_assignment, \
         parse_seeds, plot_summary, run_sweep, summarize
 
-    source = args.scenario
     grid: dict[str, list] = {}
-    try:
-        for text in args.assignments:
+    for text in args.assignments:
+        try:
             key, values = parse_assignment(text)
-            if key in grid:
-                raise ValueError(f"'{key}' is set twice")
-            grid[key] = values
+        except ValueError as exc:
+            raise ScenarioError("--set", "", str(exc)) from None
+        if key in grid:
+            raise ScenarioError("--set", "", f"'{key}' is set twice")
+        grid[key] = values
+    try:
         seeds = parse_seeds(args.seeds) if args.seeds is not None else None
     except ValueError as exc:
-        raise ScenarioError("--set" if "seeds" not in str(exc) else "--seeds", "", str(exc)) from None
+        raise ScenarioError("--seeds", "", str(exc)) from None
     scenario = None if args.scenario == "default" else args.scenario
     plot = None
     if args.plot is not None:
@@ -67,8 +69,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                          workers=args.workers, out=args.out, resume=args.resume,
                          duration=args.duration, chunk_size=args.chunk_size,
                          progress=not args.no_progress)
-    except (ValueError, BackendUnavailable) as exc:
-        raise ScenarioError(source, "", str(exc)) from None
+    except (ValueError, BackendUnavailable) as exc:  # each message names its option or path
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except SweepInterrupted as exc:
         print(f"error: {exc}".replace("\n", " "), file=sys.stderr)
         return EXIT_INTERRUPTED

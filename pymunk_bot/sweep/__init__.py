@@ -33,7 +33,7 @@ def chunk_runs(runs: list[Run], workers: int, chunk_size: int | None = None) -> 
     if chunk_size is None:
         chunk_size = min(MAX_CHUNK, max(1, math.ceil(len(runs) / (workers * TASKS_PER_WORKER))))
     if chunk_size < 1:
-        raise ValueError(f"chunk_size must be >= 1 (got {chunk_size})")
+        raise ValueError(f"--chunk-size must be >= 1 (got {chunk_size})")
     return [runs[i:i + chunk_size] for i in range(0, len(runs), chunk_size)]
 
 
@@ -81,10 +81,14 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     seeds = [config.seed] if seeds is None else [int(s) for s in seeds]
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend '{backend}' (choose from {', '.join(BACKENDS)})")
+    if address is not None and backend not in ("dask", "ray"):
+        raise ValueError(f"--address is for the dask and ray backends, not '{backend}'")
     if workers is not None and not 1 <= workers <= 1024:
-        raise ValueError(f"workers must be in [1, 1024] (got {workers})")
+        raise ValueError(f"--workers must be in [1, 1024] (got {workers})")
+    if chunk_size is not None and chunk_size < 1:
+        raise ValueError(f"--chunk-size must be >= 1 (got {chunk_size})")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be > 0 (got {duration})")
+        raise ValueError(f"--duration must be > 0 (got {duration})")
     runs = build_grid(config, source, grid, seeds)  # every combination validated here
     out = None if out is None else Path(out)
     done: dict[int, dict] = {}

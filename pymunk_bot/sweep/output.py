@@ -38,20 +38,24 @@ def journal_path(path: Path) -> Path:
 
 
 class Journal:
-    """Append-only JSON lines, flushed and fsynced per batch of rows."""
+    """Append-only JSON lines, flushed and fsynced per batch of rows; the file is created with
+    the first row, so a sweep that fails before any run finishes leaves nothing behind."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self._file = open(path, "a", encoding="utf-8")
+        self._file = None
 
     def write(self, rows: Iterable[dict]) -> None:
+        if self._file is None:
+            self._file = open(self.path, "a", encoding="utf-8")
         for row in rows:
             self._file.write(json.dumps(row, allow_nan=True) + "\n")
         self._file.flush()
         os.fsync(self._file.fileno())
 
     def close(self) -> None:
-        self._file.close()
+        if self._file is not None:
+            self._file.close()
 
 
 def read_journal(path: Path) -> list[dict]:

@@ -226,6 +226,7 @@ def test_unreachable_dask_scheduler_is_one_line(tmp_path, capsys, monkeypatch):
                        "--no-progress"])
     err = capsys.readouterr().err
     assert status == 2 and err.count("\n") == 1 and "Dask scheduler" in err
+    assert not journal_path(tmp_path / "r.csv").exists()  # nothing ran: nothing to resume
 
 
 @pytest.mark.slow
