@@ -282,3 +282,14 @@ def test_bad_input_found_inside_a_worker_is_still_one_line_exit_2(tmp_path, caps
     err = capsys.readouterr().err
     assert status == 2 and err.count("\n") == 1
     assert "robots[0].controller" in err and "no_such_module" in err
+
+
+def test_parquet_output_round_trips(tmp_path):
+    pytest.importorskip("pyarrow")
+    from pymunk_bot.sweep.output import read_table
+
+    out = tmp_path / "rows.parquet"
+    rows = run_sweep(sprint(), SPEEDS, seeds=range(2), duration=0.5, out=out)
+    assert comparable(read_table(out)) == comparable(rows)
+    again = run_sweep(sprint(), SPEEDS, seeds=range(2), duration=0.5, out=out, resume=True)
+    assert comparable(again) == comparable(rows)
