@@ -116,6 +116,11 @@ def plot_summary(groups: list[Group], path: str | Path) -> None:
                 ax.bar(x, [100 * g.pass_rate for g in mine], color="tab:green")
                 ax.set_ylim(0, 100)
                 ax.set_ylabel("passed [%]")
+            elif panel.endswith("goal_reached"):  # a rate, like the pass rate
+                ax.bar(x, [100 * g.metrics[panel].mean if panel in g.metrics else 0.0
+                           for g in mine], color="tab:blue")
+                ax.set_ylim(0, 100)
+                ax.set_ylabel(f"{panel} [%]")
             else:
                 means = [g.metrics[panel].mean if panel in g.metrics else math.nan for g in mine]
                 stds = [g.metrics[panel].std if panel in g.metrics else 0.0 for g in mine]
