@@ -138,3 +138,19 @@ def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
     env.step({"b": np.array([1.0, 0.0], np.float32)})
     assert env.sim.robots["a"].pose[0] == pytest.approx(x_stopped, abs=1e-6)
     assert env.state().shape == (6,)
+
+
+def test_one_call_advances_every_world_per_vector_step(monkeypatch):
+    """The seam a batched core replaces: one advance(sims, steps) call per step, all worlds."""
+    import pymunk_bot.envs.vector as vector
+
+    calls = []
+    real = vector.advance
+    monkeypatch.setattr(vector, "advance", lambda sims, steps: (calls.append((len(sims), steps)),
+                                                                real(sims, steps)))
+    envs = NavigationVectorEnv(num_envs=4, scenario=short_task(duration=2.0))
+    envs.reset(seed=0)
+    envs.step(np.zeros((4, 2), np.float32))
+    envs.step(np.zeros((4, 2), np.float32))
+    assert calls == [(4, 6), (4, 6)]  # 0.1 s = 6 physics steps of 1/60 s
+    assert all(e.sim.time == pytest.approx(0.2) for e in envs.episodes)
