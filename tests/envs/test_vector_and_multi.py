@@ -98,10 +98,8 @@ def test_bad_num_envs_is_refused():
 
 # ---------------------------------------------------------------------------- PettingZoo
 
-pettingzoo = pytest.importorskip("pettingzoo")
-
-
 def test_multi_robot_env_passes_the_parallel_api_test():
+    pytest.importorskip("pettingzoo")
     from pettingzoo.test import parallel_api_test
 
     from pymunk_bot.envs import MultiRobotEnv
@@ -118,6 +116,7 @@ def two_robots() -> dict:
 
 
 def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
+    pytest.importorskip("pettingzoo")
     from pymunk_bot.envs import MultiRobotEnv
 
     env = MultiRobotEnv(two_robots())
