@@ -192,6 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .cli_maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
 
     add_map_parsers(sub)
+    from .cli_sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
+
+    add_sweep_parser(sub)
     return parser
 
 

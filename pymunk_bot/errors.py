@@ -12,6 +12,9 @@ class ScenarioError(Exception):
         self.line = line
         super().__init__(self.format())
 
+    def __reduce__(self):  # pickles whole, so it crosses process and cluster boundaries
+        return (type(self), (self.source, self.path, self.problem, self.line))
+
     def format(self) -> str:
         where = f"{self.source}: {self.path}: " if self.path else f"{self.source}: "
         line = f" (line {self.line})" if self.line is not None else ""

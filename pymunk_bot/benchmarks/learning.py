@@ -1,0 +1,183 @@
+"""Learning and sweep throughput (`python -m pymunk_bot.benchmarks.learning`, or `run(quick)`):
+
+1. one Navigation-v0 env (180-beam LiDAR, 10 Hz control) against the same loop written on
+   bare pymunk: the same world and robot (its kinematic control body, pivot and gear joints),
+   the same 180 beams cast with ``segment_query_first``, the same observation;
+2. the native vector env against N single envs (``gym.make``) stepped one after another;
+3. a sweep of 200 runs on the serial, process and Dask (local cluster) backends.
+"""
+from __future__ import annotations
+
+import math
+import statistics
+import time
+
+import numpy as np
+
+ACTION = np.array([0.6, 0.3], np.float32)  # a steady arc: the robot keeps meeting things
+
+
+def _env_kwargs(beams: int = 180) -> dict:
+    # A long episode so the timed loop never resets; LiDAR noise on, as in the default scenario.
+    return {"scenario": None, "lidar": {"beams": beams}, "max_episode_time": 3600.0}
+
+
+def env_steps_per_second(steps: int = 600, beams: int = 180) -> float:
+    from pymunk_bot.envs import NavigationEnv
+
+    env = NavigationEnv(**_env_kwargs(beams))
+    env.reset(seed=0)
+    started = time.perf_counter()
+    for _ in range(steps):
+        env.step(ACTION)
+    return steps / (time.perf_counter() - started)
+
+
+def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
+    """The env's loop by hand on bare pymunk: command the control body every substep, step
+    the space, cast every beam with ``segment_query_first``, build the same observation."""
+
+    from pymunk_bot.envs import NavigationEnv
+
+    env = NavigationEnv(**_env_kwargs(beams))
+    env.reset(seed=0)  # only to build the identical world; the loop below never calls it
+    sim, task = env.sim, env.episode.task
+    robot = sim.robots[task.name]
+    space, body = sim.world.space, robot.body
+    control = robot.drive.control  # the kinematic body the pivot and gear joints pull on
+    h = sim.dt / sim.substeps
+    substeps = env.episode.steps_per_action * sim.substeps
+    angles = robot.lidar.angles
+    max_range = robot.lidar.config.max_range
+    shape_filter = robot.shape.filter
+    goal = robot.goal
+    diagonal = math.hypot(sim.world.width, sim.world.height)
+    v, omega = ACTION[0] * task.v_max, ACTION[1] * task.omega_max
+    obs = np.empty(beams + 5, np.float32)
+    started = time.perf_counter()
+    for _ in range(steps):
+        for _ in range(substeps):
+            heading = body.angle + 0.5 * omega * h
+            control.velocity = (v * math.cos(heading), v * math.sin(heading))
+            control.angular_velocity = omega
+            space.step(h)
+        x, y = body.position
+        theta = body.angle
+        for i, a in enumerate(angles):
+            end = (x + max_range * math.cos(theta + a), y + max_range * math.sin(theta + a))
+            hit = space.segment_query_first((x, y), end, 0.0, shape_filter)
+            obs[i] = 1.0 if hit is None else hit.alpha
+        bearing = math.atan2(goal[1] - y, goal[0] - x) - theta
+        obs[beams] = math.hypot(goal[0] - x, goal[1] - y) / diagonal
+        obs[beams + 1], obs[beams + 2] = math.cos(bearing), math.sin(bearing)
+        vx, vy = body.velocity
+        obs[beams + 3] = (math.cos(theta) * vx + math.sin(theta) * vy) / task.v_max
+        obs[beams + 4] = body.angular_velocity / task.omega_max
+    return steps / (time.perf_counter() - started)
+
+
+def vector_vs_separate(num_envs: int = 16, steps: int = 100) -> tuple[float, float]:
+    """(env steps per second) of the native vector env and of ``num_envs`` gym.make envs."""
+    import gymnasium as gym
+
+    import pymunk_bot.envs  # noqa: F401
+
+    kwargs = _env_kwargs()
+    vec = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=num_envs,
+                       vectorization_mode="vector_entry_point", **kwargs)
+    vec.reset(seed=0)
+    actions = np.tile(ACTION, (num_envs, 1))
+    started = time.perf_counter()
+    for _ in range(steps):
+        vec.step(actions)
+    vector = num_envs * steps / (time.perf_counter() - started)
+    envs = [gym.make("pymunk_bot/Navigation-v0", **kwargs) for _ in range(num_envs)]
+    for i, env in enumerate(envs):
+        env.reset(seed=i)
+    started = time.perf_counter()
+    for _ in range(steps):
+        for env in envs:
+            env.step(ACTION)
+    separate = num_envs * steps / (time.perf_counter() - started)
+    return vector, separate
+
+
+def sweep_scenario() -> dict:
+    """A short run (2 s simulated) with a LiDAR-driven controller: ~10 ms of work per run."""
+    return {"name": "bench_sweep", "world": {"size": [6.0, 3.0], "duration": 2.0},
+            "obstacles": [{"type": "box", "center": [3.0, 1.0], "size": [0.5, 0.5]}],
+            "robots": [{"name": "r1", "pose": [0.5, 1.5, 0.0],
+                        "lidar": {"beams": 90, "noise_std": 0.01},
+                        "controller": {"type": "avoid"},
+                        "goal": {"position": [5.5, 1.5]}}]}
+
+
+def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
+                   workers: int = 2) -> list[dict]:
+    """Wall time of the same sweep per backend, chunked automatically and one run per task;
+    the difference between the two gives the backend's overhead per task."""
+    from pymunk_bot.sweep import chunk_runs, run_sweep
+    from pymunk_bot.sweep.grid import Run
+
+    grid = {"robots[0].max_wheel_speed": [0.5, 1.0]}
+    seeds = range(runs // 2)
+    rows, serial_wall = [], None
+    for backend in backends:
+        n = 1 if backend == "serial" else workers
+        auto_tasks = len(chunk_runs([Run(i, (), 0) for i in range(runs)], n))
+        walls = {}
+        for chunk_size in (None, 1) if backend != "serial" else (None,):
+            started = time.perf_counter()
+            try:
+                run_sweep(sweep_scenario(), grid, seeds, backend=backend, workers=workers,
+                          chunk_size=chunk_size)
+            except Exception as exc:  # a missing extra: say so, measure the rest
+                rows.append({"backend": backend, "error": str(exc)})
+                break
+            walls[chunk_size] = time.perf_counter() - started
+        if None not in walls:
+            continue
+        serial_wall = walls[None] if backend == "serial" else serial_wall
+        per_task = ((walls[1] - walls[None]) / (runs - auto_tasks) if 1 in walls else 0.0)
+        rows.append({"backend": backend, "runs": runs, "tasks": auto_tasks,
+                     "wall_s": walls[None], "speedup": serial_wall / walls[None],
+                     "wall_one_run_per_task_s": walls.get(1, walls[None]),
+                     "overhead_per_task_ms": 1e3 * per_task})
+    return rows
+
+
+def run(quick: bool = False) -> dict:
+    """Every measurement, printed; returns them (what `pymunk-bot bench` calls)."""
+    repeats = 1 if quick else 3
+    env = statistics.median(env_steps_per_second() for _ in range(repeats))
+    bare = statistics.median(bare_pymunk_steps_per_second() for _ in range(repeats))
+    print("Navigation-v0, 180-beam LiDAR, 10 Hz control (env steps per second)")
+    print(f"  env {env:8.0f}   bare pymunk + segment_query_first {bare:8.0f}   "
+          f"ratio {env / bare:.2f}x")
+    results = {"env_steps_per_s": env, "bare_pymunk_steps_per_s": bare}
+    for n in (16, 64):
+        vector, separate = vector_vs_separate(n, steps=30 if quick else 100)
+        print(f"  {n} envs: vector env {vector:8.0f}   {n} separate envs {separate:8.0f}   "
+              f"ratio {vector / separate:.2f}x")
+        results[f"vector_{n}"] = (vector, separate)
+    print(f"Sweep of {60 if quick else 200} runs (2 s simulated each), 2 workers "
+          "(wall times include starting the workers)")
+    sweep = sweep_backends(60 if quick else 200)
+    for row in sweep:
+        if "error" in row:
+            print(f"  {row['backend']:<8} unavailable: {row['error']}")
+        else:
+            print(f"  {row['backend']:<8} {row['wall_s']:6.2f} s in {row['tasks']:2d} tasks "
+                  f"(speedup {row['speedup']:4.2f}x); one run per task "
+                  f"{row['wall_one_run_per_task_s']:6.2f} s: "
+                  f"{row['overhead_per_task_ms']:5.1f} ms overhead per task")
+    results["sweep"] = sweep
+    return results
+
+
+def main() -> None:
+    run()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""`pymunk-bot sweep`: a grid of scenario values times seeds, on a chosen backend."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import ScenarioError
+
+EXIT_OK, EXIT_SOME_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 3
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    from .sweep import BACKENDS
+
+    sweep = subparsers.add_parser(
+        "sweep", help="run a scenario over a grid of parameter values and seeds",
+        description="Run SCENARIO for every combination of --set values and every seed; one "
+                    "row per run in --out, a summary per parameter value on stdout.")
+    sweep.add_argument("scenario", help="path or shipped name ('default' for the built-in)")
+    sweep.add_argument("--seeds", default=None, metavar="A:B",
+                       help="seeds: START:STOP (STOP excluded), a list 1,2,3 or one seed "
+                            "(default: the scenario's seed)")
+    sweep.add_argument("--set", dest="assignments", action="append", default=[],
+                       metavar="KEY.PATH=V1,V2",
+                       help="sweep a scenario key over values, e.g. "
+                            "robots[0].max_wheel_speed=0.5,1.0 (repeat for a grid)")
+    sweep.add_argument("--backend", choices=BACKENDS, default="serial",
+                       help="where runs execute (default: serial)")
+    sweep.add_argument("--address", help="scheduler of a running cluster, e.g. "
+                                         "tcp://HOST:8786 (dask) or HOST:6379 (ray)")
+    sweep.add_argument("--workers", type=int, help="local workers (default: the CPU count)")
+    sweep.add_argument("--duration", type=float, help="simulated seconds per run "
+                                                      "(default: the scenario's world.duration)")
+    sweep.add_argument("--chunk-size", type=int, help="runs per task (default: automatic)")
+    sweep.add_argument("--resume", action="store_true",
+                       help="skip the runs an earlier, interrupted sweep to --out finished")
+    sweep.add_argument("--out", type=Path, required=True, help="results table (.csv or .parquet)")
+    sweep.add_argument("--plot", type=Path, nargs="?", const=True, default=None,
+                       metavar="IMAGE", help="plot the summary (default: next to --out, .png)")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=cmd_sweep)
+    return sweep
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep import BackendUnavailable, SweepInterrupted, format_table, parse_assignment, \
+        parse_seeds, plot_summary, run_sweep, summarize
+
+    grid: dict[str, list] = {}
+    for text in args.assignments:
+        try:
+            key, values = parse_assignment(text)
+        except ValueError as exc:
+            raise ScenarioError("--set", "", str(exc)) from None
+        if key in grid:
+            raise ScenarioError("--set", "", f"'{key}' is set twice")
+        grid[key] = values
+    try:
+        seeds = parse_seeds(args.seeds) if args.seeds is not None else None
+    except ValueError as exc:
+        raise ScenarioError("--seeds", "", str(exc)) from None
+    scenario = None if args.scenario == "default" else args.scenario
+    plot = None
+    if args.plot is not None:
+        plot = args.out.with_suffix(".png") if args.plot is True else args.plot
+    try:
+        rows = run_sweep(scenario, grid, seeds, backend=args.backend, address=args.address,
+                         workers=args.workers, out=args.out, resume=args.resume,
+                         duration=args.duration, chunk_size=args.chunk_size,
+                         progress=not args.no_progress)
+    except (ValueError, BackendUnavailable) as exc:  # each message names its option or path
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except SweepInterrupted as exc:
+        print(f"error: {exc}".replace("\n", " "), file=sys.stderr)
+        return EXIT_INTERRUPTED
+    groups = summarize(rows, list(grid))
+    print(format_table(groups))
+    passed = sum(bool(r["passed"]) for r in rows)
+    print(f"{passed}/{len(rows)} runs passed; rows in {args.out}")
+    if plot is not None:
+        plot_summary(groups, plot)
+        print(f"plot in {plot}")
+    return EXIT_OK if passed == len(rows) else EXIT_SOME_FAILED
+
+
+def main(argv: list[str] | None = None) -> int:  # pragma: no cover - `pymunk-bot sweep`
+    from .cli import main as cli_main
+
+    return cli_main(["sweep", *(argv if argv is not None else sys.argv[1:])])

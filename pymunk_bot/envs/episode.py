@@ -1,0 +1,107 @@
+"""One navigation episode after another in one simulation: what a single env and each slot of
+the vector env hold. No RL library here either."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ..config import ScenarioConfig
+from ..sim import Simulation
+from .task import RewardWeights, RobotTask, load_config, prepare_scenario, robot_result, \
+    sample_goal
+
+MAX_CONTROL_PERIOD = 10.0  # [s]
+MAX_EPISODE_TIME = 24 * 3600.0  # [s] of simulated time
+SEED_BOUND = 2**31 - 1  # simulation seeds drawn from the episode's generator lie below this
+
+
+def advance(sims: Sequence[Simulation], steps: int) -> None:
+    """Advance every simulation by ``steps`` physics steps: one control period for all.
+
+    The one place where the environments move their worlds: a batched core (one call that
+    steps many worlds and casts all their LiDAR beams at once) replaces this loop. Until then
+    each world runs its steps in one go: interleaving the worlds tick by tick measured 1.6x
+    slower (16 worlds), each Space falling out of the caches between its ticks.
+    """
+    for sim in sims:
+        for _ in range(steps):
+            sim.step()
+
+
+def episode_timing(config: ScenarioConfig, control_period: float,
+                   max_episode_time: float | None) -> tuple[int, float, float]:
+    """(physics steps per action, control period [s], time limit [s]), checked."""
+    if not (math.isfinite(control_period) and 0 < control_period <= MAX_CONTROL_PERIOD):
+        raise ValueError(f"control_period must be in (0, {MAX_CONTROL_PERIOD}] s "
+                         f"(got {control_period})")
+    steps = max(1, round(control_period / config.world.dt))
+    limit = config.world.duration if max_episode_time is None else float(max_episode_time)
+    if not (math.isfinite(limit) and 0 < limit <= MAX_EPISODE_TIME):
+        raise ValueError(f"max_episode_time must be in (0, {MAX_EPISODE_TIME:g}] s "
+                         f"(got {max_episode_time})")
+    return steps, steps * config.world.dt, limit
+
+
+class NavigationEpisode:
+    """A scenario prepared for one learning robot, and its current episode.
+
+    ``control_period`` [s] is rounded to whole physics steps; the robot's LiDAR scans once per
+    period, just before the observation is taken.
+    """
+
+    def __init__(self, scenario: str | Path | dict | ScenarioConfig | None = None,
+                 robot: str | None = None, control_period: float = 0.1,
+                 max_episode_time: float | None = None,
+                 lidar: Mapping[str, Any] | None = None,
+                 reward: RewardWeights | Mapping[str, float] | None = None,
+                 random_goal: bool = False, pose_source: str = "ground_truth",
+                 terminate_on_collision: bool = False) -> None:
+        config, self.source = load_config(scenario)
+        # control period and time limit [s]
+        self.steps_per_action, self.control_period, self.time_limit = episode_timing(
+            config, control_period, max_episode_time)
+        self.config, (self.robot_name,) = prepare_scenario(
+            config, self.source, None if robot is None else [robot], lidar, self.control_period,
+            need_goal=not random_goal)
+        self.random_goal = bool(random_goal)
+        self.terminate_on_collision = bool(terminate_on_collision)
+        robot_config = next(r for r in self.config.robots if r.name == self.robot_name)
+        self.task = RobotTask(robot_config, self.config.world.size,
+                              RewardWeights.from_any(reward), pose_source)
+        self.sim: Simulation | None = None
+        self.done = True  # no episode under way until reset
+
+    def reset(self, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+        """Start an episode: the simulation seed (and a random goal) come from ``rng``."""
+        seed = int(rng.integers(SEED_BOUND))
+        if self.sim is None:
+            self.sim = Simulation(self.config, seed=seed, source=self.source)
+        else:
+            self.sim.reset(seed)
+        robot = self.sim.robots[self.robot_name]
+        if self.random_goal:
+            robot.set_goal(sample_goal(self.sim, robot, rng))
+        self.task.start(robot)
+        self.done = False
+        return self.task.observe(), {"sim_seed": seed, "goal": tuple(robot.goal),
+                                     "distance_to_goal": self.task.goal_distance(),
+                                     "collisions": robot.collisions}
+
+    def act(self, action: np.ndarray) -> None:
+        self.task.act(action)
+
+    def finish(self, out: np.ndarray | None = None
+               ) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """(obs, reward, terminated, truncated, info) once the physics has advanced."""
+        reward, terminated, info = self.task.outcome(self.control_period,
+                                                     self.terminate_on_collision)
+        time = self.sim.time
+        truncated = not terminated and time >= self.time_limit - 1e-9
+        info["time"] = time
+        if terminated or truncated:
+            info["result"] = robot_result(self.sim, self.robot_name)
+            self.done = True
+        return self.task.observe(out), reward, terminated, truncated, info

@@ -1,0 +1,252 @@
+"""The navigation task, free of any RL library: scenario preparation, observation, reward.
+
+The Gymnasium env, the vector env and the PettingZoo env all use these pieces, so one robot
+sees, acts and is rewarded the same way in all three. Units: metres, seconds, radians.
+
+Observation (float32), for a robot with B LiDAR beams::
+
+    [0, B)   LiDAR ranges / max_range          in [0, 1]   (1: no return)
+    B        goal distance / arena diagonal    in [0, 1]
+    B+1, B+2 cos, sin of the goal bearing      in [-1, 1]  (bearing in the robot frame)
+    B+3      forward speed / v_max             in [-1, 1]
+    B+4      yaw rate / omega_max              in [-1, 1]
+    B+5      lateral speed / vy_max            in [-1, 1]  (omni drives only)
+
+Action (float32 in [-1, 1]): (v, omega) or (v, omega, vy) for omni drives, scaled by the
+drive's limits (see :func:`drive_limits`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..config import ScenarioConfig, load_scenario, parse_scenario
+from ..errors import ScenarioError
+
+MAX_BEAMS = 4096  # an observation larger than this is a mistake, not a sensor
+GOAL_SAMPLE_TRIES = 2000  # random goals tried before giving up on a crowded arena
+GOAL_MIN_DISTANCE = 1.0  # [m] a random goal at least this far from the start
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    """Reward per control step = progress * (metres closer to the goal)
+    + collision * (new contact episodes) + time * (seconds elapsed) + success (once, on arrival)."""
+
+    progress: float = 1.0  # per metre of progress toward the goal
+    collision: float = -1.0  # per new contact episode
+    time: float = -0.1  # per simulated second
+    success: float = 10.0  # on reaching the goal
+
+    @classmethod
+    def from_any(cls, value: "RewardWeights | Mapping[str, float] | None") -> "RewardWeights":
+        if value is None:
+            return cls()
+        if isinstance(value, cls):
+            return value
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(value) - known)
+        if unknown:
+            raise ValueError(f"unknown reward weight(s) {unknown}; valid: {sorted(known)}")
+        weights = {k: float(v) for k, v in value.items()}
+        if not all(math.isfinite(v) for v in weights.values()):
+            raise ValueError(f"reward weights must be finite (got {weights})")
+        return cls(**weights)
+
+
+def drive_limits(robot_config) -> tuple[float, float, float | None]:
+    """(v_max [m/s], omega_max [rad/s], vy_max [m/s] or None) that an action of 1 commands.
+
+    A diff drive turns fastest on the spot: omega_max = 2 * max_wheel_speed / track_width.
+    """
+    drive = getattr(robot_config, "drive", "diff")
+    if drive == "diff":
+        v = float(robot_config.max_wheel_speed)
+        return v, 2.0 * v / float(robot_config.track_width), None
+    v = float(robot_config.max_speed)
+    if drive == "omni":
+        return v, float(robot_config.max_angular_speed), v
+    # ackermann: the tightest circle is wheelbase / tan(max_steer)
+    return v, v * math.tan(float(robot_config.max_steer)) / float(robot_config.wheelbase), None
+
+
+def load_config(scenario: str | Path | dict | ScenarioConfig | None) -> tuple[ScenarioConfig, str]:
+    """(config, source name) from a path, shipped name, dict, config or None (built-in)."""
+    if isinstance(scenario, ScenarioConfig):
+        return scenario, f"scenario '{scenario.name}'"
+    if isinstance(scenario, dict):
+        return parse_scenario(scenario, "<dict>"), "<dict>"
+    return load_scenario(scenario), "default" if scenario is None else str(scenario)
+
+
+def prepare_scenario(config: ScenarioConfig, source: str, agents: list[str] | None,
+                     lidar: Mapping[str, Any] | None, control_period: float,
+                     need_goal: bool = True) -> tuple[ScenarioConfig, list[str]]:
+    """The scenario the agents drive: their controllers removed, a LiDAR that scans once per
+    control period (overrides from ``lidar``), a goal each. Returns (config, agent names).
+
+    Errors name the key path, as for a scenario file.
+    """
+    data = config.model_dump()
+    names = [r["name"] for r in data["robots"]]
+    agents = names[:1] if agents is None else list(agents)
+    for name in agents:
+        if name not in names:
+            raise ScenarioError(source, "robots", f"no robot named '{name}' (robots: {names})")
+    overrides = dict(lidar or {})
+    for name in agents:
+        index = names.index(name)
+        robot = data["robots"][index]
+        controller = robot.pop("controller", None) or {}
+        if robot.get("goal") is None and controller.get("goal") is not None:
+            robot["goal"] = {"position": controller["goal"]}
+        if need_goal and robot.get("goal") is None:
+            raise ScenarioError(source, f"robots[{index}].goal",
+                                "the navigation task needs a goal (or random_goal=True)")
+        scan = dict(robot.get("lidar") or {})
+        scan["rate"] = 1.0 / control_period  # one fresh scan per action
+        scan.update(overrides)
+        robot["lidar"] = scan
+    prepared = parse_scenario(data, source)
+    for name in agents:
+        beams = prepared.robots[names.index(name)].lidar.beams
+        if beams > MAX_BEAMS:
+            raise ScenarioError(source, f"robots[{names.index(name)}].lidar.beams",
+                                f"at most {MAX_BEAMS} beams in an observation (got {beams})")
+    return prepared, agents
+
+
+def sample_goal(sim, robot, rng: np.random.Generator) -> tuple[float, float]:
+    """A goal in free space: clear of every obstacle by the robot's radius and a margin, and
+    at least GOAL_MIN_DISTANCE from the robot."""
+    import pymunk
+
+    world = sim.world
+    clearance = robot.radius + 0.1  # [m]
+    everything = pymunk.ShapeFilter()
+    x0, y0 = robot.pose[:2]
+    for _ in range(GOAL_SAMPLE_TRIES):
+        x = float(rng.uniform(clearance, world.width - clearance))
+        y = float(rng.uniform(clearance, world.height - clearance))
+        if math.hypot(x - x0, y - y0) < GOAL_MIN_DISTANCE:
+            continue
+        if world.space.point_query_nearest((x, y), clearance, everything) is None:
+            return x, y
+    raise RuntimeError(f"no free goal found in {GOAL_SAMPLE_TRIES} tries: the arena is too "
+                       "crowded for random_goal")
+
+
+class RobotTask:
+    """One robot's view of the navigation task inside a running simulation.
+
+    Call :meth:`start` after the simulation is (re)built, :meth:`act` before the physics
+    advances and :meth:`observe` / :meth:`outcome` after.
+    """
+
+    def __init__(self, robot_config, arena: tuple[float, float], weights: RewardWeights,
+                 pose_source: str = "ground_truth") -> None:
+        if pose_source not in ("ground_truth", "odometry"):
+            raise ValueError(f"pose_source must be 'ground_truth' or 'odometry' (got {pose_source!r})")
+        self.name = robot_config.name
+        self.weights = weights
+        self.pose_source = pose_source
+        self.v_max, self.omega_max, self.vy_max = drive_limits(robot_config)
+        self.beams = robot_config.lidar.beams
+        self.max_range = robot_config.lidar.max_range  # [m]
+        self.diagonal = math.hypot(*arena)  # [m]
+        self.action_size = 2 if self.vy_max is None else 3
+        self.obs_size = self.beams + 5 + (self.vy_max is not None)
+        self.robot = None
+        self._distance = 0.0  # [m] to the goal at the last observation
+        self._collisions = 0
+
+    # ------------------------------------------------------------------ spaces (as arrays)
+    def obs_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        low = np.full(self.obs_size, -1.0, dtype=np.float32)
+        high = np.ones(self.obs_size, dtype=np.float32)
+        low[: self.beams + 1] = 0.0  # ranges and goal distance are never negative
+        return low, high
+
+    # ------------------------------------------------------------------ episode
+    def start(self, robot) -> None:
+        """Bind to the (re)built robot and remember where the episode starts."""
+        self.robot = robot
+        self._distance = self.goal_distance()
+        self._collisions = robot.collisions
+
+    def act(self, action: np.ndarray) -> None:
+        """Command the normalised body velocity (clipped to [-1, 1])."""
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
+        if a.shape[0] != self.action_size or not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be {self.action_size} finite numbers (got {action!r})")
+        if self.vy_max is None:
+            self.robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max)
+        else:
+            self.robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max, a[2] * self.vy_max)
+
+    def stop(self) -> None:
+        """Hold still (an agent whose episode is over stays in the world as an obstacle)."""
+        if self.vy_max is None:
+            self.robot.set_velocity(0.0, 0.0)
+        else:
+            self.robot.set_velocity(0.0, 0.0, 0.0)
+
+    def pose(self) -> np.ndarray:
+        return self.robot.pose if self.pose_source == "ground_truth" else self.robot.odometry.pose
+
+    def goal_distance(self) -> float:
+        goal = self.robot.goal
+        x, y, _ = self.pose()
+        return math.hypot(goal[0] - x, goal[1] - y)
+
+    def observe(self, out: np.ndarray | None = None) -> np.ndarray:
+        """The observation vector (see the module docstring), written into ``out`` if given."""
+        obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
+        robot, b = self.robot, self.beams
+        obs[:b] = robot.lidar.latest.ranges
+        obs[:b] /= self.max_range
+        x, y, theta = self.pose()
+        gx, gy = robot.goal
+        bearing = math.atan2(gy - y, gx - x) - theta
+        obs[b] = math.hypot(gx - x, gy - y) / self.diagonal
+        obs[b + 1] = math.cos(bearing)
+        obs[b + 2] = math.sin(bearing)
+        body = robot.body
+        c, s = math.cos(body.angle), math.sin(body.angle)
+        vx, vy = body.velocity
+        obs[b + 3] = (c * vx + s * vy) / self.v_max
+        obs[b + 4] = body.angular_velocity / self.omega_max
+        if self.vy_max is not None:
+            obs[b + 5] = (-s * vx + c * vy) / self.vy_max
+        # Contacts can push a robot past its own limits for a moment: keep to the bounds.
+        np.clip(obs, -1.0, 1.0, out=obs)
+        np.clip(obs[: b + 1], 0.0, 1.0, out=obs[: b + 1])
+        return obs
+
+    def outcome(self, elapsed: float, terminate_on_collision: bool = False
+                ) -> tuple[float, bool, dict]:
+        """(reward, terminated, info) for the control step just taken (``elapsed`` seconds)."""
+        robot, w = self.robot, self.weights
+        distance = self.goal_distance()
+        new_collisions = robot.collisions - self._collisions
+        reached = robot.goal_reached
+        reward = (w.progress * (self._distance - distance) + w.collision * new_collisions
+                  + w.time * elapsed + (w.success if reached else 0.0))
+        self._distance = distance
+        self._collisions = robot.collisions
+        info = {"distance_to_goal": distance, "collisions": robot.collisions,
+                "new_collisions": new_collisions, "goal_reached": reached,
+                "is_success": reached}
+        return float(reward), bool(reached or (terminate_on_collision and new_collisions > 0)), info
+
+
+def robot_result(sim, name: str) -> dict:
+    """The result fields of one robot (``Simulation.result()``'s robots entry) plus ``passed``."""
+    result = sim.result()
+    fields_ = dict(result["robots"][name])
+    fields_["passed"] = result["passed"]
+    return fields_

@@ -1,0 +1,139 @@
+"""Per parameter value: how many runs, how many passed, mean and spread of every metric."""
+from __future__ import annotations
+
+import math
+import statistics
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+# Shown in the printed table (every numeric field is in the Summary); per robot, by suffix.
+HEADLINE = ("goal_reached", "time_to_goal", "collisions", "min_clearance")
+NOT_METRICS = {"run", "seed", "steps", "sim_time"}
+
+
+@dataclass(frozen=True)
+class Stat:
+    n: int  # runs with a value (time_to_goal is empty when the goal was not reached)
+    mean: float
+    std: float  # sample standard deviation (0 for one value)
+
+
+@dataclass(frozen=True)
+class Group:
+    key: str  # the swept key path, or "all"
+    value: Any
+    runs: int
+    pass_rate: float  # [0, 1]
+    metrics: dict[str, Stat]
+
+
+def metric_columns(rows: list[dict], swept: list[str]) -> list[str]:
+    """Numeric and boolean result columns (pose components and the like excluded)."""
+    columns: dict[str, None] = {}
+    for row in rows:
+        for key, value in row.items():
+            if key in NOT_METRICS or key in swept or "[" in key or key == "passed":
+                continue
+            if isinstance(value, (bool, int, float)) and value is not None:
+                columns.setdefault(key, None)
+    return list(columns)
+
+
+def _stat(values: list[float]) -> Stat | None:
+    values = [float(v) for v in values if v is not None and not
+              (isinstance(v, float) and math.isnan(v))]
+    if not values:
+        return None
+    std = statistics.stdev(values) if len(values) > 1 else 0.0
+    return Stat(len(values), statistics.fmean(values), std)
+
+
+def summarize(rows: list[dict], swept: list[str]) -> list[Group]:
+    """One group per (swept key, value) in first-seen order; one "all" group without keys."""
+    metrics = metric_columns(rows, swept)
+    keys = swept or ["all"]
+    groups = []
+    for key in keys:
+        values: dict[str, Any] = {}
+        for row in rows:
+            value = row.get(key, "all")
+            values.setdefault(repr(value), value)
+        for label, value in values.items():
+            members = [r for r in rows if repr(r.get(key, "all")) == label]
+            stats = {m: s for m in metrics
+                     if (s := _stat([r.get(m) for r in members])) is not None}
+            passed = sum(bool(r.get("passed")) for r in members)
+            groups.append(Group(key, value, len(members), passed / len(members), stats))
+    return groups
+
+
+def format_table(groups: list[Group]) -> str:
+    """The printed summary: pass rate and the headline metrics, mean +- std."""
+    if not groups:
+        return "(no runs)"
+    shown = [m for m in groups[0].metrics if m.rsplit(".", 1)[-1] in HEADLINE]
+    header = ["parameter", "value", "runs", "pass"] + shown
+    lines = [header]
+    for g in groups:
+        cells = [g.key, str(g.value), str(g.runs), f"{100 * g.pass_rate:.0f}%"]
+        for m in shown:
+            s = g.metrics.get(m)
+            if s is None:
+                cells.append("-")
+            elif m.endswith("goal_reached"):
+                cells.append(f"{100 * s.mean:.0f}%")
+            else:
+                cells.append(f"{s.mean:.3g} ± {s.std:.2g}" + (f" (n={s.n})" if s.n < g.runs
+                                                              else ""))
+        lines.append(cells)
+    widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip()
+                     for line in lines)
+
+
+def plot_summary(groups: list[Group], path: str | Path) -> None:
+    """Pass rate and headline metrics (mean, error bar = std) against each swept value."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..results import temp_beside
+
+    keys = list(dict.fromkeys(g.key for g in groups))
+    shown = [m for m in groups[0].metrics if m.rsplit(".", 1)[-1] in HEADLINE] if groups else []
+    panels = ["pass rate"] + shown
+    fig, axes = plt.subplots(len(keys), len(panels), squeeze=False,
+                             figsize=(3.2 * len(panels), 2.6 * len(keys)))
+    for row, key in enumerate(keys):
+        mine = [g for g in groups if g.key == key]
+        labels = [str(g.value) for g in mine]
+        x = range(len(mine))
+        for col, panel in enumerate(panels):
+            ax = axes[row][col]
+            if panel == "pass rate":
+                ax.bar(x, [100 * g.pass_rate for g in mine], color="tab:green")
+                ax.set_ylim(0, 100)
+                ax.set_ylabel("passed [%]")
+            elif panel.endswith("goal_reached"):  # a rate, like the pass rate
+                ax.bar(x, [100 * g.metrics[panel].mean if panel in g.metrics else 0.0
+                           for g in mine], color="tab:blue")
+                ax.set_ylim(0, 100)
+                ax.set_ylabel(f"{panel} [%]")
+            else:
+                means = [g.metrics[panel].mean if panel in g.metrics else math.nan for g in mine]
+                stds = [g.metrics[panel].std if panel in g.metrics else 0.0 for g in mine]
+                ax.errorbar(list(x), means, yerr=stds, fmt="o-", capsize=3)
+                ax.set_ylabel(panel)
+            ax.set_xticks(list(x), labels)
+            ax.set_xlabel(key)
+    fig.tight_layout()
+    path = Path(path)
+    tmp = temp_beside(path, path.suffix or ".png")
+    try:
+        fig.savefig(tmp)
+        Path(tmp).replace(path)
+    finally:
+        plt.close(fig)
+        Path(tmp).unlink(missing_ok=True)

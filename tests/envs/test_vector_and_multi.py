@@ -1,0 +1,155 @@
+"""The native vector env (lockstep, autoreset) and the PettingZoo multi-robot env."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+
+import pymunk_bot.envs  # noqa: E402,F401
+from pymunk_bot.envs import NavigationEnv, NavigationVectorEnv  # noqa: E402
+from gymnasium.vector import AutoresetMode  # noqa: E402
+
+
+def short_task(duration=0.5) -> dict:
+    """Goal 0.6 m straight ahead: full speed reaches it in about 0.6 s."""
+    return {"name": "short", "world": {"size": [4.0, 3.0], "duration": duration},
+            "robots": [{"name": "r1", "pose": [1.0, 1.5, 0.0],
+                        "lidar": {"beams": 12, "max_range": 5.0, "noise_std": 0.01},
+                        "goal": {"position": [1.6, 1.5], "tolerance": 0.1}}]}
+
+
+def test_make_vec_uses_the_native_vector_env():
+    envs = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=3,
+                        vectorization_mode="vector_entry_point", lidar={"beams": 30})
+    assert isinstance(envs.unwrapped, NavigationVectorEnv)
+    obs, info = envs.reset(seed=5)
+    assert obs.shape == (3, 35) and obs.dtype == np.float32
+    assert envs.observation_space.contains(obs)
+    obs, rewards, terminated, truncated, info = envs.step(envs.action_space.sample())
+    assert rewards.shape == (3,) and terminated.dtype == np.bool_
+    assert info["collisions"].shape == (3,)
+    envs.close()
+
+
+def test_slot_i_plays_the_single_env_episode_of_seed_plus_i():
+    envs = NavigationVectorEnv(num_envs=3, scenario=short_task(duration=2.0))
+    singles = [NavigationEnv(short_task(duration=2.0)) for _ in range(3)]
+    obs, _ = envs.reset(seed=10)
+    for i, env in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], env.reset(seed=10 + i)[0])
+    actions = np.random.default_rng(1).uniform(-1, 1, size=(8, 3, 2)).astype(np.float32)
+    for batch in actions:
+        obs, rewards, *_ = envs.step(batch)
+        for i, env in enumerate(singles):
+            single_obs, reward, *_ = env.step(batch[i])
+            np.testing.assert_array_equal(obs[i], single_obs)
+            assert rewards[i] == reward
+
+
+def test_next_step_autoreset_follows_gymnasium():
+    envs = NavigationVectorEnv(num_envs=2, scenario=short_task(duration=1.0))
+    envs.reset(seed=0)
+    stop_and_go = np.array([[1.0, 0.0], [0.0, 0.0]], np.float32)
+    history = [envs.step(stop_and_go) for _ in range(10)]  # 1 s of 0.1 s steps
+    # Slot 0 drives to the goal (terminated), slot 1 stands still until the 1 s limit.
+    k = next(i for i, h in enumerate(history) if h[2][0])
+    assert k < 9 and history[k][4]["result"]["goal_reached"][0]
+    assert history[9][3][1] and not history[9][2][1]
+    obs, rewards, terminated, truncated, info = history[k + 1]  # slot 0's reset step
+    assert rewards[0] == 0.0 and not terminated[0] and not truncated[0]
+    assert info["_sim_seed"][0] and not info["_sim_seed"][1]  # only slot 0 was reset
+    assert obs[0, 12] == pytest.approx(0.6 / np.hypot(4.0, 3.0), abs=1e-6)  # back at the start
+
+
+def test_same_step_autoreset_returns_the_final_observation():
+    envs = NavigationVectorEnv(num_envs=1, scenario=short_task(duration=0.3),
+                               autoreset_mode=AutoresetMode.SAME_STEP)
+    envs.reset(seed=0)
+    truncated = np.array([False])
+    while not truncated[0]:
+        obs, _, _, truncated, info = envs.step(np.zeros((1, 2), np.float32))
+    assert info["_final_obs"][0] and info["final_info"]["time"][0] == pytest.approx(0.3)
+    assert info["final_info"]["result"]["goal_reached"][0] is np.False_ or \
+        not info["final_info"]["result"]["goal_reached"][0]
+    assert envs.episodes[0].sim.time == 0.0  # already reset
+
+
+def test_reset_mask_resets_only_the_chosen_slots():
+    envs = NavigationVectorEnv(num_envs=2, scenario=short_task(duration=2.0))
+    envs.reset(seed=0)
+    envs.step(np.ones((2, 2), np.float32))
+    envs.reset(options={"reset_mask": np.array([True, False])})
+    assert envs.episodes[0].sim.time == 0.0 and envs.episodes[1].sim.time > 0.0
+
+
+def test_vector_rgb_array_gives_one_frame_per_env():
+    envs = NavigationVectorEnv(num_envs=2, scenario=short_task(), render_mode="rgb_array")
+    envs.reset(seed=0)
+    frames = envs.render()
+    assert len(frames) == 2 and frames[0].dtype == np.uint8 and frames[0].shape[2] == 3
+    envs.close()
+
+
+def test_bad_num_envs_is_refused():
+    with pytest.raises(ValueError):
+        NavigationVectorEnv(num_envs=0)
+
+
+# ---------------------------------------------------------------------------- PettingZoo
+
+def test_multi_robot_env_passes_the_parallel_api_test():
+    pytest.importorskip("pettingzoo")
+    from pettingzoo.test import parallel_api_test
+
+    from pymunk_bot.envs import MultiRobotEnv
+
+    parallel_api_test(MultiRobotEnv("head_on_swap", lidar={"beams": 36}), num_cycles=100)
+
+
+def two_robots() -> dict:
+    return {"name": "pair", "world": {"size": [6.0, 4.0], "duration": 5.0},
+            "robots": [{"name": "a", "pose": [1.0, 1.0, 0.0], "lidar": {"beams": 8},
+                        "goal": {"position": [1.8, 1.0], "tolerance": 0.1}},
+                       {"name": "b", "pose": [1.0, 3.0, 0.0], "lidar": {"beams": 8},
+                        "goal": {"position": [5.0, 3.0], "tolerance": 0.1}}]}
+
+
+def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
+    pytest.importorskip("pettingzoo")
+    from pymunk_bot.envs import MultiRobotEnv
+
+    env = MultiRobotEnv(two_robots())
+    obs, _ = env.reset(seed=0)
+    assert env.agents == ["a", "b"] and obs["a"].shape == (13,)
+    for _ in range(30):
+        obs, rewards, terminations, truncations, infos = env.step(
+            {a: np.array([1.0, 0.0], np.float32) for a in env.agents})
+        if terminations.get("a"):
+            break
+    assert terminations["a"] and infos["a"]["result"]["goal_reached"]
+    assert env.agents == ["b"]
+    x_a = env.sim.robots["a"].pose[0]
+    for _ in range(4):  # braking from 1 m/s at 3 m/s^2 takes 1/3 s and 1/6 m
+        env.step({"b": np.array([1.0, 0.0], np.float32)})
+    x_stopped = env.sim.robots["a"].pose[0]
+    assert x_stopped - x_a == pytest.approx(1.0 / 6.0, abs=0.02)
+    env.step({"b": np.array([1.0, 0.0], np.float32)})
+    assert env.sim.robots["a"].pose[0] == pytest.approx(x_stopped, abs=1e-6)
+    assert env.state().shape == (6,)
+
+
+def test_one_call_advances_every_world_per_vector_step(monkeypatch):
+    """The seam a batched core replaces: one advance(sims, steps) call per step, all worlds."""
+    import pymunk_bot.envs.vector as vector
+
+    calls = []
+    real = vector.advance
+    monkeypatch.setattr(vector, "advance", lambda sims, steps: (calls.append((len(sims), steps)),
+                                                                real(sims, steps)))
+    envs = NavigationVectorEnv(num_envs=4, scenario=short_task(duration=2.0))
+    envs.reset(seed=0)
+    envs.step(np.zeros((4, 2), np.float32))
+    envs.step(np.zeros((4, 2), np.float32))
+    assert calls == [(4, 6), (4, 6)]  # 0.1 s = 6 physics steps of 1/60 s
+    assert all(e.sim.time == pytest.approx(0.2) for e in envs.episodes)
