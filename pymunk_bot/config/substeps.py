@@ -28,13 +28,27 @@ def half_width(obstacle) -> float:
     return geo.thinness(obstacle_outline(obstacle)) / 2.0
 
 
+def map_half_widths(scenario: ScenarioConfig) -> list[float]:
+    """Half widths of a ``world.map``'s shapes: a convex piece's thinnest extent, and a
+    segment's radius (0 for the zero-width chains around free space: then only the robot's
+    own radius keeps it from crossing, so the depth is the radius alone)."""
+    geometry = scenario.world.map_geometry()
+    if geometry is None:
+        return []
+    widths = [geo.thinness(piece) / 2.0 for piece in geometry.polygons]
+    if len(geometry.segment_radius):
+        widths.append(float(geometry.segment_radius.min()))
+    return widths
+
+
 def required_substeps(scenario: ScenarioConfig) -> int:
     """Substeps for the fastest robot against the thinnest obstacle (and robots head-on)."""
     dt = scenario.world.dt
     robots = scenario.robots
     fastest = max(r.top_speed() for r in robots)
     smallest = min(r.radius for r in robots)
-    thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles])
+    thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles]
+                   + map_half_widths(scenario))
     substeps = substeps_against_tunnelling(dt, fastest, smallest, thinnest)
     if len(robots) > 1:  # two robots closing head-on
         substeps = max(substeps, substeps_against_tunnelling(dt, 2 * fastest, smallest, smallest))
