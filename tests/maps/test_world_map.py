@@ -234,3 +234,29 @@ def test_map_command_round_trips_a_map_scenario(tmp_path):
     again = load_world_map(out).grid
     assert again.origin == pytest.approx(first.origin) and again.resolution == first.resolution
     assert np.array_equal(again.data, first.data)
+
+
+def _grid_of(mask: np.ndarray):
+    from pymunk_bot.maps.grid import OccupancyGrid
+    return OccupancyGrid(np.where(mask, 100, 0).astype(np.int8), RES)
+
+
+def test_a_rasterised_rotated_box_is_one_shape_and_a_diagonal_wall_has_no_gap():
+    import pymunk
+
+    from pymunk_bot.maps.geometry import add_to_space, geometry_from_grid
+
+    yy, xx = (np.mgrid[:120, :120] + 0.5) * RES
+    u = (xx - 3.0) * math.cos(0.4) + (yy - 3.0) * math.sin(0.4)
+    v = -(xx - 3.0) * math.sin(0.4) + (yy - 3.0) * math.cos(0.4)
+    box = (np.abs(u) <= 1.0) & (np.abs(v) <= 0.5)
+    assert len(geometry_from_grid(_grid_of(box)).polygons) == 1  # not a staircase of pieces
+    wall = np.zeros((120, 120), dtype=bool)
+    k = np.arange(10, 110)
+    wall[k, k] = True  # one cell thick, cells touching only at their corners
+    space = pymunk.Space()
+    add_to_space(space, geometry_from_grid(_grid_of(wall)))
+    for t in np.linspace(0.6, 5.3, 95):  # rays across the wall between every pair of cells
+        hit = space.segment_query_first((t + 0.4, t - 0.4), (t - 0.4, t + 0.4), 0.0,
+                                        pymunk.ShapeFilter())
+        assert hit is not None
