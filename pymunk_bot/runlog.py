@@ -76,6 +76,12 @@ class RunLog:
         """Arena interior width and height [m]."""
         return float(self.meta["width"]), float(self.meta["height"])
 
+    @property
+    def origin(self) -> tuple[float, float]:
+        """The arena's lower-left corner [m] (a map's origin; logs without one: 0, 0)."""
+        x0, y0 = self.meta.get("origin", (0.0, 0.0))
+        return float(x0), float(y0)
+
     def fixed_shapes(self) -> list[ShapeGeometry]:
         """The arena walls and fixed obstacles (world frame)."""
         return [_geometry_from_json(g, False) for g in self.meta["fixed"]]
@@ -140,7 +146,7 @@ class RunLogger:
         self._meta = {
             "format": FORMAT, "version": VERSION, "scenario": sim.config.name,
             "seed": sim.seed, "dt": sim.dt, "width": sim.world.width,
-            "height": sim.world.height, "robots": robots,
+            "height": sim.world.height, "origin": list(sim.world.extent[:2]), "robots": robots,
             "fixed": [_geometry_to_json(g) for g in fixed],
             "movable": [{"obstacle": i, "shapes": [_geometry_to_json(g) for g in shapes]}
                         for i, shapes in movable],

@@ -20,9 +20,12 @@ class World:
     def __init__(self, config: ScenarioConfig) -> None:
         self.config = config
         self.width, self.height = config.world.size
+        # (x0, y0, x1, y1) [m]: [0, width] x [0, height], or a map's extent in the map's frame
+        self.extent: tuple[float, float, float, float] = config.world.extent
         self.space = physics.new_space(
             pushable=any(getattr(o, "movable", False) for o in config.obstacles))
-        self.arena_shapes = self._build_arena()
+        self.map = config.world.map_geometry()  # a MapGeometry, or None
+        self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
         self.obstacles: list[Obstacle] = [
             obstacle_kinds.get(o.type)(self.space, o) for o in config.obstacles]
         self.actors: list[Any] = []
@@ -44,6 +47,11 @@ class World:
             shapes.append(shape)
         self.space.add(*shapes)
         return shapes
+
+    def _build_map(self) -> list[pymunk.Shape]:
+        """The map's static geometry instead of the four arena walls (its edge is closed)."""
+        from .maps.geometry import add_to_space
+        return add_to_space(self.space, self.map, self.config.world.wall_friction, physics.STATIC)
 
     def ray_caster(self) -> Any:
         """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:

@@ -11,6 +11,7 @@ from . import semantics
 from .assemble import scenario_model
 from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
+from .world_map import attach_map
 from .yaml_source import line_of, parse_yaml
 
 PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"
@@ -53,7 +54,10 @@ def resolve(spec: str | Path | None) -> Path:
 
 
 def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
-    """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers."""
+    """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers.
+
+    ``source`` names the data in errors; when it is a file's path, a relative ``world.map`` is
+    resolved against that file's directory (else against the current directory)."""
     if not isinstance(data, dict):
         raise ScenarioError(source, "", "the file must be a YAML mapping of scenario keys "
                                         f"(got {type(data).__name__})")
@@ -70,6 +74,7 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise ScenarioError(source, path, describe(first, owner) + more,
                             line_of(node, clean_loc)) from None
+    config = attach_map(config, source, node)
     try:
         semantics.check(config)
     except semantics.SemanticError as exc:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import Field, PrivateAttr
 
 from .types import (
     Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
@@ -22,12 +22,34 @@ MAX_ACCEL = 50.0  # [m/s^2]: 5 g, beyond what wheels on a floor can transmit
 
 
 class WorldConfig(Section):
-    size: tuple[Length, Length]  # arena interior width, height [m]
+    """The arena: a ``size`` (walls around [0, w] x [0, h]) or a ``map`` file (its extent)."""
+
+    # arena interior width, height [m]; with ``map`` left out (filled in from the map's extent)
+    size: tuple[Length, Length] | None = None
+    map: str | None = None  # ROS map YAML or SVG plan, relative to the scenario file
+    map_scale: PositiveFloat | None = None  # SVG only: metres per SVG user unit (default 0.01)
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
     # pymunk steps per dt; None = computed so nothing tunnels
     substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
     duration: PositiveFloat = 30.0  # default run length [s]
     wall_friction: NonNegativeFloat = 0.5  # contact friction of the arena walls
+    _map_path: str | None = PrivateAttr(default=None)  # ``map`` resolved (config.world_map)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1) [m] of the arena: the map's extent, else (0, 0, width, height)."""
+        geometry = self.map_geometry()
+        if geometry is not None:
+            return tuple(float(v) for v in geometry.extent)  # type: ignore[return-value]
+        assert self.size is not None  # parse_scenario guarantees one of size and map
+        return (0.0, 0.0, float(self.size[0]), float(self.size[1]))
+
+    def map_geometry(self) -> Any:
+        """The :class:`~pymunk_bot.maps.geometry.MapGeometry` of ``map`` (loaded once), or None."""
+        if self.map is None:
+            return None
+        from .world_map import map_geometry
+        return map_geometry(self)
 
 
 # ---------------------------------------------------------------------------- obstacles

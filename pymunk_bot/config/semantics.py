@@ -56,14 +56,21 @@ def _check_wall(index: int, wall: WallObstacle) -> None:
 
 
 def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
-    width, height = scenario.world.size
     x, y, _ = robot.pose
     r = robot.radius
-    if not (r <= x <= width - r and r <= y <= height - r):
-        raise SemanticError(
-            ("robots", index, "pose"),
-            f"robot of radius {r:g} at ({x:g}, {y:g}) is not inside the arena "
-            f"[0, {width:g}] x [0, {height:g}]")
+    geometry = scenario.world.map_geometry()
+    if geometry is not None:
+        from .world_map import disc_problem
+        problem = disc_problem(geometry, x, y, r)
+        if problem is not None:
+            raise SemanticError(("robots", index, "pose"), f"robot of radius {r:g} at {problem}")
+    else:
+        width, height = scenario.world.size
+        if not (r <= x <= width - r and r <= y <= height - r):
+            raise SemanticError(
+                ("robots", index, "pose"),
+                f"robot of radius {r:g} at ({x:g}, {y:g}) is not inside the arena "
+                f"[0, {width:g}] x [0, {height:g}]")
     for k, obstacle in enumerate(scenario.obstacles):
         if distance_to_obstacle((x, y), obstacle) < r - 1e-9:
             raise SemanticError(
@@ -75,6 +82,13 @@ def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig)
 
 
 def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
+    geometry = scenario.world.map_geometry()
+    if geometry is not None:
+        from .world_map import disc_problem
+        problem = disc_problem(geometry, float(point[0]), float(point[1]), 0.0)
+        if problem is not None:
+            raise SemanticError(loc, problem)
+        return
     width, height = scenario.world.size
     if not (0 <= point[0] <= width and 0 <= point[1] <= height):
         raise SemanticError(loc, f"({point[0]:g}, {point[1]:g}) is outside the arena "
@@ -104,6 +118,9 @@ def check(scenario: ScenarioConfig) -> None:
         controller_goal = getattr(robot.controller, "goal", None)
         if controller_goal is not None:
             _check_point_in_arena(("robots", i, "controller", "goal"), controller_goal, scenario)
+        if scenario.world.map is not None:  # on a map, waypoints must lie in free space too
+            for k, point in enumerate(getattr(robot.controller, "points", None) or ()):
+                _check_point_in_arena(("robots", i, "controller", "points", k), point, scenario)
     if scenario.world.substeps is None:
         from .schema import MAX_SUBSTEPS
         from .substeps import required_substeps

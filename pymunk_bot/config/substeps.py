@@ -39,6 +39,19 @@ def substeps_against_overlap(dt: float, closing_speed: float) -> int:
     return max(1, math.ceil(closing_speed * dt / CONTACT_STEP))
 
 
+def map_half_widths(scenario: ScenarioConfig) -> list[float]:
+    """Half widths of a ``world.map``'s shapes: a convex piece's thinnest extent, and a
+    segment's radius (0 for the zero-width chains around free space: then only the robot's
+    own radius keeps it from crossing, so the depth is the radius alone)."""
+    geometry = scenario.world.map_geometry()
+    if geometry is None:
+        return []
+    widths = [geo.thinness(piece) / 2.0 for piece in geometry.polygons]
+    if len(geometry.segment_radius):
+        widths.append(float(geometry.segment_radius.min()))
+    return widths
+
+
 def required_substeps(scenario: ScenarioConfig) -> int:
     """Substeps so that nothing tunnels and no contact starts deeper than CONTACT_STEP.
 
@@ -52,7 +65,8 @@ def required_substeps(scenario: ScenarioConfig) -> int:
                                            if getattr(o, "movable", False)]
     smallest = min(movers)
     thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles
-                                                 if not getattr(o, "movable", False)])
+                                                 if not getattr(o, "movable", False)]
+                   + map_half_widths(scenario))
     closing = 2 * fastest if len(robots) > 1 else fastest  # two robots head-on
     return max(substeps_against_tunnelling(dt, fastest, smallest, thinnest),
                substeps_against_tunnelling(dt, closing, smallest, smallest),

@@ -179,10 +179,8 @@ class NavigateController(Controller):
             world = np.column_stack([x + c * points[:, 0] - s * points[:, 1],
                                      y + s * points[:, 0] + c * points[:, 1]])
             grid = self.static
-            cols = np.clip((world[:, 0] / res).astype(int), 0, grid.cols - 1)
-            rows = np.clip((world[:, 1] / res).astype(int), 0, grid.rows - 1)
-            inside = ((world[:, 0] > 0) & (world[:, 0] < grid.size[0])
-                      & (world[:, 1] > 0) & (world[:, 1] < grid.size[1]))
+            rows, cols = grid.cells_of(world[:, 0], world[:, 1])
+            inside = grid.inside(world[:, 0], world[:, 1])
             unexplained = inside & (grid.clearance[rows, cols] > 2.0 * res)
             for (px, py), r, k in zip(world[unexplained], rows[unexplained], cols[unexplained]):
                 self.unmapped[(int(r), int(k))] = (float(px), float(py))

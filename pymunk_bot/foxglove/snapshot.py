@@ -80,7 +80,7 @@ def geometry_of_sim(sim) -> RunGeometry:
     meta = {
         "format": "pymunk-bot run log", "version": 1, "scenario": sim.config.name,
         "seed": sim.seed, "dt": sim.dt, "width": sim.world.width, "height": sim.world.height,
-        "robots": robots, "fixed": [geometry_to_json(g) for g in fixed],
+        "origin": list(sim.world.extent[:2]), "robots": robots, "fixed": [geometry_to_json(g) for g in fixed],
         "movable": [{"obstacle": i, "shapes": [geometry_to_json(g) for g in shapes]}
                     for i, shapes in movable],
     }

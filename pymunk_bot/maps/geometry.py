@@ -23,6 +23,8 @@ from pymunk import autogeometry
 from .grid import OCCUPIED_THRESH, OccupancyGrid
 
 MAX_DECOMPOSE_VERTICES = 2000  # larger islands stay segment chains (decomposition is quadratic)
+PINHOLE_CELLS = 4.0  # [cells] enclosed free pockets up to this area become solid
+DECOMPOSE_TOLERANCE = 1.0  # [cells] concavity depth an island's convex pieces may fill
 
 
 @dataclass(frozen=True)
@@ -87,16 +89,21 @@ def geometry_from_grid(grid: OccupancyGrid, occupied_thresh: float = OCCUPIED_TH
     """Trace the solid cells of ``grid`` into convex pieces and segment chains (see module doc)."""
     solid = solid_cells(grid, occupied_thresh, unknown_is_solid)
     padded = np.pad(solid, 1, constant_values=True)  # outside the map is solid: outlines close
-    loops = [_simplify(loop) for loop in trace_outlines(padded)]
+    loops = [_simplify(straighten(loop)) for loop in trace_outlines(padded)]
     loops = [loop for loop in loops if len(loop) >= 4]  # closed: first point repeated
     areas = np.array([_signed_area(loop) for loop in loops])
     islands = [i for i in range(len(loops)) if areas[i] > 0]
-    rims = [i for i in range(len(loops)) if areas[i] < 0]
+    # Pinholes (free pockets of a few cells inside solid, e.g. where rasterised boxes overlap)
+    # are filled: no robot fits, no ray gets in, and kept they would turn their whole island
+    # into segment chains.
+    rims = [i for i in range(len(loops)) if areas[i] < -PINHOLE_CELLS]
     enclosing = _islands_enclosing(loops, islands, rims)
     polygons: list[np.ndarray] = []
     chains: list[np.ndarray] = []
     for i in islands:
-        pieces = None if i in enclosing else convex_pieces(loops[i], 0.5)  # half a cell
+        # Concavities up to a cell deep are filled: where rasterised boxes meet, the notches
+        # between them would otherwise each cost a piece (and LiDAR time).
+        pieces = None if i in enclosing else convex_pieces(loops[i], DECOMPOSE_TOLERANCE)
         if pieces is None:
             chains.append(loops[i])
         else:
@@ -182,6 +189,32 @@ def _runs(solid: np.ndarray, vertical: bool) -> tuple[np.ndarray, np.ndarray]:
     if vertical:
         return np.stack([line, a], axis=1), np.stack([line, b], axis=1)
     return np.stack([a, line], axis=1), np.stack([b, line], axis=1)
+
+
+def straighten(loop: np.ndarray) -> np.ndarray:
+    """A staircase loop (cell edges) as the points a half-cell Douglas-Peucker can straighten.
+
+    A staircase zigzags half a cell either side of the line it stands for, too far for a
+    half-cell tolerance. Along a staircase the turns alternate left and right and every step
+    has a one-cell edge; at a real corner two turns in a row go the same way, or both edges
+    are longer. So every edge's midpoint is kept, and a vertex only where it is a real corner:
+    a rotated box's stairs become the lines through their edges' midpoints (within half a cell
+    of the cells) and its corners stay. Both sides of a one-cell diagonal wall stay apart (half
+    a cell either side of its centre line).
+    """
+    points = loop[:-1]
+    if len(points) < 4:
+        return loop
+    incoming = points - np.roll(points, 1, axis=0)  # edge ending at each vertex
+    outgoing = np.roll(incoming, -1, axis=0)
+    turn = np.sign(incoming[:, 0] * outgoing[:, 1] - incoming[:, 1] * outgoing[:, 0])
+    step = np.minimum(np.abs(incoming).sum(axis=1), np.abs(outgoing).sum(axis=1)) <= 1.0 + 1e-9
+    corner = (turn == np.roll(turn, 1)) | (turn == np.roll(turn, -1)) | ~step
+    midpoints = points + 0.5 * outgoing  # of the edge starting at each vertex
+    both = np.stack([points, midpoints], axis=1).reshape(-1, 2)
+    keep = np.stack([corner, np.ones(len(points), dtype=bool)], axis=1).reshape(-1)
+    out = both[keep]
+    return np.vstack([out, out[:1]])
 
 
 def _simplify(loop: np.ndarray) -> np.ndarray:

@@ -82,7 +82,7 @@ def astar(grid: ClearanceGrid, start, goal, hard: float, soft: float, weight: fl
             return result
         result.notes.append("start was too close to an obstacle; path leaves it first")
     goal_cell = grid.cell_of(gx, gy)
-    if not (0 <= gx <= grid.size[0] and 0 <= gy <= grid.size[1]):
+    if not grid.inside(gx, gy):
         result.reason = f"goal ({gx:.2f}, {gy:.2f}) is outside the arena"
         return result
     if not free[goal_cell]:

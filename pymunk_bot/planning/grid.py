@@ -48,29 +48,32 @@ def points_in_polygon(px: np.ndarray, py: np.ndarray, points: np.ndarray) -> np.
 class ClearanceGrid:
     """Cells of ``resolution`` metres covering the arena; ``clearance[row, col]`` in metres.
 
-    Row i, column j has its centre at ``((j + 0.5) * res, (i + 0.5) * res)``.
+    Row i, column j has its centre at ``origin + ((j + 0.5) * res, (i + 0.5) * res)``.
     """
 
-    def __init__(self, size: tuple[float, float], resolution: float, cap: float) -> None:
+    def __init__(self, size: tuple[float, float], resolution: float, cap: float,
+                 origin: tuple[float, float] = (0.0, 0.0)) -> None:
         if not (resolution > 0 and cap > 0):
             raise ValueError("resolution and cap must be > 0")
         self.size = (float(size[0]), float(size[1]))
+        self.origin = (float(origin[0]), float(origin[1]))  # [m] the arena's lower-left corner
         self.resolution = float(resolution)
         self.cap = float(cap)  # [m] clearances beyond this read as this
         self.cols = max(1, math.ceil(self.size[0] / resolution - 1e-9))
         self.rows = max(1, math.ceil(self.size[1] / resolution - 1e-9))
-        self.xs = (np.arange(self.cols) + 0.5) * resolution  # cell centre x [m]
-        self.ys = (np.arange(self.rows) + 0.5) * resolution  # cell centre y [m]
+        ox, oy = self.origin
+        self.xs = ox + (np.arange(self.cols) + 0.5) * resolution  # cell centre x [m]
+        self.ys = oy + (np.arange(self.rows) + 0.5) * resolution  # cell centre y [m]
         width, height = self.size
-        to_wall_x = np.minimum(self.xs, width - self.xs)
-        to_wall_y = np.minimum(self.ys, height - self.ys)
+        to_wall_x = np.minimum(self.xs - ox, ox + width - self.xs)
+        to_wall_y = np.minimum(self.ys - oy, oy + height - self.ys)
         self.clearance = np.minimum(np.minimum.outer(to_wall_y, to_wall_x), self.cap)
         np.maximum(self.clearance, 0.0, out=self.clearance)
 
     @classmethod
     def from_map(cls, world_map: MapInfo, resolution: float, cap: float) -> "ClearanceGrid":
         """Rasterise a map's arena and every obstacle in it."""
-        grid = cls(world_map.size, resolution, cap)
+        grid = cls(world_map.size, resolution, cap, world_map.origin)
         for polygon in world_map.polygons:
             grid.add_polygon(polygon.points)
         for circle in world_map.circles:
@@ -87,10 +90,11 @@ class ClearanceGrid:
     def _window(self, x0: float, y0: float, x1: float, y1: float):
         """Index slices of the cells whose centres lie within ``cap`` of a bounding box."""
         res, cap = self.resolution, self.cap
-        c0 = max(0, math.floor((x0 - cap) / res - 0.5))
-        c1 = min(self.cols, math.ceil((x1 + cap) / res + 0.5))
-        r0 = max(0, math.floor((y0 - cap) / res - 0.5))
-        r1 = min(self.rows, math.ceil((y1 + cap) / res + 0.5))
+        ox, oy = self.origin
+        c0 = max(0, math.floor((x0 - ox - cap) / res - 0.5))
+        c1 = min(self.cols, math.ceil((x1 - ox + cap) / res + 0.5))
+        r0 = max(0, math.floor((y0 - oy - cap) / res - 0.5))
+        r1 = min(self.rows, math.ceil((y1 - oy + cap) / res + 0.5))
         if c0 >= c1 or r0 >= r1:
             return None
         return slice(r0, r1), slice(c0, c1)
@@ -126,12 +130,25 @@ class ClearanceGrid:
     # ------------------------------------------------------------------ look-ups
     def cell_of(self, x: float, y: float) -> tuple[int, int]:
         """(row, col) of the cell containing a point, clamped to the grid."""
-        col = min(self.cols - 1, max(0, int(x / self.resolution)))
-        row = min(self.rows - 1, max(0, int(y / self.resolution)))
+        col = min(self.cols - 1, max(0, math.floor((x - self.origin[0]) / self.resolution)))
+        row = min(self.rows - 1, max(0, math.floor((y - self.origin[1]) / self.resolution)))
         return row, col
 
     def center_of(self, row: int, col: int) -> tuple[float, float]:
-        return (col + 0.5) * self.resolution, (row + 0.5) * self.resolution
+        return (self.origin[0] + (col + 0.5) * self.resolution,
+                self.origin[1] + (row + 0.5) * self.resolution)
+
+    def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Which points lie within the arena (boundary included)."""
+        ox, oy = self.origin
+        return (x >= ox) & (x <= ox + self.size[0]) & (y >= oy) & (y <= oy + self.size[1])
+
+    def cells_of(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of the cells containing many points, clamped to the grid."""
+        res = self.resolution
+        cols = np.clip(np.floor((x - self.origin[0]) / res).astype(int), 0, self.cols - 1)
+        rows = np.clip(np.floor((y - self.origin[1]) / res).astype(int), 0, self.rows - 1)
+        return rows, cols
 
     def segment_clearance(self, a, b) -> float:
         """Smallest cell clearance along the straight segment a-b (sampled at res/2)."""
@@ -140,8 +157,6 @@ class ClearanceGrid:
         n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * self.resolution)) + 1)
         t = np.linspace(0.0, 1.0, n)
         x, y = ax + t * (bx - ax), ay + t * (by - ay)
-        outside = (x < 0) | (x > self.size[0]) | (y < 0) | (y > self.size[1])
-        cols = np.clip((x / self.resolution).astype(int), 0, self.cols - 1)
-        rows = np.clip((y / self.resolution).astype(int), 0, self.rows - 1)
-        values = self.clearance[rows, cols]
-        return 0.0 if outside.any() else float(values.min())
+        if not self.inside(x, y).all():
+            return 0.0
+        return float(self.clearance[self.cells_of(x, y)].min())

@@ -39,9 +39,7 @@ def shortcut(grid: ClearanceGrid, path: Sequence[Point], wanted: float) -> list[
     if len(points) <= 2:
         return points
     xy = np.asarray(points)
-    along = grid.clearance[
-        np.clip((xy[:, 1] / grid.resolution).astype(int), 0, grid.rows - 1),
-        np.clip((xy[:, 0] / grid.resolution).astype(int), 0, grid.cols - 1)]
+    along = grid.clearance[grid.cells_of(xy[:, 0], xy[:, 1])]
     corners = _corners(points)
     # Sampling a slanted segment reads cells the grid path did not use; allow for that.
     slack = 0.25 * grid.resolution

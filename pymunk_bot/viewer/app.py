@@ -60,7 +60,8 @@ class Viewer:
     def fit(self) -> None:
         """Show the whole arena."""
         width, height = self.source.size
-        self.camera.fit(0.0, 0.0, width, height)
+        x0, y0 = getattr(self.source, "origin", (0.0, 0.0))
+        self.camera.fit(x0, y0, x0 + width, y0 + height)
 
     def resize(self, viewport: tuple[int, int]) -> None:
         """The window changed size: keep the user's view, or refit if they have not chosen one."""
@@ -235,7 +236,8 @@ class Viewer:
             return
         x, y = self.camera.to_world(px, py)
         width, height = self.source.size
-        if not (0.0 <= x <= width and 0.0 <= y <= height):
+        x0, y0 = getattr(self.source, "origin", (0.0, 0.0))
+        if not (x0 <= x <= x0 + width and y0 <= y <= y0 + height):
             self.say("that is outside the arena")
             return
         robot = self.source.robot(self.selected)

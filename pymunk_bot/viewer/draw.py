@@ -39,12 +39,13 @@ def draw_scene(surface: pygame.Surface, scene: Scene, camera: Camera, layers: La
     all; ``halo`` rings it (the window does, recordings do not).
     """
     surface.fill(pal.BACKGROUND)
-    floor = camera.points_to_screen(np.array([[0.0, 0.0], [scene.width, scene.height]]))
+    ox, oy = scene.origin
+    floor = camera.points_to_screen(np.array([[ox, oy], [ox + scene.width, oy + scene.height]]))
     (x0, y1), (x1, y0) = floor
     pygame.draw.rect(surface, pal.FLOOR, pygame.Rect(round(x0), round(y0),
                                                      round(x1 - x0), round(y1 - y0)))
     if layers.grid:
-        _grid(surface, camera, scene.width, scene.height)
+        _grid(surface, camera, (ox, oy, ox + scene.width, oy + scene.height))
     _shapes(surface, camera, scene.shapes)
     robots = scene.robots
     if layers.rays:
@@ -73,23 +74,25 @@ def draw_scene(surface: pygame.Surface, scene: Scene, camera: Camera, layers: La
             _label(surface, camera, r, font)
 
 
-def _grid(surface: pygame.Surface, camera: Camera, width: float, height: float) -> None:
+def _grid(surface: pygame.Surface, camera: Camera,
+          extent: tuple[float, float, float, float]) -> None:
+    x0, y0, x1, y1 = extent
     spacing = next((s for s in GRID_SPACINGS if s * camera.scale >= MIN_GRID_PX),
                    GRID_SPACINGS[-1])
     major = next((m for m in MAJOR_SPACINGS if m >= 2 * spacing), MAJOR_SPACINGS[-1])
     every = int(round(major / spacing))
-    (left, top), (right, bottom) = camera.points_to_screen(np.array([[0, height], [width, 0]]))
+    (left, top), (right, bottom) = camera.points_to_screen(np.array([[x0, y1], [x1, y0]]))
     sw, sh = surface.get_size()
     # Only lines that can be seen: the arena cut to the visible window.
     wx0, wy1 = camera.to_world(0, 0)
     wx1, wy0 = camera.to_world(sw, sh)
     top_c, bottom_c = max(top, 0), min(bottom, sh)
     left_c, right_c = max(left, 0), min(right, sw)
-    for k in range(max(0, math.ceil(wx0 / spacing)), math.floor(min(wx1, width) / spacing) + 1):
+    for k in range(math.ceil(max(wx0, x0) / spacing), math.floor(min(wx1, x1) / spacing) + 1):
         x = round(camera.to_screen(k * spacing, 0)[0])
         colour = pal.GRID_MAJOR if k % every == 0 else pal.GRID
         pygame.draw.line(surface, colour, (x, top_c), (x, bottom_c))
-    for k in range(max(0, math.ceil(wy0 / spacing)), math.floor(min(wy1, height) / spacing) + 1):
+    for k in range(math.ceil(max(wy0, y0) / spacing), math.floor(min(wy1, y1) / spacing) + 1):
         y = round(camera.to_screen(0, k * spacing)[1])
         colour = pal.GRID_MAJOR if k % every == 0 else pal.GRID
         pygame.draw.line(surface, colour, (left_c, y), (right_c, y))

@@ -85,6 +85,7 @@ class Scene:
     shapes: list[ShapeView]
     robots: list[RobotView]
     title: str = ""
+    origin: tuple[float, float] = (0.0, 0.0)  # [m] the arena's lower-left corner (a map's origin)
 
 
 # ---------------------------------------------------------------------------- geometry

@@ -65,6 +65,11 @@ class LiveSource:
         """Arena interior width and height [m]."""
         return self.sim.world.width, self.sim.world.height
 
+    @property
+    def origin(self) -> tuple[float, float]:
+        """The arena's lower-left corner [m] (a map's origin; else 0, 0)."""
+        return self.sim.world.extent[0], self.sim.world.extent[1]
+
     def step(self) -> None:
         """One physics step, then note trails and new scans."""
         self.sim.step()
@@ -121,7 +126,7 @@ class LiveSource:
                 status=_status(controller),
                 teleop=robot.overridden))
         return Scene(self.sim.world.width, self.sim.world.height, self.sim.time, shapes, robots,
-                     self.sim.config.name)
+                     self.sim.config.name, self.origin)
 
 
 def _status(controller) -> str:
@@ -169,6 +174,11 @@ class ReplaySource:
         """Arena interior width and height [m]."""
         return self.log.size
 
+    @property
+    def origin(self) -> tuple[float, float]:
+        """The arena's lower-left corner [m]."""
+        return self.log.origin
+
     def step(self) -> None:
         """The next logged step (stays on the last one)."""
         if not self.at_end:
@@ -208,7 +218,8 @@ class ReplaySource:
                 scan_hit=hit, collisions=int(log.collisions[i, j]),
                 teleop=bool(log.teleop[i, j])))
         width, height = log.size
-        return Scene(width, height, self.time, shapes, robots, f"replay: {log.meta['scenario']}")
+        return Scene(width, height, self.time, shapes, robots, f"replay: {log.meta['scenario']}",
+                     log.origin)
 
 
 class _Scan:

@@ -107,14 +107,14 @@ def test_diagonal_wall_has_no_gaps_between_touching_corners():
         assert hit < x + RES
 
 
-def test_shipped_office_map_and_floor_plan_draft():
+def test_shipped_office_map_and_floor_plan():
     from pathlib import Path
 
     import yaml
 
     from pymunk_bot.maps.files import load_world_map
 
-    draft_path = Path("scenarios/drafts/floor_plan.yaml")
+    draft_path = Path("scenarios/floor_plan.yaml")
     draft = yaml.safe_load(draft_path.read_text())
     geometry = load_world_map(draft_path.parent / draft["world"]["map"])
     assert geometry.grid.unknown().any()  # SLAM-like: unknown beyond the walls
