@@ -123,13 +123,25 @@ def occupied_boxes(grid: OccupancyGrid) -> list[dict]:
     return boxes
 
 
-def ros_map_world(seed: int = 0, odometry: dict | None = None) -> tuple[dict, OccupancyGrid]:
+def ros_map_world(seed: int = 0, odometry: dict | None = None,
+                  start=ROS_START) -> tuple[dict, OccupancyGrid]:
     """(scenario whose geometry is the map's occupied cells, the map as an OccupancyGrid)."""
     grid = grid_from_image(ros_map_image(seed), ROS_MAP_RESOLUTION)
     scenario = {
         "name": "ros_map", "seed": seed, "world": {"size": list(ROS_MAP_SIZE)},
         "obstacles": occupied_boxes(grid),
-        "robots": [{"name": "r1", "pose": list(ROS_START), "lidar": dict(LIDAR),
+        "robots": [{"name": "r1", "pose": list(start), "lidar": dict(LIDAR),
                     "odometry": dict(DRIFTING_ODOMETRY if odometry is None else odometry)}],
     }
     return scenario, grid
+
+
+def route_from(route: list, start_xy, index: int) -> tuple[tuple[float, float, float], list]:
+    """Start at waypoint ``index`` of a closed tour (start_xy + route), facing the next one; the
+    rest of the tour follows. Different seeds start at different places (global localization)."""
+    home = (float(start_xy[0]), float(start_xy[1]))
+    tour = [home] + [tuple(p) for p in route if np.hypot(p[0] - home[0], p[1] - home[1]) > 1e-6]
+    i = index % len(tour)
+    here, ahead = tour[i], tour[(i + 1) % len(tour)]
+    heading = float(np.arctan2(ahead[1] - here[1], ahead[0] - here[0]))
+    return (here[0], here[1], heading), tour[i + 1:] + tour[:i]  # not back to the start itself

@@ -1,9 +1,11 @@
 """The likelihood field of a map: distance from any point to the nearest occupied cell.
 
-Built once with scipy's exact Euclidean distance transform. The occupied mask is upsampled by
-``upsample`` before the transform so that distances are measured to the *edge* of occupied
-cells (where a LiDAR beam actually stops) to within half a sub-cell, not to their centres.
-Points off the grid read ``max_dist`` (ROS AMCL does the same for beams ending off the map).
+Built once with scipy's exact Euclidean distance transform. Distances are measured to the
+*edge* of the occupied region, where a LiDAR beam stops in this project's maps: the scenario
+rasterizer and a ROS map turned into geometry both make occupied cells solid, surface at their
+boundary. (ROS AMCL measures to cell centres, which puts every wall half a cell too far.) The
+occupied mask is upsampled before the transform so that the edge is found to within half a
+sub-cell; points off the grid read ``max_dist`` (as AMCL's beams ending off the map do).
 """
 from __future__ import annotations
 
@@ -18,7 +20,9 @@ MAX_FIELD_CELLS = 64_000_000  # upsampled cells; ~512 MB of float64
 class LikelihoodField:
     """Distance [m] to the nearest occupied cell, capped at ``max_dist``, with a smooth lookup."""
 
-    def __init__(self, grid: OccupancyGrid, max_dist: float = 2.0, upsample: int = 2) -> None:
+    def __init__(self, grid: OccupancyGrid, max_dist: float = 2.0, upsample: int | None = None) -> None:
+        if upsample is None:  # as fine as a few MB allow
+            upsample = next(k for k in (4, 2, 1) if grid.rows * grid.cols * k * k <= 4_000_000 or k == 1)
         if not max_dist > 0:
             raise ValueError(f"max_dist must be > 0 (got {max_dist})")
         if grid.rows * grid.cols * upsample * upsample > MAX_FIELD_CELLS:
@@ -31,6 +35,7 @@ class LikelihoodField:
         occupied = grid.occupied()
         if occupied.any():
             fine = np.kron(occupied, np.ones((upsample, upsample), dtype=bool))
+            # From a sub-cell centre to the nearest occupied sub-cell's edge.
             dist = distance_transform_edt(~fine) * self.resolution - 0.5 * self.resolution
             self.field = np.clip(dist, 0.0, self.max_dist)
         else:
