@@ -51,7 +51,7 @@ ROS_MAP_RESOLUTION = 0.05  # [m]
 ROS_BUILDING = (1.0, 1.0, 11.0, 9.0)  # [m] outer wall box xmin, ymin, xmax, ymax
 ROS_ROUTE = [(5.0, 2.0), (5.0, 5.0), (9.5, 5.0), (9.5, 7.4), (8.2, 7.4), (8.2, 5.0),
              (2.5, 5.0), (2.5, 8.4), (5.5, 8.4), (5.5, 6.85), (2.5, 6.85), (2.5, 5.0),
-             (2.2, 2.2)]  # ~37 m through every room
+             (3.0, 2.0)]  # ~37 m through every room
 ROS_START = (2.2, 2.2, 0.0)
 
 

@@ -20,7 +20,10 @@ MAX_FIELD_CELLS = 64_000_000  # upsampled cells; ~512 MB of float64
 class LikelihoodField:
     """Distance [m] to the nearest occupied cell, capped at ``max_dist``, with a smooth lookup."""
 
-    def __init__(self, grid: OccupancyGrid, max_dist: float = 2.0, upsample: int | None = None) -> None:
+    def __init__(self, grid: OccupancyGrid, max_dist: float = 2.0, upsample: int | None = None,
+                 to_edges: bool = True) -> None:
+        """``to_edges`` False: measure to occupied cell centres instead (maps built from LiDAR
+        hits, where the surface lies inside the cell that a beam ended in)."""
         if upsample is None:  # as fine as a few MB allow
             upsample = next(k for k in (4, 2, 1) if grid.rows * grid.cols * k * k <= 4_000_000 or k == 1)
         if not max_dist > 0:
@@ -36,7 +39,12 @@ class LikelihoodField:
         if occupied.any():
             fine = np.kron(occupied, np.ones((upsample, upsample), dtype=bool))
             # From a sub-cell centre to the nearest occupied sub-cell's edge.
-            dist = distance_transform_edt(~fine) * self.resolution - 0.5 * self.resolution
+            if to_edges:
+                dist = distance_transform_edt(~fine) * self.resolution - 0.5 * self.resolution
+            else:  # the outermost sub-cell centre lies (res - res/k) / 2 past the cell's centre
+                dist = distance_transform_edt(~fine) * self.resolution + 0.5 * (
+                    grid.resolution - self.resolution)
+                dist[fine] = 0.0
             self.field = np.clip(dist, 0.0, self.max_dist)
         else:
             self.field = np.full((grid.rows * upsample, grid.cols * upsample), self.max_dist)
