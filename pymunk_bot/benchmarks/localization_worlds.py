@@ -40,7 +40,7 @@ def office_scenario(seed: int = 0, odometry: dict | None = None, start=(1.0, 1.0
             {"type": "box", "center": [4.5, 6.8], "size": [0.8, 0.5]},
             {"type": "box", "center": [0.8, 7.2], "size": [0.6, 0.6]},
         ],
-        "robots": [{"name": "r1", "pose": list(start), "lidar": dict(LIDAR),
+        "robots": [{"name": "r1", "pose": [float(v) for v in start], "lidar": dict(LIDAR),
                     "odometry": dict(DRIFTING_ODOMETRY if odometry is None else odometry)}],
     }
 
@@ -130,7 +130,7 @@ def ros_map_world(seed: int = 0, odometry: dict | None = None,
     scenario = {
         "name": "ros_map", "seed": seed, "world": {"size": list(ROS_MAP_SIZE)},
         "obstacles": occupied_boxes(grid),
-        "robots": [{"name": "r1", "pose": list(start), "lidar": dict(LIDAR),
+        "robots": [{"name": "r1", "pose": [float(v) for v in start], "lidar": dict(LIDAR),
                     "odometry": dict(DRIFTING_ODOMETRY if odometry is None else odometry)}],
     }
     return scenario, grid

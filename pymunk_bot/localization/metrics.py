@@ -87,3 +87,41 @@ def rpe(truth: np.ndarray, estimate: np.ndarray, delta: float = 1.0,
     err = between(rel_truth, rel_est)
     return {"trans": _stats(np.hypot(err[:, 0], err[:, 1])), "rot": _stats(np.abs(err[:, 2])),
             "pairs": int(i.size)}
+
+
+def map_scores(built, truth, tolerance: float | None = None) -> dict[str, float]:
+    """Precision and recall of a built occupancy grid's occupied cells against the true one.
+
+    precision: fraction of cells ``built`` marks occupied that lie within ``tolerance`` [m]
+    (default: one cell of ``truth``) of a truly occupied cell; recall: fraction of the true
+    *surface* cells (occupied cells next to a free one) that have a built occupied cell within
+    ``tolerance``, counted only where the built map has seen anything nearby.
+    """
+    from scipy.ndimage import binary_erosion, distance_transform_edt
+
+    tol = truth.resolution if tolerance is None else float(tolerance)
+    true_occ = truth.occupied()
+    built_occ = built.occupied()
+    if not built_occ.any():
+        return {"precision": 0.0, "recall": 0.0, "occupied_cells": 0}
+    to_true = distance_transform_edt(~true_occ) * truth.resolution
+    xs, ys = built.cell_centers()
+    rows, cols = np.nonzero(built_occ)
+    r, c = truth.cell_of(np.stack([xs[cols], ys[rows]], axis=-1))
+    inside = truth.inside(r, c)
+    near = np.zeros(rows.size, dtype=bool)
+    near[inside] = to_true[r[inside], c[inside]] <= tol + 1e-9
+    precision = float(near.mean())
+    surface = true_occ & ~binary_erosion(true_occ, border_value=1)
+    to_built = distance_transform_edt(~built_occ) * built.resolution
+    seen = ~built.unknown()
+    txs, tys = truth.cell_centers()
+    sr, sc = np.nonzero(surface)
+    br, bc = built.cell_of(np.stack([txs[sc], tys[sr]], axis=-1))
+    ok = built.inside(br, bc)
+    br, bc = br[ok], bc[ok]
+    # a surface cell counts when the built map saw within 3 cells of it
+    seen_near = distance_transform_edt(~seen) * built.resolution <= 3 * built.resolution
+    counted = seen_near[br, bc]
+    recall = float((to_built[br, bc][counted] <= tol + 1e-9).mean()) if counted.any() else 0.0
+    return {"precision": precision, "recall": recall, "occupied_cells": int(rows.size)}
