@@ -67,7 +67,9 @@ def run_trial(sim, localizer: Localizer, route: list[tuple[float, float]], max_t
     def feed() -> None:
         scan = robot.lidar.latest if robot.lidar is not None else None
         started = wallclock.perf_counter()
-        localizer.update(LocalizerInputs(time=sim.time, odometry=robot.odometry.pose, scan=scan))
+        imu = robot.imu.reading if robot.imu is not None else None
+        localizer.update(LocalizerInputs(time=sim.time, odometry=robot.odometry.pose, scan=scan,
+                                         imu=imu))
         trial.wall_time += wallclock.perf_counter() - started
         trial.times.append(sim.time)
         trial.truth.append(robot.pose.copy())
