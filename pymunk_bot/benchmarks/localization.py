@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+from typing import Any
 import statistics
 import time
 
@@ -36,9 +37,10 @@ from ..maps.rasterize import scenario_grid
 from ..sim import Simulation
 from . import localization_worlds as worlds
 
-TRACKING = dict(sigma_hit=0.05, update_min_d=0.05, update_min_a=0.05)  # scenarios/drafts/mcl_office
-GLOBAL = dict(initial="global", max_particles=5000, recovery_alpha_slow=0.001,
-              recovery_alpha_fast=0.1)  # scenarios/drafts/global_localization
+# The settings of scenarios/drafts/mcl_office.yaml and global_localization.yaml.
+TRACKING = MclConfig(sigma_hit=0.05, update_min_d=0.05, update_min_a=0.05)
+GLOBAL = MclConfig(initial="global", max_particles=5000, recovery_alpha_slow=0.001,
+                   recovery_alpha_fast=0.1)
 MAX_TIME = 120.0  # [s] of simulated time per run
 GLOBAL_TIME = 20.0  # [s]
 
@@ -60,7 +62,7 @@ def _odometry_error(sim) -> float:
 
 def run_mcl(world: str, seed: int) -> dict:
     sim, grid, route = _world(world, seed)
-    trial = run_trial(sim, MclLocalizer(MclConfig(**TRACKING), make_context(sim, "r1", seed, grid)),
+    trial = run_trial(sim, MclLocalizer(TRACKING, make_context(sim, "r1", seed, grid)),
                       route, MAX_TIME)
     e = trial.errors()
     return {"rmse": e["rmse"], "heading_rmse_deg": float(np.rad2deg(e["heading_rmse"])),
@@ -71,7 +73,7 @@ def run_mcl(world: str, seed: int) -> dict:
 
 def run_global(world: str, seed: int) -> dict:
     sim, grid, route = _world(world, seed, start_index=seed)
-    trial = run_trial(sim, MclLocalizer(MclConfig(**GLOBAL), make_context(sim, "r1", seed, grid)),
+    trial = run_trial(sim, MclLocalizer(GLOBAL, make_context(sim, "r1", seed, grid)),
                       route, GLOBAL_TIME, drive_on="truth")
     t, truth, est = trial.arrays()
     ok = (np.hypot(*(truth[:, :2] - est[:, :2]).T) <= 0.3) & (
@@ -146,7 +148,7 @@ def mcl_update_cost(particles: int, beams: int = 60, repeats: int = 15) -> float
 
 
 def _summary(rows: list[dict], keys: list[str]) -> dict:
-    out = {"passed": f"{sum(r['passed'] for r in rows)}/{len(rows)}"}
+    out: dict[str, Any] = {"passed": f"{sum(r['passed'] for r in rows)}/{len(rows)}"}
     for k in keys:
         values = [r[k] for r in rows]
         out[k] = {"median": float(np.median(values)), "worst": float(max(values))}
@@ -156,7 +158,7 @@ def _summary(rows: list[dict], keys: list[str]) -> dict:
 def run_all(seeds: int = 10, quick: bool = False) -> dict:
     """Every figure of the bench (``quick``: 2 seeds); for ``pymunk-bot bench``."""
     seeds = 2 if quick else seeds
-    result: dict = {"seeds": seeds}
+    result: dict[str, Any] = {"seeds": seeds}
     for world in ("office", "ros_map"):
         mcl = [run_mcl(world, s) for s in range(seeds)]
         glob = [run_global(world, s) for s in range(seeds)]

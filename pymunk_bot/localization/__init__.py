@@ -34,7 +34,7 @@ def check_localizer(config: Any, robot_config: Any, has_map: bool = True) -> Non
     ``robot_config`` the robot's RobotConfig, ``has_map`` whether a map will be given.
     """
     name = getattr(config, "type", None)
-    if name not in localizers:
+    if not isinstance(name, str) or name not in localizers:
         return  # ground_truth / odometry / python: nothing of ours to check
     cls = localizers.get(name)
     lidar = getattr(robot_config, "lidar", None)

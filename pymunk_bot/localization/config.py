@@ -96,12 +96,12 @@ class SlamConfig(Section):
     loop_radius: Distance = 1.5  # [m] search radius for loop-closure candidates
     loop_min_travel: Distance = 5.0  # [m] travelled since a keyframe before it can close a loop
     loop_min_inliers: Weight = 0.7  # fraction of scan points that must match a loop closure
-    max_dist: Distance = 1.0  # [m] distance-field cap for matching
-    huber: Distance = 0.1  # [m]
-    iterations: Annotated[Int, Field(ge=1, le=100)] = 10
+    max_pair: Distance = 0.3  # [m] ICP pairs a point with a reference point at most this far
+    huber: Distance = 0.05  # [m] ICP residuals beyond this count linearly
+    iterations: Annotated[Int, Field(ge=1, le=100)] = 20  # ICP iterations per match
     max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 180
     optimize_every: Annotated[Int, Field(ge=1, le=10_000)] = 1  # loop closures between optimizations
-    max_keyframes: Annotated[Int, Field(ge=10, le=100_000)] = 20_000
+    max_keyframes: Annotated[Int, Field(ge=10, le=100_000)] = 20_000  # then odometry only
     margin: NonNegativeFloat = 1.0  # [m] map extent beyond the arena
 
 

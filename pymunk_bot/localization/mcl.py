@@ -67,6 +67,7 @@ class MclLocalizer(Localizer):
             raise ValueError("mcl needs a map (the scenario's, or world.map)")
         self.rng = context.rng
         self.field = LikelihoodField(context.map, config.laser_likelihood_max_dist)
+        self._cell = context.map.resolution  # [m]
         if self.field.free_xy.shape[0] == 0:
             raise ValueError("mcl: the map has no free cell to place particles on")
         start = np.asarray(context.start_pose, dtype=float)
@@ -114,8 +115,7 @@ class MclLocalizer(Localizer):
         """Poses drawn uniformly over the map's free cells, any heading."""
         free = self.field.free_xy
         pick = free[self.rng.integers(0, free.shape[0], count)]
-        res = self.context.map.resolution
-        xy = pick + self.rng.uniform(-0.5 * res, 0.5 * res, (count, 2))
+        xy = pick + self.rng.uniform(-0.5 * self._cell, 0.5 * self._cell, (count, 2))
         return np.column_stack([xy, self.rng.uniform(-np.pi, np.pi, count)])
 
     # ------------------------------------------------------------------ filter steps

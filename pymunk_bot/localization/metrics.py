@@ -15,6 +15,8 @@ Definitions follow evo (Grupp, github.com/MichaelGrupp/evo), reduced to SE(2):
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .se2 import between, wrap
@@ -64,7 +66,7 @@ def ate(truth: np.ndarray, estimate: np.ndarray, align: bool = False) -> dict[st
 
 
 def rpe(truth: np.ndarray, estimate: np.ndarray, delta: float = 1.0,
-        unit: str = "m") -> dict[str, dict[str, float]]:
+        unit: str = "m") -> dict[str, Any]:
     """Relative pose error over ``delta`` metres of true path (or ``delta`` samples, "frames").
 
     Returns {"trans": stats [m], "rot": stats [rad], "pairs": count}; empty stats when the

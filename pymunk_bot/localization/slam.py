@@ -56,6 +56,7 @@ class SlamLocalizer(Localizer):
         self._travel: list[float] = []  # odometry distance driven up to each keyframe [m]
         self.edges: list[Edge] = []
         self.loop_closures: list[tuple[int, int]] = []
+        self.keyframe_limit_reached = False  # past max_keyframes the estimate is odometry only
         self._last_closure = -MIN_KEYFRAMES_BETWEEN_CLOSURES
 
     @property
@@ -65,7 +66,8 @@ class SlamLocalizer(Localizer):
 
     def debug(self) -> dict[str, Any]:
         return {"keyframes": np.array(self.keyframes).reshape(-1, 3),
-                "loop_closures": list(self.loop_closures)}
+                "loop_closures": list(self.loop_closures),
+                "keyframe_limit_reached": self.keyframe_limit_reached}
 
     # ------------------------------------------------------------------ update
     def update(self, inputs: LocalizerInputs) -> None:
@@ -80,13 +82,16 @@ class SlamLocalizer(Localizer):
         moved = between(self._odom[-1], odom)
         predicted = compose(self.keyframes[-1], moved)
         self.pose = predicted
+        if self.keyframe_limit_reached:  # the graph is full: dead reckoning from here on
+            return
         if fresh and (np.hypot(moved[0], moved[1]) >= self.config.keyframe_d
                       or abs(moved[2]) >= self.config.keyframe_a):
             travel = self._travel[-1] + float(np.hypot(moved[0], moved[1]))
             points = subsample(scan_points(scan)[0], self.config.max_beams)
             c = self.config
             match = icp(self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
-                                              len(self.keyframes))), points, predicted)
+                                              len(self.keyframes))), points, predicted,
+                        c.iterations, c.max_pair, c.huber)
             pose, cov = (match.pose, match.covariance) if match.ok and match.inliers > 0.5 else (
                 predicted, np.diag([0.05, 0.05, 0.05]) ** 2)
             self._add_keyframe(pose, odom, scan, travel, cov)
@@ -94,8 +99,6 @@ class SlamLocalizer(Localizer):
             self.covariance = cov
 
     def _add_keyframe(self, pose, odom, scan, travel, cov) -> None:
-        if len(self.keyframes) >= self.config.max_keyframes:
-            raise RuntimeError(f"slam: more than max_keyframes ({self.config.max_keyframes}) keyframes")
         index = len(self.keyframes)
         self.keyframes.append(np.array(pose, dtype=float))
         self._scans.append(scan)
@@ -109,6 +112,7 @@ class SlamLocalizer(Localizer):
             self.edges.append(Edge(index - 1, index, z, np.linalg.inv(cov + EDGE_FLOOR)))
         self.mapper.integrate(self.keyframes[index], scan)
         self._close_loop(index)
+        self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
     def _reference(self, keyframes) -> Reference:
         """The end points (with normals) of these keyframes' scans, in the world frame."""
@@ -137,7 +141,8 @@ class SlamLocalizer(Localizer):
             return False
         old = int(far_back[np.argmin(dist)])
         lo, hi = max(0, old - SUBMAP_NEIGHBOURS), min(index, old + SUBMAP_NEIGHBOURS + 1)
-        match = icp(self._reference(range(lo, hi)), self._points[index], here)
+        match = icp(self._reference(range(lo, hi)), self._points[index], here, c.iterations,
+                    c.max_pair, c.huber)
         if not (match.ok and match.inliers >= c.loop_min_inliers):
             return False
         z = between(self.keyframes[old], match.pose)
