@@ -111,6 +111,11 @@ def build(config: ScenarioConfig, seed: int, source: str,
         robot.controller = _make_controller(robot, index, maps, source)
         schedules.append(None if robot.controller is None else Schedule(robot.controller.rate))
         robot.localizer = _make_localizer(robot, index, maps, source, localizer_rng, config)
+        if robot.config.mapping is not None:
+            from .localization.mapping import OccupancyMapper
+            robot.mapper = OccupancyMapper.for_arena(robot.config.mapping, tuple(config.world.size))
+        elif hasattr(robot.localizer, "grid"):  # slam builds its own map
+            robot.mapper = robot.localizer
     built = Built(world, robots, fleet, drive_groups, odometry_groups,
                   Propulsion(world.space, [r.body for r in ordered], [r.control for r in ordered],
                              [(g, idx) for g, idx in drive_groups]),

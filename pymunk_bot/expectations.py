@@ -69,6 +69,12 @@ def evaluate(expectations: dict, robots: dict) -> list[Check]:
             entered = robot.metrics.entered[i]
             add(f"never_enter[{i}]", entered is None, "never",
                 "never" if entered is None else f"entered at t={entered:.2f} s")
+        if exp.localization_rmse is not None:
+            score = getattr(robot, "localization_score", None)
+            rmse = score.block()["rmse"] if score is not None else None
+            add("localization_rmse", rmse is not None and rmse <= exp.localization_rmse,
+                f"<= {exp.localization_rmse:g} m", "not localized" if rmse is None else rmse,
+                None if rmse is None else rmse - exp.localization_rmse, "m")
         if exp.end_in is not None:
             region = np.asarray(exp.end_in, dtype=float)
             inside = point_in_polygon(robot.pose[:2], region)

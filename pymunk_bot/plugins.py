@@ -83,8 +83,13 @@ def _register_builtins() -> None:
             ("navigate", "navigate:NavigateController", c.NavigateControllerConfig),
             ("python", "python:PythonController", c.PythonControllerConfig)):
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
+    from .localization import config as lc
+
     for name, cls, model in (
             ("ground_truth", "simple:GroundTruthLocalizer", loc.GroundTruthLocalizerConfig),
             ("odometry", "simple:OdometryLocalizer", loc.OdometryLocalizerConfig),
+            ("mcl", "mcl:MclLocalizer", lc.MclConfig),
+            ("ekf", "ekf:EkfLocalizer", lc.EkfConfig),
+            ("slam", "slam:SlamLocalizer", lc.SlamConfig),
             ("python", "python:PythonLocalizer", loc.PythonLocalizerConfig)):
         localizers.add(name, f"pymunk_bot.localization.{cls}", model)

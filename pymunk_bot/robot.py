@@ -104,6 +104,7 @@ class Robot:
         self.localizer = None
         self.mapper: Any = None  # builds an occupancy grid from this robot's LiDAR, if configured
         self.metrics = None
+        self.localization_score: Any = None  # estimate vs truth, when the scenario names a localizer
         self.nav_goal: tuple[float, float] | None = None  # where the controller drives
         self._override = False
 

@@ -15,7 +15,7 @@ from .expectations import Check, evaluate
 from .localization.base import LocalizerInputs
 from .readings import Observation
 from .robot import Robot
-from .sensors.schedule import ScheduleArray
+from .sensors.schedule import Schedule, ScheduleArray
 
 MAX_SEED = 2 ** 63 - 1
 
@@ -27,6 +27,24 @@ def check_seed(seed: Any) -> int:
     if not 0 <= int(seed) <= MAX_SEED:
         raise ValueError(f"seed must be in [0, 2**63 - 1] (got {seed})")
     return int(seed)
+
+
+class LocalizationScore:
+    """The localizer's estimate against the truth, sampled at a fixed rate."""
+
+    def __init__(self, rate: float) -> None:
+        self.schedule = Schedule(rate)
+        self.truth: list[np.ndarray] = []
+        self.estimate: list[np.ndarray] = []
+
+    def add(self, truth: np.ndarray, estimate: np.ndarray) -> None:
+        self.truth.append(np.array(truth, dtype=float))
+        self.estimate.append(np.array(estimate, dtype=float))
+
+    def block(self) -> dict[str, float]:
+        """rmse, max_error, final_error [m] of the position; heading_rmse [rad]."""
+        from .localization.metrics import error_block
+        return error_block(np.array(self.truth), np.array(self.estimate))
 
 
 class Simulation:
@@ -81,6 +99,17 @@ class Simulation:
         self._sensors = [s for r in self._robots for s in r.sensors
                          if s is not r.lidar and not getattr(s, "passive", False)]
         self._localized = [r for r in self._robots if not getattr(r.localizer, "passive", False)]
+        self._mapping = [r for r in self._robots if r.mapper is not None and r.lidar is not None]
+        # Robots whose scenario names a localizer are scored against the truth (result JSON's
+        # "localization" block), sampled at their controller's rate (10 Hz without one).
+        self._scores = {}
+        for r in self._robots:
+            if "localization" in r.config.model_fields_set:
+                r.localization_score = self._scores[r.name] = LocalizationScore(
+                    r.controller.rate if r.controller else 10.0)
+        for robot in self._localized:  # the first estimate folds in the readings taken at t = 0
+            robot.localizer.update(self._localizer_inputs(robot, 0.0))
+        self._score(0.0)
 
     # ------------------------------------------------------------------ state
     @property
@@ -112,8 +141,14 @@ class Simulation:
         for (drive, _), (odometry, _) in zip(built.drive_groups, built.odometry_groups):
             odometry.update(drive.take_travel())
         self._read_sensors(now)
+        for robot in self._mapping:
+            scan = robot.lidar.latest
+            if scan.time == now and robot.mapper.due(now):
+                robot.mapper.integrate(robot.pose, scan)
         for robot in self._localized:
             robot.localizer.update(self._localizer_inputs(robot, now))
+        if self._scores:
+            self._score(now)
         for metrics in built.metrics:
             metrics.update(now)
         self.wall_time += wallclock.perf_counter() - started
@@ -158,6 +193,12 @@ class Simulation:
             lidar.record(now, lidar.true_ranges())
         for sensor in self._sensors:
             sensor.update(now)
+
+    def _score(self, now: float) -> None:
+        for name, score in self._scores.items():
+            if score.schedule.due(now):
+                robot = self.robots[name]
+                score.add(robot.pose, robot.localizer.pose)
 
     def _localizer_inputs(self, robot: Robot, now: float) -> LocalizerInputs:
         imu = robot.imu.reading if robot.imu is not None else None
@@ -204,6 +245,8 @@ class Simulation:
                 "controller_status": r.controller.status if r.controller is not None else None,
                 "controller_message": r.controller.message if r.controller is not None else "",
             }
+            if name in self._scores:
+                robots[name]["localization"] = self._scores[name].block()
         return {
             "scenario": self.config.name,
             "seed": self.seed,

@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, PrivateAttr
 
+from ..localization.config import MappingConfig
 from .types import (
     Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
     Probability, Section, Vec2,
@@ -145,6 +146,8 @@ class RobotConfig(Section):
     imu: ImuConfig | None = None
     controller: Any = None  # a registered controller's section; None: the robot stands still
     goal: GoalConfig | None = None
+    # Build an occupancy grid from this robot's LiDAR (known poses; slam builds its own).
+    mapping: MappingConfig | None = None
 
     def top_speed(self) -> float:
         """Fastest the robot's centre can move [m/s] (substeps are chosen from it)."""
@@ -175,6 +178,8 @@ class RobotExpectation(Section):
     max_path_length: PositiveFloat | None = None  # [m]
     never_enter: list[list[Vec2]] = []  # polygons the robot's centre must never enter
     end_in: list[Vec2] | None = None  # polygon the robot's centre must end inside
+    # [m] the localizer's position RMSE against the truth (needs a `localization` on the robot)
+    localization_rmse: PositiveFloat | None = None
 
 
 # ---------------------------------------------------------------------------- scenario

@@ -95,6 +95,20 @@ def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
                                  f"[0, {width:g}] x [0, {height:g}]")
 
 
+def _check_localization(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
+    """A localizer or mapping the robot cannot run (no LiDAR, too large a map) is bad input."""
+    from ..localization.checks import check_localizer, check_mapping
+    try:
+        check_localizer(robot.localization, robot, has_map=True)  # the scenario is its map
+    except ValueError as exc:
+        raise SemanticError(("robots", index, "localization"), str(exc)) from None
+    if robot.mapping is not None:
+        try:
+            check_mapping(robot.mapping, tuple(scenario.world.size))
+        except ValueError as exc:
+            raise SemanticError(("robots", index, "mapping"), str(exc)) from None
+
+
 def check(scenario: ScenarioConfig) -> None:
     """Raise SemanticError for the first problem found."""
     for i, obstacle in enumerate(scenario.obstacles):
@@ -113,6 +127,7 @@ def check(scenario: ScenarioConfig) -> None:
             raise SemanticError(("robots", i, "lidar", "min_range"),
                                 f"must be < max_range ({lidar.max_range:g}) (got {lidar.min_range:g})")
         _check_robot_start(i, robot, scenario)
+        _check_localization(i, robot, scenario)
         if robot.goal is not None:
             _check_point_in_arena(("robots", i, "goal", "position"), robot.goal.position, scenario)
         controller_goal = getattr(robot.controller, "goal", None)

@@ -1,0 +1,117 @@
+"""Config models of the built-in localizers and of mapping (``localization: {type: ...}``,
+``mapping: {...}``). Every field has physical bounds; particle counts are bounded so that memory
+stays sane. docs/localization.md lists every key with its unit and default; keep them in step.
+
+MCL's keys are ROS / Nav2 AMCL's parameter names, with Nav2's defaults.
+"""
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from ..config.types import Float, Int, NonNegativeFloat, Section
+
+MAX_PARTICLES_LIMIT = 100_000  # ~2.4 MB of particles; a 60-beam update is done in chunks
+MAX_MAP_CELLS = 16_000_000  # cells of a built occupancy grid (e.g. 200 x 200 m at 5 cm)
+
+Alpha = Annotated[Float, Field(ge=0.0, le=10.0)]
+Weight = Annotated[Float, Field(ge=0.0, le=1.0)]
+ParticleCount = Annotated[Int, Field(ge=1, le=MAX_PARTICLES_LIMIT)]
+StdVec3 = tuple[Annotated[Float, Field(ge=0.0, le=100.0)], Annotated[Float, Field(ge=0.0, le=100.0)],
+                Annotated[Float, Field(ge=0.0, le=math.pi)]]
+Distance = Annotated[Float, Field(gt=0.0, le=100.0)]  # [m]
+
+
+class MclConfig(Section):
+    """Monte Carlo localization (adaptive, KLD-sampling), ROS AMCL's parameters."""
+
+    type: Literal["mcl"] = "mcl"
+    particles: ParticleCount | None = None  # initial count; None = max_particles (as AMCL)
+    initial: Literal["known", "global"] = "known"  # known: around the true start pose
+    initial_std: StdVec3 = (0.1, 0.1, 0.1)  # [m, m, rad] spread around the start pose (known)
+    robot_model_type: Literal["diff", "omni"] = "diff"
+    alpha1: Alpha = 0.2  # rotation noise from rotation
+    alpha2: Alpha = 0.2  # rotation noise from translation
+    alpha3: Alpha = 0.2  # translation noise from translation
+    alpha4: Alpha = 0.2  # translation noise from rotation
+    alpha5: Alpha = 0.2  # strafe noise from translation (omni only)
+    min_particles: ParticleCount = 500
+    max_particles: ParticleCount = 2000
+    pf_err: Annotated[Float, Field(gt=0.0, lt=1.0)] = 0.05  # KLD: max error of the sampled belief
+    pf_z: Annotated[Float, Field(gt=0.0, le=10.0)] = 0.99  # KLD: the normal quantile (as AMCL uses it)
+    update_min_d: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.25  # [m] travel before an update
+    update_min_a: Annotated[Float, Field(ge=0.0, le=2 * math.pi)] = 0.2  # [rad] turn before an update
+    resample_interval: Annotated[Int, Field(ge=1, le=1000)] = 1  # updates between resamplings
+    laser_model_type: Literal["likelihood_field", "beam"] = "likelihood_field"
+    z_hit: Weight = 0.5
+    z_short: Weight = 0.05  # beam model only
+    z_max: Weight = 0.05  # beam model only
+    z_rand: Weight = 0.5
+    sigma_hit: Annotated[Float, Field(ge=0.001, le=10.0)] = 0.2  # [m]
+    lambda_short: Annotated[Float, Field(gt=0.0, le=100.0)] = 0.1  # [1/m], beam model only
+    laser_likelihood_max_dist: Distance = 2.0  # [m] distance field cap
+    max_beams: Annotated[Int, Field(ge=2, le=10_000)] = 60
+    recovery_alpha_slow: Weight = 0.0  # 0 disables recovery; e.g. 0.001
+    recovery_alpha_fast: Weight = 0.0  # e.g. 0.1
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "MclConfig":
+        if self.min_particles > self.max_particles:
+            raise ValueError(f"min_particles ({self.min_particles}) must be <= max_particles "
+                             f"({self.max_particles})")
+        if self.particles is not None and self.particles > self.max_particles:
+            raise ValueError(f"particles ({self.particles}) must be <= max_particles "
+                             f"({self.max_particles})")
+        if self.z_hit + self.z_rand + self.z_short + self.z_max <= 0.0:
+            raise ValueError("z_hit, z_short, z_max and z_rand must not all be 0")
+        return self
+
+
+class EkfConfig(Section):
+    """EKF localization: odometry prediction, scan-to-map matching as the measurement."""
+
+    type: Literal["ekf"] = "ekf"
+    initial_std: StdVec3 = (0.05, 0.05, 0.05)  # [m, m, rad] around the true start pose
+    trans_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.02  # [m/sqrt(m)] per metre driven
+    rot_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.02  # [rad/sqrt(m)] per metre driven
+    turn_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.05  # [rad/sqrt(rad)] per radian turned
+    max_dist: Distance = 1.0  # [m] distance-field cap for matching
+    huber: Distance = 0.1  # [m] residuals beyond this count linearly (robust to clutter)
+    iterations: Annotated[Int, Field(ge=1, le=100)] = 10  # Gauss-Newton iterations per match
+    max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 120
+    match_cov_scale: Annotated[Float, Field(ge=1.0, le=1e6)] = 5.0  # inflates the match covariance
+    map_std: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.0  # [m] how far off the map's walls may be
+    gate: Annotated[Float, Field(gt=0.0, le=1e6)] = 16.27  # Mahalanobis gate (chi^2_3, 99.9 %)
+
+
+class SlamConfig(Section):
+    """Pose-graph SLAM: scan-to-map matching, loop closures, map rebuilt from optimized poses."""
+
+    type: Literal["slam"] = "slam"
+    resolution: Annotated[Float, Field(ge=0.01, le=1.0)] = 0.05  # [m] map cell size
+    keyframe_d: Annotated[Float, Field(gt=0.0, le=10.0)] = 0.2  # [m] travel between keyframes
+    keyframe_a: Annotated[Float, Field(gt=0.0, le=math.pi)] = 0.2  # [rad] turn between keyframes
+    loop_radius: Distance = 1.5  # [m] search radius for loop-closure candidates
+    loop_min_travel: Distance = 5.0  # [m] travelled since a keyframe before it can close a loop
+    loop_min_inliers: Weight = 0.7  # fraction of scan points that must match a loop closure
+    max_pair: Distance = 0.3  # [m] ICP pairs a point with a reference point at most this far
+    huber: Distance = 0.05  # [m] ICP residuals beyond this count linearly
+    iterations: Annotated[Int, Field(ge=1, le=100)] = 20  # ICP iterations per match
+    max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 180
+    optimize_every: Annotated[Int, Field(ge=1, le=10_000)] = 1  # loop closures between optimizations
+    max_keyframes: Annotated[Int, Field(ge=10, le=100_000)] = 20_000  # then odometry only
+    margin: NonNegativeFloat = 1.0  # [m] map extent beyond the arena
+
+
+class MappingConfig(Section):
+    """Occupancy-grid mapping from LiDAR with known poses (log-odds, inverse sensor model)."""
+
+    resolution: Annotated[Float, Field(ge=0.01, le=1.0)] = 0.05  # [m] cell size
+    hit_probability: Annotated[Float, Field(gt=0.5, lt=1.0)] = 0.7  # a cell where a beam ends
+    miss_probability: Annotated[Float, Field(gt=0.0, lt=0.5)] = 0.4  # a cell a beam crosses
+    min_probability: Annotated[Float, Field(gt=0.0, lt=0.5)] = 0.12  # clamp: a free cell can still
+    max_probability: Annotated[Float, Field(gt=0.5, lt=1.0)] = 0.97  # ... turn occupied, and back
+    margin: NonNegativeFloat = 1.0  # [m] extent beyond the arena (its walls lie outside it)
+    rate: Annotated[Float, Field(gt=0.0, le=1000.0)] | None = None  # [Hz]; None = every scan

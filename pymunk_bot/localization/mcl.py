@@ -1,0 +1,244 @@
+"""Monte Carlo localization as ROS AMCL does it, vectorised over particles with numpy.
+
+Per update (after ``update_min_d`` of travel or ``update_min_a`` of turn, on a fresh scan):
+1. move every particle by the odometry motion since the last update (motion.py);
+2. weight it by the scan: AMCL's likelihood-field model (``p = 1 + sum pz^3`` with
+   ``pz = z_hit exp(-d^2 / 2 sigma_hit^2) + z_rand / max_range``, d = distance from a beam's end
+   to the nearest obstacle) or its beam model (expected ranges by sphere tracing the field);
+3. every ``resample_interval`` updates: low-variance resampling, KLD-sampling choosing how many
+   particles (Fox 2003, AMCL's 0.5 m x 0.5 m x 10 deg histogram), and recovery: a fraction
+   ``max(0, 1 - w_fast / w_slow)`` of the new particles is drawn uniformly over free space.
+The pose is the weighted mean of the heaviest cluster of particles (AMCL's choice, which stays
+right while a global localization still has several candidates), composed with the odometry
+motion since the last update; the covariance is that cluster's weighted sample covariance.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from .base import Localizer, LocalizerContext, LocalizerInputs
+from .config import MclConfig
+from .likelihood import LikelihoodField
+from .motion import sample_motion
+from .se2 import between, compose, scan_points, transform_points, wrap
+
+KLD_BIN = (0.5, 0.5, np.deg2rad(10.0))  # [m, m, rad] AMCL's histogram bins
+CLUSTER_BIN = 0.5  # [m]
+CHUNK_ENDPOINTS = 1_000_000  # beam end points weighted at once (bounds temporary memory)
+
+
+def kld_limit(k: np.ndarray, pf_err: float, pf_z: float) -> np.ndarray:
+    """Particles needed for ``k`` occupied bins (Fox's bound; AMCL uses pf_z as z directly)."""
+    k = np.maximum(np.asarray(k, dtype=float) - 1.0, 1e-12)
+    b = 2.0 / (9.0 * k)
+    return np.ceil(k / (2.0 * pf_err) * (1.0 - b + np.sqrt(b) * pf_z) ** 3)
+
+
+def low_variance_indices(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Systematic resampling: ``count`` indices, one random offset, evenly spaced pointers."""
+    cumulative = np.cumsum(weights)
+    cumulative /= cumulative[-1]
+    pointers = (rng.random() + np.arange(count)) / count
+    return np.minimum(np.searchsorted(cumulative, pointers), weights.size - 1)
+
+
+def weighted_pose_stats(poses: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted mean (circular for theta) and weighted sample covariance of poses (n, 3)."""
+    w = weights / weights.sum()
+    theta = np.arctan2(w @ np.sin(poses[:, 2]), w @ np.cos(poses[:, 2]))
+    mean = np.array([w @ poses[:, 0], w @ poses[:, 1], theta])
+    d = poses - mean
+    d[:, 2] = wrap(d[:, 2])
+    return mean, (d * w[:, None]).T @ d
+
+
+class MclLocalizer(Localizer):
+    """Adaptive Monte Carlo localization against the scenario's map."""
+
+    needs_map = True
+    needs_lidar = True
+
+    def __init__(self, config: MclConfig, context: LocalizerContext) -> None:
+        super().__init__(config, context)
+        if context.map is None:
+            raise ValueError("mcl needs a map (the scenario's, or world.map)")
+        self.rng = context.rng
+        self.field = LikelihoodField(context.map, config.laser_likelihood_max_dist)
+        self._cell = context.map.resolution  # [m]
+        if self.field.free_xy.shape[0] == 0:
+            raise ValueError("mcl: the map has no free cell to place particles on")
+        start = np.asarray(context.start_pose, dtype=float)
+        if config.initial == "global":
+            self.particles = self.random_poses(config.particles or config.max_particles)
+        else:
+            n = config.particles or config.max_particles
+            self.particles = start + self.rng.normal(0.0, 1.0, (n, 3)) * np.asarray(config.initial_std)
+            self.particles[:, 2] = wrap(self.particles[:, 2])
+        self.weights = np.full(self.particles.shape[0], 1.0 / self.particles.shape[0])
+        self.w_slow = self.w_fast = 0.0
+        self.updates = 0  # measurement updates done
+        self._odom_at_update: np.ndarray | None = None  # odometry when the filter last moved
+        self._filter_pose, self.covariance = weighted_pose_stats(self.particles, self.weights)
+        self.pose = start.copy() if config.initial == "known" else self._filter_pose.copy()
+
+    # ------------------------------------------------------------------ public
+    def update(self, inputs: LocalizerInputs) -> None:
+        odom = np.asarray(inputs.odometry, dtype=float)
+        scan = inputs.scan
+        fresh = scan is not None and abs(scan.time - inputs.time) < 1e-9
+        if self._odom_at_update is None:
+            if fresh:  # the first scan: weigh the initial cloud before anything moves
+                self._odom_at_update = odom.copy()
+                self._measure_and_resample(scan)
+        else:
+            moved = between(self._odom_at_update, odom)
+            if fresh and (np.hypot(moved[0], moved[1]) >= self.config.update_min_d
+                          or abs(moved[2]) >= self.config.update_min_a):
+                c = self.config
+                self.particles = sample_motion(
+                    self.particles, self._odom_at_update, odom,
+                    (c.alpha1, c.alpha2, c.alpha3, c.alpha4, c.alpha5), self.rng,
+                    c.robot_model_type)
+                self._odom_at_update = odom.copy()
+                self._measure_and_resample(scan)
+        since = (np.zeros(3) if self._odom_at_update is None
+                 else between(self._odom_at_update, odom))
+        self.pose = compose(self._filter_pose, since)
+
+    def debug(self) -> dict[str, Any]:
+        return {"particles": self.particles.copy(), "weights": self.weights.copy()}
+
+    def random_poses(self, count: int) -> np.ndarray:
+        """Poses drawn uniformly over the map's free cells, any heading."""
+        free = self.field.free_xy
+        pick = free[self.rng.integers(0, free.shape[0], count)]
+        xy = pick + self.rng.uniform(-0.5 * self._cell, 0.5 * self._cell, (count, 2))
+        return np.column_stack([xy, self.rng.uniform(-np.pi, np.pi, count)])
+
+    # ------------------------------------------------------------------ filter steps
+    def _measure_and_resample(self, scan) -> None:
+        likelihood = self.scan_likelihood(scan)
+        weights = self.weights * likelihood
+        total = weights.sum()
+        if not (np.isfinite(total) and total > 0):
+            weights = np.full(weights.size, 1.0)
+            total = float(weights.size)
+        w_avg = total / weights.size
+        c = self.config
+        if c.recovery_alpha_slow > 0 or c.recovery_alpha_fast > 0:
+            self.w_slow = w_avg if self.w_slow == 0 else self.w_slow + c.recovery_alpha_slow * (w_avg - self.w_slow)
+            self.w_fast = w_avg if self.w_fast == 0 else self.w_fast + c.recovery_alpha_fast * (w_avg - self.w_fast)
+        self.weights = weights / total
+        self.updates += 1
+        if self.updates % c.resample_interval == 0:
+            self._resample()
+        self._filter_pose, self.covariance = self._cluster_estimate()
+
+    def scan_likelihood(self, scan) -> np.ndarray:
+        """AMCL's per-particle weight factor for this scan (1 + sum of pz^3 over used beams)."""
+        c = self.config
+        n_beams = np.asarray(scan.ranges).size
+        step = max(1, (n_beams - 1) // (c.max_beams - 1))
+        used = np.arange(0, n_beams, step)
+        if c.laser_model_type == "beam":
+            return self._beam_likelihood(scan, used)
+        points, index = scan_points(scan)
+        points = points[np.isin(index, used)]
+        p = np.ones(self.particles.shape[0])
+        if points.shape[0] == 0:
+            return p
+        denom = 2.0 * c.sigma_hit ** 2
+        z_rand = c.z_rand / scan.max_range
+        chunk = max(1, CHUNK_ENDPOINTS // points.shape[0])
+        for start in range(0, self.particles.shape[0], chunk):
+            ends = transform_points(self.particles[start:start + chunk], points)
+            d = self.field.distance(ends)
+            pz = c.z_hit * np.exp(-d * d / denom) + z_rand
+            p[start:start + chunk] += (pz ** 3).sum(axis=1)
+        return p
+
+    def _beam_likelihood(self, scan, used: np.ndarray) -> np.ndarray:
+        c = self.config
+        ranges = np.asarray(scan.ranges, dtype=float)[used]
+        angles = np.asarray(scan.angles, dtype=float)[used]
+        mount = np.array([[scan.offset[0], scan.offset[1]]])
+        p = np.ones(self.particles.shape[0])
+        chunk = max(1, CHUNK_ENDPOINTS // used.size)
+        for start in range(0, self.particles.shape[0], chunk):
+            part = self.particles[start:start + chunk]
+            origin = transform_points(part, mount)[:, 0, :]  # (n, 2)
+            heading = part[:, 2:3] + angles[None, :]  # (n, m)
+            expected = self._trace(origin, heading, scan.max_range)
+            z = ranges[None, :] - expected
+            pz = c.z_hit * np.exp(-z * z / (2.0 * c.sigma_hit ** 2))
+            short = z < 0
+            pz += np.where(short, c.z_short * c.lambda_short * np.exp(-c.lambda_short * ranges), 0.0)
+            at_max = ranges >= scan.max_range
+            pz += np.where(at_max, c.z_max, c.z_rand / scan.max_range)
+            p[start:start + chunk] += (pz ** 3).sum(axis=1)
+        return p
+
+    def _trace(self, origin: np.ndarray, heading: np.ndarray, max_range: float) -> np.ndarray:
+        """Expected ranges (n, m) by sphere tracing the distance field from each origin."""
+        eps = self.field.resolution
+        direction = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
+        t = np.zeros(heading.shape)
+        active = np.ones(heading.shape, dtype=bool)
+        for _ in range(200):
+            if not active.any():
+                break
+            pts = origin[:, None, :] + t[..., None] * direction
+            d = self.field.distance(pts)
+            hit = d < 0.5 * eps
+            active &= ~hit & (t < max_range)
+            t = np.where(active, t + np.maximum(d, 0.5 * eps), t)
+        return np.minimum(t, max_range)
+
+    def _resample(self) -> None:
+        c = self.config
+        n_max = c.max_particles
+        draw = low_variance_indices(self.weights, n_max, self.rng)
+        draw = draw[self.rng.permutation(n_max)]  # a prefix of a shuffled systematic draw is fair
+        new = self.particles[draw]
+        if self.w_slow > 0:
+            w_diff = max(0.0, 1.0 - self.w_fast / self.w_slow)
+            random = self.rng.random(n_max) < w_diff
+            if random.any():
+                new[random] = self.random_poses(int(random.sum()))
+                self.w_slow = self.w_fast = 0.0
+        count = self._kld_count(new)
+        self.particles = new[:count]
+        self.weights = np.full(count, 1.0 / count)
+
+    def _kld_count(self, poses: np.ndarray) -> int:
+        """How many of ``poses`` (in draw order) KLD-sampling keeps."""
+        c = self.config
+        keys = np.floor(poses / np.asarray(KLD_BIN)).astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        new_bin = np.zeros(poses.shape[0], dtype=np.int64)
+        new_bin[first] = 1
+        k = np.cumsum(new_bin)  # occupied bins after n particles
+        n = np.arange(1, poses.shape[0] + 1)
+        limit = np.where(k <= 1, c.max_particles, kld_limit(k, c.pf_err, c.pf_z))
+        limit = np.clip(limit, c.min_particles, c.max_particles)
+        enough = np.flatnonzero(n > limit)
+        return int(n[enough[0]]) if enough.size else poses.shape[0]
+
+    def _cluster_estimate(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance of the heaviest 8-connected cluster of 0.5 m (x, y) bins."""
+        xy = np.floor(self.particles[:, :2] / CLUSTER_BIN).astype(np.int64)
+        lo = xy.min(axis=0)
+        span = xy.max(axis=0) - lo + 1
+        if span[0] * span[1] > 4_000_000:  # particles strewn absurdly far: no clustering
+            return weighted_pose_stats(self.particles, self.weights)
+        occupied = np.zeros(tuple(span), dtype=bool)
+        cell = xy - lo
+        occupied[cell[:, 0], cell[:, 1]] = True
+        labels, count = ndimage.label(occupied, structure=np.ones((3, 3)))
+        particle_label = labels[cell[:, 0], cell[:, 1]]
+        mass = np.bincount(particle_label, weights=self.weights, minlength=count + 1)
+        members = particle_label == int(np.argmax(mass))
+        return weighted_pose_stats(self.particles[members], self.weights[members])
