@@ -10,7 +10,7 @@ from ..errors import ScenarioError
 from . import semantics
 from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
-from .yaml_source import line_of, parse_yaml
+from .yaml_source import line_of, parse_yaml, read_text
 
 PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"
 DEFAULT_SCENARIO = PACKAGE_DATA / "default.yaml"
@@ -80,13 +80,6 @@ def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
     """Read and validate a scenario file (path or shipped name; None = built-in default)."""
     path = resolve(spec)
     source = str(spec) if spec is not None and Path(str(spec)).exists() else str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(source, "", "file not found") from None
-    except IsADirectoryError:
-        raise ScenarioError(source, "", "is a directory, not a scenario file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(source, "", f"cannot read: {exc}") from None
+    text = read_text(path, source)
     data, node = parse_yaml(text, source)
     return parse_scenario(data, source, node)
