@@ -11,8 +11,9 @@ from pydantic import Field
 
 from .controllers import ControllerConfig
 from .types import (
-    Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
-    Probability, Section, Vec2,
+    MAX_BEAMS, MAX_OBSTACLES, MAX_ROBOTS, Accel, Angle, Bias, Distance, Duration, Float,
+    FieldOfView, Friction, Int, Length, Mass, Name, Noise, Pose, PositiveFloat,
+    PositiveInt, Probability, Rate, Region, Resolution, Section, Speed, Vec2,
 )
 
 # ---------------------------------------------------------------------------- world
@@ -25,25 +26,25 @@ class WorldConfig(Section):
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
     # pymunk steps per dt; None = computed so nothing tunnels
     substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
-    duration: PositiveFloat = 30.0  # default run length [s]
-    wall_friction: NonNegativeFloat = 0.5  # contact friction of the arena walls
+    duration: Duration = 30.0  # default run length [s]
+    wall_friction: Friction = 0.5  # contact friction of the arena walls
 
 
 # ---------------------------------------------------------------------------- obstacles
 
 
 class _Solid(Section):
-    friction: NonNegativeFloat = 0.5  # contact friction (pymunk multiplies the two shapes')
+    friction: Friction = 0.5  # contact friction (pymunk multiplies the two shapes')
     movable: bool = False  # a dynamic body the robots can push
     mass: Mass = 1.0  # [kg], movable only
-    ground_friction: NonNegativeFloat = 0.5  # floor friction coefficient mu, movable only
+    ground_friction: Friction = 0.5  # floor friction coefficient mu, movable only
 
 
 class BoxObstacle(_Solid):
     type: Literal["box"]
     center: Vec2  # [m]
     size: tuple[Length, Length]  # width, height [m]
-    angle: Float = 0.0  # [rad]
+    angle: Angle = 0.0  # [rad]
 
 
 class CircleObstacle(_Solid):
@@ -54,7 +55,7 @@ class CircleObstacle(_Solid):
 
 class PolygonObstacle(_Solid):
     type: Literal["polygon"]
-    points: list[Vec2] = Field(min_length=3)  # outline [m], either winding, concave allowed
+    points: Region  # outline [m], either winding, concave allowed
 
 
 class WallObstacle(Section):
@@ -62,7 +63,7 @@ class WallObstacle(Section):
     start: Vec2  # [m]
     end: Vec2  # [m]
     thickness: Length = 0.05  # [m]
-    friction: NonNegativeFloat = 0.5
+    friction: Friction = 0.5
 
 
 ObstacleConfig = Annotated[
@@ -75,33 +76,33 @@ OBSTACLE_TYPES = ("box", "circle", "polygon", "wall")
 
 
 class LidarConfig(Section):
-    beams: PositiveInt = 360
+    beams: Annotated[PositiveInt, Field(le=MAX_BEAMS)] = 360
     fov: FieldOfView = 2 * math.pi  # [rad], centred on the heading
-    max_range: PositiveFloat = 8.0  # [m]
-    min_range: NonNegativeFloat = 0.05  # [m]; closer returns read max_range (no return)
-    noise_std: NonNegativeFloat = 0.0  # Gaussian range noise [m]
-    rate: PositiveFloat = 10.0  # scans per second [Hz]
+    max_range: Annotated[Distance, Field(gt=0)] = 8.0  # [m]
+    min_range: Distance = 0.05  # [m]; closer returns read max_range (no return)
+    noise_std: Annotated[Distance, Field(le=100)] = 0.0  # Gaussian range noise [m]
+    rate: Rate = 10.0  # scans per second [Hz]
     offset: Pose = (0.0, 0.0, 0.0)  # mounting pose in the robot frame [m, m, rad]
     dropout: Probability = 0.0  # chance that a beam has no return (reads max_range)
 
 
 class OdometryConfig(Section):
-    wheel_noise_std: NonNegativeFloat = 0.0  # [m per sqrt(m)]: travel error std after 1 m
+    wheel_noise_std: Noise = 0.0  # [m per sqrt(m)]: travel error std after 1 m
     # Fractional errors: odometry believes a wheel radius (track width) of true * (1 + error).
-    left_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # left wheel radius
-    right_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # right wheel radius
-    track_width_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # track width
-    encoder_resolution: NonNegativeFloat = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
+    left_scale_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # left wheel radius
+    right_scale_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # right wheel radius
+    track_width_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # track width
+    encoder_resolution: Resolution = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
 
 
 class ImuConfig(Section):
-    rate: PositiveFloat | None = None  # [Hz]; None = every physics step
-    gyro_noise_std: NonNegativeFloat = 0.0  # yaw-rate white noise [rad/s]
-    gyro_bias: Float = 0.0  # constant yaw-rate bias [rad/s]
-    accel_noise_std: NonNegativeFloat = 0.0  # white noise per axis [m/s^2]
-    accel_bias: Vec2 = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
-    gyro_bias_walk: NonNegativeFloat = 0.0  # yaw-rate bias random walk [rad/s per sqrt(s)]
-    accel_bias_walk: NonNegativeFloat = 0.0  # accel bias random walk per axis [m/s^2 per sqrt(s)]
+    rate: Rate | None = None  # [Hz]; None = every physics step
+    gyro_noise_std: Noise = 0.0  # yaw-rate white noise [rad/s]
+    gyro_bias: Bias = 0.0  # constant yaw-rate bias [rad/s]
+    accel_noise_std: Noise = 0.0  # white noise per axis [m/s^2]
+    accel_bias: tuple[Bias, Bias] = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
+    gyro_bias_walk: Noise = 0.0  # yaw-rate bias random walk [rad/s per sqrt(s)]
+    accel_bias_walk: Noise = 0.0  # accel bias random walk per axis [m/s^2 per sqrt(s)]
 
 
 # ---------------------------------------------------------------------------- robots
@@ -109,7 +110,7 @@ class ImuConfig(Section):
 
 class GoalConfig(Section):
     position: Vec2  # [m]
-    tolerance: PositiveFloat = 0.2  # [m]
+    tolerance: Annotated[Distance, Field(gt=0)] = 0.2  # [m]
 
 
 class RobotConfig(Section):
@@ -119,9 +120,9 @@ class RobotConfig(Section):
     radius: Length = 0.2  # [m]
     mass: Mass = 5.0  # [kg]
     track_width: Length = 0.3  # wheel separation [m]
-    max_wheel_speed: PositiveFloat = 1.0  # [m/s]
-    max_accel: PositiveFloat = 3.0  # per wheel [m/s^2]
-    friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
+    max_wheel_speed: Speed = 1.0  # [m/s]
+    max_accel: Accel = 3.0  # per wheel [m/s^2]
+    friction: Friction = 0.5  # contact friction of the robot's body
     localization: Literal["odometry", "ground_truth"] = "odometry"  # the pose controllers see
     lidar: LidarConfig | None = None
     odometry: OdometryConfig = OdometryConfig()
@@ -135,12 +136,12 @@ class RobotConfig(Section):
 
 class RobotExpectation(Section):
     goal_reached: bool | None = None
-    max_collisions: Annotated[Int, Field(ge=0)] | None = None
-    within: PositiveFloat | None = None  # goal reached by this simulated time [s]
-    min_clearance: NonNegativeFloat | None = None  # [m], closest approach to any obstacle
-    max_path_length: PositiveFloat | None = None  # [m]
-    never_enter: list[list[Vec2]] = []  # polygons the robot's centre must never enter
-    end_in: list[Vec2] | None = None  # polygon the robot's centre must end inside
+    max_collisions: Annotated[Int, Field(ge=0, le=10**9)] | None = None
+    within: Duration | None = None  # goal reached by this simulated time [s]
+    min_clearance: Distance | None = None  # [m], closest approach to any obstacle
+    max_path_length: Annotated[PositiveFloat, Field(le=1e7)] | None = None  # [m]
+    never_enter: Annotated[list[Region], Field(max_length=100)] = []  # polygons the centre avoids
+    end_in: Region | None = None  # polygon the robot's centre must end inside
 
 
 # ---------------------------------------------------------------------------- scenario
@@ -148,9 +149,9 @@ class RobotExpectation(Section):
 
 class ScenarioConfig(Section):
     name: Name
-    description: str = ""
+    description: Annotated[str, Field(max_length=10_000)] = ""
     seed: Annotated[Int, Field(ge=0)] = 0
     world: WorldConfig
-    obstacles: list[ObstacleConfig] = []
-    robots: list[RobotConfig] = Field(min_length=1)
+    obstacles: Annotated[list[ObstacleConfig], Field(max_length=MAX_OBSTACLES)] = []
+    robots: list[RobotConfig] = Field(min_length=1, max_length=MAX_ROBOTS)
     expect: dict[str, RobotExpectation] = {}
