@@ -1,13 +1,15 @@
 """Scenario files -> validated, frozen ScenarioConfig (or one ScenarioError)."""
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, ScenarioWarning
 from . import semantics
+from .checks import angle_warnings
 from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
 from .yaml_source import line_of, parse_yaml, read_text
@@ -65,7 +67,7 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
         if first["type"] == "missing" and loc and isinstance(loc[-1], int):
             loc = loc[:-1]  # a short list: name the list, not its absent item
         path, clean_loc, owner = walk(ScenarioConfig, loc)
-        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        more = _more_problems(errors, first)
         raise ScenarioError(source, path, describe(first, owner) + more,
                             line_of(node, clean_loc)) from None
     try:
@@ -73,7 +75,22 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
     except semantics.SemanticError as exc:
         path, clean_loc, _ = walk(ScenarioConfig, exc.loc)
         raise ScenarioError(source, path, exc.problem, line_of(node, clean_loc)) from None
+    for loc, problem in angle_warnings(config):
+        path, clean_loc, _ = walk(ScenarioConfig, loc)
+        warnings.warn(ScenarioWarning(source, path, problem, line_of(node, clean_loc)),
+                      stacklevel=2)
     return config
+
+
+def _more_problems(errors: list[dict], first: dict) -> str:
+    """How many other problems pydantic found, worded so it cannot be read as the end of a
+    list of valid keys; a misspelt key's 'missing' twin is the same problem, not another."""
+    parent = first["loc"][:-1]
+    others = [e for e in errors if e is not first and not (
+        first["type"] == "extra_forbidden" and e["type"] == "missing" and e["loc"][:-1] == parent)]
+    if not others:
+        return ""
+    return f"; {len(others)} more problem{'s' if len(others) > 1 else ''} in the file"
 
 
 def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
