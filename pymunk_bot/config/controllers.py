@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import AfterValidator, Field
+from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
 
 from .types import (
     MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, PositiveInt, Rate, Section, Speed, Vec2,
@@ -107,12 +107,12 @@ class NavigateControllerConfig(_GoalConfig):
 _CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
 
 
-def _importable(value: str) -> str:
+def _importable(value: str, info: ValidationInfo) -> str:
     if not _CLASS_PATH.match(value):
         raise ValueError(f"must be 'package.module:ClassName' (got {value!r})")
-    from ..controllers.python import import_class  # lazy: config must not need the controllers
+    from ..controllers.python import check_class_path  # lazy: config must not need controllers
 
-    import_class(value)  # raises ValueError with a one-line reason
+    check_class_path(value, (info.context or {}).get("base_dir"))  # runs no user code
     return value
 
 
@@ -124,6 +124,18 @@ class PythonControllerConfig(Section):
     params: dict[str, Any] = {}  # keyword arguments for the class's constructor
     rate: Rate | None = None  # [Hz]; None = the class's own ``rate`` (default 10)
     goal: Vec2 | None = None  # [m]; None = the robot's goal
+    # The scenario file's folder, where ``class_path`` is looked for first (not a YAML key).
+    _base_dir: str | None = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _remember_base_dir(self, info: ValidationInfo) -> "PythonControllerConfig":
+        self._base_dir = (info.context or {}).get("base_dir")
+        return self
+
+    @property
+    def base_dir(self) -> str | None:
+        """The scenario file's folder (None for data not read from a file)."""
+        return self._base_dir
 
 
 ControllerConfig = Annotated[

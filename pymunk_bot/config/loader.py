@@ -53,13 +53,16 @@ def resolve(spec: str | Path | None) -> Path:
                         f"{did_you_mean(str(spec), shipped)}; see `pymunk-bot list`")
 
 
-def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
-    """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers."""
+def parse_scenario(data: Any, source: str, node=None,
+                   base_dir: str | Path | None = None) -> ScenarioConfig:
+    """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers;
+    ``base_dir`` (the file's folder) is where a python controller's module is looked for first."""
     if not isinstance(data, dict):
         raise ScenarioError(source, "", "the file must be a YAML mapping of scenario keys "
                                         f"(got {type(data).__name__})")
     try:
-        config = ScenarioConfig.model_validate(data)
+        context = {"base_dir": None if base_dir is None else str(base_dir)}
+        config = ScenarioConfig.model_validate(data, context=context)
     except ValidationError as exc:
         errors = exc.errors()
         first = most_helpful(errors)
@@ -99,4 +102,4 @@ def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
     source = str(spec) if spec is not None and Path(str(spec)).exists() else str(path)
     text = read_text(path, source)
     data, node = parse_yaml(text, source)
-    return parse_scenario(data, source, node)
+    return parse_scenario(data, source, node, base_dir=path.resolve().parent)

@@ -7,11 +7,11 @@ imports pygame or matplotlib at module level.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import ScenarioError
+from ..results import writable_problem
 
 VIDEO_FORMATS = (".mp4", ".gif")
 LOG_FORMATS = (".npz",)
@@ -25,13 +25,9 @@ def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:
         got = f"'{path.suffix}'" if path.suffix else "no extension"
         raise ScenarioError(option, "", f"{path}: unsupported file type ({got}); use "
                                         f"{' or '.join(formats)}")
-    if path.is_dir():
-        raise ScenarioError(option, "", f"{path} is a directory")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ScenarioError(option, "", f"{path}: directory {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ScenarioError(option, "", f"{path}: directory {parent} is not writable")
+    problem = writable_problem(path)
+    if problem is not None:
+        raise ScenarioError(option, "", problem)
     return path
 
 
