@@ -16,7 +16,7 @@ import numpy as np
 import pygame
 
 from .camera import Camera
-from .draw import Layers, draw_scene
+from .draw import Layers, StaticLayer, draw_scene
 from .hud import Hud, HudState
 from .scene import Scene
 
@@ -42,6 +42,7 @@ class Viewer:
         self.source = source
         self.camera = Camera(viewport)
         self.layers = Layers()
+        self.static = StaticLayer()  # the frame's fixed part, redrawn only when the view moves
         self.hud = Hud()
         self.label_font = pygame.font.Font(None, 18)
         self.duration = duration
@@ -308,7 +309,7 @@ class Viewer:
         """Render the present state (with the HUD); changes nothing but ``surface``."""
         scene = self.scene()
         draw_scene(surface, scene, self.camera, self.layers, self.selected, self.label_font,
-                   halo=not self.recording)
+                   halo=not self.recording, static=self.static)
         if not hud:
             return
         selected = next((r for r in scene.robots if r.name == self.selected), None)
