@@ -7,6 +7,7 @@ imports pygame or matplotlib at module level.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -76,12 +77,15 @@ class RunOutputs:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
         from . import ViewerUnavailable, record_video
 
+        started = time.perf_counter()
         try:
             frames = record_video(sim, self.record, duration, fps=self.fps, size=self.size,
                                   progress=True)
         except ViewerUnavailable as exc:
             raise ScenarioError("--record", "", str(exc)) from None
-        print(f"wrote {self.record} ({frames} frames)")
+        spent = max(time.perf_counter() - started, 1e-9)  # [s] of wall time, drawing included
+        print(f"wrote {self.record} ({frames} frames in {spent:.1f} s: {frames / spent:.0f} "
+              f"frames/s, {duration / spent:.2f}x real time)")
 
     def finish(self) -> None:
         """Write the run log, if one was asked for."""
