@@ -261,6 +261,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `pymunk-bot run ... | head -1`: the reader left, nothing to say
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit must not fail again
+        return 128 + signal.SIGPIPE
     except Exception as exc:  # a bug in pymunk-bot itself: show everything
         traceback.print_exc(file=sys.stderr)
         print(f"internal error: {type(exc).__name__}: {exc} (this is a bug in pymunk-bot; "
