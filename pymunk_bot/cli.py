@@ -111,6 +111,9 @@ def _print_summary(result: dict, verdict_lines: list[str]) -> None:
         x, y, theta = r["pose"]
         status = r.get("controller_status")
         controller = f", controller {status}" if status not in (None, "failed") else ""
+        if status == "failed" and not any(f"{name}: controller failed" in line
+                                          for line in verdict_lines):
+            controller = f", controller failed as expected: {r['controller_message']}"
         print(f"  {name}: pose ({x:.3f}, {y:.3f}, {theta:.3f}), {r['distance']:.2f} m travelled, "
               f"{r['collisions']} collision(s){goal}{controller}")
     for line in verdict_lines[:-1]:

@@ -120,6 +120,15 @@ class Verdict:
         return out
 
 
+def unexpected_failures(expectations: dict, controller_status: dict[str, tuple[str | None, str]]
+                        ) -> list[tuple[str, str]]:
+    """(robot, message) of controllers that reported ``failed`` when the scenario did not
+    expect it: a scenario expecting ``goal_reached: false`` expects its controller to give up."""
+    return [(name, message) for name, (status, message) in controller_status.items()
+            if status == "failed" and not (name in expectations
+                                           and expectations[name].goal_reached is False)]
+
+
 def judge(expectations: dict, checks: list[Check], sim_time: float, planned: float,
           controller_status: dict[str, tuple[str | None, str]], dt: float) -> Verdict:
     """Sort checks into decided and undecided for a run of ``sim_time`` out of ``planned`` [s].
@@ -143,8 +152,7 @@ def judge(expectations: dict, checks: list[Check], sim_time: float, planned: flo
         else:
             open_ = False
         (undecided if open_ else decided).append(check)
-    failures = [(name, message) for name, (status, message) in controller_status.items()
-                if status == "failed"]
+    failures = unexpected_failures(expectations, controller_status)
     needed = max([planned] + [expectations[c.robot].within or 0.0 for c in undecided])
     if failures or not all(c.passed for c in decided):
         status = "failed"

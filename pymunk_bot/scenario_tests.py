@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 from .errors import ScenarioError
+from .expectations import unexpected_failures
 
 YAML_SUFFIXES = (".yaml", ".yml")
 
@@ -95,9 +96,10 @@ def run_scenario(path: str | Path, seed: int | None = None,
         return outcome
     checks = sim.check_expectations()
     outcome.failures = [c.miss() for c in checks if not c.passed]
-    outcome.failures += [f"{robot.name}: controller failed: {robot.controller.message}"
-                         for robot in sim.robots.values()
-                         if robot.controller is not None and robot.controller.status == "failed"]
+    statuses = {r.name: (r.controller.status, r.controller.message)
+                for r in sim.robots.values() if r.controller is not None}
+    outcome.failures += [f"{name}: controller failed: {message}"
+                         for name, message in unexpected_failures(config.expect, statuses)]
     outcome.status = "passed" if not outcome.failures else "failed"
     outcome.sim_time = sim.time
     outcome.wall_time = time.perf_counter() - started

@@ -95,3 +95,22 @@ def test_an_internal_error_is_exit_3_with_its_traceback(tmp_path, capsys, monkey
     assert main(["run", write(tmp_path, plain), "--headless"]) == 3
     err = capsys.readouterr().err
     assert "Traceback" in err and "internal error: RuntimeError: a bug inside" in err
+
+
+def test_pursuit_gains_default_to_the_scenario_pursuit_defaults():
+    from dataclasses import fields
+
+    from pymunk_bot.config.controllers import PursuitConfig
+    from pymunk_bot.planning.pursuit import PursuitGains
+
+    gains = PursuitGains()
+    shared = {f.name for f in fields(PursuitGains)} & set(PursuitConfig.model_fields)
+    assert shared >= {"lookahead", "lookahead_time", "corner_radius", "decel"}
+    for name in shared:
+        assert getattr(gains, name) == PursuitConfig.model_fields[name].default, name
+
+
+def test_a_controller_failure_the_scenario_expects_is_not_a_failure(capsys):
+    # unreachable.yaml expects goal_reached: false, i.e. that navigate gives up cleanly.
+    assert main(["run", str(REPO / "scenarios" / "unreachable.yaml"), "--headless"]) == 0
+    assert "PASSED" in capsys.readouterr().out
