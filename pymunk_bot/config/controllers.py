@@ -10,7 +10,8 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
 
 from .types import (
-    MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, PositiveInt, Rate, Section, Speed, Vec2,
+    MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, PositiveFloat, PositiveInt,
+    PositiveShort, Rate, Section, Short, Speed, Vec2,
 )
 
 
@@ -39,19 +40,19 @@ class GoToGoalControllerConfig(_GoalConfig):
     """Proportional steering toward a point: v = k_rho * distance, omega = k_alpha * bearing."""
 
     type: Literal["go_to_goal"]
-    k_rho: Annotated[Gain, Field(gt=0)] = 1.0  # [1/s]
-    k_alpha: Annotated[Gain, Field(gt=0)] = 3.0  # [1/s]
+    k_rho: Annotated[PositiveFloat, Field(le=1e3)] = 1.0  # [1/s]
+    k_alpha: Annotated[PositiveFloat, Field(le=1e3)] = 3.0  # [1/s]
 
 
 class PursuitConfig(Section):
     """Pure-pursuit path following, shared by ``waypoints`` and ``navigate``."""
 
-    lookahead: Annotated[Distance, Field(gt=0, le=100)] = 0.6  # [m] steering point ahead, full speed
-    lookahead_time: Annotated[Duration, Field(le=100)] = 0.4  # [s] lookahead = speed * this (0.2 m to ``lookahead``)
-    corner_radius: Annotated[Distance, Field(le=100)] = 0.5  # [m] corners are rounded with arcs up to this radius
+    lookahead: PositiveShort = 0.6  # [m] steering point ahead, full speed
+    lookahead_time: PositiveShort = 0.4  # [s] lookahead = speed * this (0.2 m to ``lookahead``)
+    corner_radius: Short = 0.5  # [m] corners are rounded with arcs up to this radius
     lateral_accel: Accel = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
     decel: Accel = 1.0  # [m/s^2] planned braking before bends and the end
-    rotate_threshold: Annotated[Gain, Field(gt=0, le=3.1416)] = 1.2  # [rad] turn on the spot above
+    rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot
 
 
 class WaypointsControllerConfig(_DrivingConfig):
@@ -68,16 +69,16 @@ class WaypointsControllerConfig(_DrivingConfig):
 class DwaConfig(Section):
     """Dynamic Window Approach (Fox et al. 1997) tuning, shared by ``avoid`` and ``navigate``."""
 
-    horizon: Annotated[Duration, Field(le=10)] = 1.5  # [s] each candidate arc is simulated this far ahead
+    horizon: Annotated[PositiveShort, Field(le=10)] = 1.5  # [s] each arc is simulated this far
     time_samples: Annotated[PositiveInt, Field(le=100)] = 12  # collision checks along each arc
     v_samples: Annotated[PositiveInt, Field(ge=2, le=50)] = 7  # forward speeds tried per tick
     w_samples: Annotated[PositiveInt, Field(ge=2, le=100)] = 15  # turn rates tried per tick
-    safety: Annotated[Distance, Field(le=10)] = 0.1  # [m] clearance below this counts as a collision
+    safety: Annotated[Short, Field(le=10)] = 0.1  # [m] clearance below this counts as a collision
     heading_weight: Gain = 0.4  # facing the target at the end of the arc
     progress_weight: Gain = 1.0  # getting closer to the target along the arc
     clearance_weight: Gain = 0.5  # closest approach on the arc (up to the cap)
     speed_weight: Gain = 0.2  # driving fast
-    clearance_cap: Annotated[Distance, Field(gt=0, le=100)] = 0.4  # [m] more clearance scores no better
+    clearance_cap: PositiveShort = 0.4  # [m] more clearance scores no better
     allow_reverse: bool = False  # back away slowly when closer than ``safety`` to something
 
 
@@ -93,12 +94,12 @@ class NavigateControllerConfig(_GoalConfig):
 
     type: Literal["navigate"]
     resolution: Annotated[Distance, Field(ge=0.01, le=10)] = 0.1  # [m] planning grid cell size
-    margin: Annotated[Distance, Field(le=100)] = 0.25  # [m] clearance beyond the radius that paths try to keep
-    hard_margin: Annotated[Distance, Field(le=100)] = 0.02  # [m] beyond the radius: closer cells are blocked
+    margin: Short = 0.25  # [m] clearance beyond the radius that paths try to keep
+    hard_margin: Short = 0.02  # [m] beyond the radius: closer cells are blocked
     clearance_cost: Gain = 4.0  # extra cost per metre next to an obstacle
     map_movable: bool = False  # plan around movable obstacles at their starting places
-    lookahead: Annotated[Distance, Field(gt=0, le=100)] = 0.6  # [m] steering point ahead on the path
-    stuck_time: Annotated[Duration, Field(le=1e4)] = 3.0  # [s] without progress along the path before a replan
+    lookahead: PositiveShort = 0.6  # [m] steering point ahead on the path
+    stuck_time: Duration = 3.0  # [s] without progress along the path before a replan
     give_up_after: Duration = 10.0  # [s] of failed replans (blocked by unmapped things)
     pursuit: PursuitConfig = PursuitConfig()
     dwa: DwaConfig = DwaConfig()

@@ -78,7 +78,7 @@ OBSTACLE_TYPES = ("box", "circle", "polygon", "wall")
 class LidarConfig(Section):
     beams: Annotated[PositiveInt, Field(le=MAX_BEAMS)] = 360
     fov: FieldOfView = 2 * math.pi  # [rad], centred on the heading
-    max_range: Annotated[Distance, Field(gt=0)] = 8.0  # [m]
+    max_range: Annotated[PositiveFloat, Field(le=1e4)] = 8.0  # [m]
     min_range: Distance = 0.05  # [m]; closer returns read max_range (no return)
     noise_std: Annotated[Distance, Field(le=100)] = 0.0  # Gaussian range noise [m]
     rate: Rate = 10.0  # scans per second [Hz]
@@ -110,7 +110,7 @@ class ImuConfig(Section):
 
 class GoalConfig(Section):
     position: Vec2  # [m]
-    tolerance: Annotated[Distance, Field(gt=0)] = 0.2  # [m]
+    tolerance: Annotated[PositiveFloat, Field(le=1e4)] = 0.2  # [m]
 
 
 class RobotConfig(Section):

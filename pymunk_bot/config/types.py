@@ -27,6 +27,8 @@ Rate = Annotated[Float, Field(gt=0, le=1e3)]  # [Hz]: a controller or sensor at 
 Gain = Annotated[Float, Field(ge=0, le=1e3)]  # a dimensionless weight or a controller gain
 Friction = Annotated[Float, Field(ge=0, le=100)]  # contact / floor friction coefficient
 Duration = Annotated[Float, Field(gt=0, le=86_400)]  # [s], at most one simulated day
+Short = Annotated[Float, Field(ge=0, le=100)]  # [m], a margin or radius at robot scale
+PositiveShort = Annotated[Float, Field(gt=0, le=100)]  # a look-ahead [m] or [s], a cap [m]
 Angle = Annotated[Float, Field(ge=-1e3, le=1e3)]  # [rad]; |angle| > 2 pi warns (degrees?)
 Noise = Annotated[Float, Field(ge=0, le=1e3)]  # a noise std or random-walk rate, sensor's unit
 Bias = Annotated[Float, Field(ge=-1e3, le=1e3)]  # a sensor bias, in the sensor's unit
