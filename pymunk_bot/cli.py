@@ -2,13 +2,43 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
+import signal
 import sys
+import traceback
+import warnings
 from pathlib import Path
 
-from .errors import ScenarioError
+from .errors import ControllerError, ScenarioError, ScenarioWarning
 
-EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+# 0 ran and every expectation held; 1 an expectation failed, could not be decided, or a
+# controller failed (or raised); 2 bad input; 3 an internal error (a bug: traceback shown).
+EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR = 0, 1, 2, 3
+MAX_SEED = 2**63 - 1
+MAX_DURATION = 86_400.0  # [s] simulated, as the scenario's own world.duration
+
+
+def _seed(text: str) -> int:
+    """argparse type: an integer in [0, 2**63 - 1]."""
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 0 (got '{text}')") from None
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1] (got {value})")
+    return value
+
+
+def _duration(text: str) -> float:
+    """argparse type: simulated seconds, finite, in (0, MAX_DURATION]."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds (got '{text}')") from None
+    if not (math.isfinite(value) and 0 < value <= MAX_DURATION):
+        raise argparse.ArgumentTypeError(f"must be > 0 and <= {MAX_DURATION:g} s (got '{text}')")
+    return value
 
 
 class _Parser(argparse.ArgumentParser):
@@ -27,13 +57,15 @@ def _display_available() -> bool:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .config import load_scenario
+    from .expectations import judge
+    from .results import write_json, writable_problem
     from .sim import Simulation
 
+    if args.out is not None and (problem := writable_problem(args.out)) is not None:
+        raise ScenarioError("--out", "", problem)  # before anything runs
     config = load_scenario(args.scenario)
     sim = Simulation(config, seed=args.seed, source=args.scenario)
     duration = args.duration if args.duration is not None else config.world.duration
-    if args.duration is not None and not args.duration > 0:
-        raise ScenarioError("--duration", "", f"must be > 0 (got {args.duration:g})")
     from .viewer.commands import prepare_outputs
 
     outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
@@ -62,27 +94,40 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
             print("note: no display found; running headless (pass --headless to silence this)")
         outputs.run_headless(sim, duration)
     result = sim.result()
+    statuses = {name: (r["controller_status"], r["controller_message"])
+                for name, r in result["robots"].items()}
+    verdict = judge(config.expect, sim.check_expectations(), sim.time, config.world.duration,
+                    statuses, sim.dt)
+    result["passed"] = verdict.passed
+    result["verdict"] = verdict.status
+    result["undecided"] = [f"{c.robot}.{c.key}" for c in verdict.undecided]
     outputs.finish()
     if args.out:
         write_json(args.out, result)
-    _print_summary(result)
-    return EXIT_OK if result["passed"] else EXIT_EXPECTATION_FAILED
+    _print_summary(result, verdict.lines())
+    return EXIT_OK if verdict.passed else EXIT_EXPECTATION_FAILED
 
 
-def _print_summary(result: dict) -> None:
+def _print_summary(result: dict, verdict_lines: list[str]) -> None:
     rtf = result["real_time_factor"]
+    speed = f" ({rtf:.0f}x real time)" if rtf else ""
     print(f"{result['scenario']} (seed {result['seed']}): {result['sim_time']:.2f} s simulated in "
-          f"{result['wall_time']:.3f} s ({rtf:.0f}x real time)" if rtf else "")
+          f"{result['wall_time']:.3f} s{speed}")
     for name, r in result["robots"].items():
         goal = ""
         if r["goal_reached"]:
             goal = f", goal reached at {r['time_to_goal']:.2f} s"
         x, y, theta = r["pose"]
+        status = r.get("controller_status")
+        controller = f", controller {status}" if status not in (None, "failed") else ""
+        if status == "failed" and not any(f"{name}: controller failed" in line
+                                          for line in verdict_lines):
+            controller = f", controller failed as expected: {r['controller_message']}"
         print(f"  {name}: pose ({x:.3f}, {y:.3f}, {theta:.3f}), {r['distance']:.2f} m travelled, "
-              f"{r['collisions']} collision(s){goal}")
-    for line in result["expectations"]:
-        print(f"  expect {line}")
-    print("PASSED" if result["passed"] else "FAILED")
+              f"{r['collisions']} collision(s){goal}{controller}")
+    for line in verdict_lines[:-1]:
+        print(f"  {line}")
+    print(verdict_lines[-1])
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -149,13 +194,17 @@ def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> Non
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = _Parser(prog="pymunk-bot", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"pymunk-bot {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     run = sub.add_parser("run", help="run a scenario (window if a display is available)")
     run.add_argument("scenario", nargs="?", help="path or shipped name (default: built-in)")
     run.add_argument("--headless", action="store_true", help="no window, full speed")
-    run.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
-    run.add_argument("--seed", type=int, help="override the scenario's seed")
+    run.add_argument("--duration", type=_duration,
+                     help="simulated seconds (default: the scenario's)")
+    run.add_argument("--seed", type=_seed, help="override the scenario's seed (an integer >= 0)")
     run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
     _add_video_options(run, "render the run offscreen to a video (.mp4 or .gif); no window")
     run.add_argument("--log", type=Path, metavar="RUN.npz|RUN.mcap",
@@ -198,16 +247,55 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Scenario warnings as one line on stderr; others as Python prints them."""
+    if issubclass(category, ScenarioWarning):
+        print(f"warning: {message}", file=sys.stderr)
+    else:
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
+def _terminate(signum, frame) -> None:
+    # Turn SIGTERM into an exception so `finally` blocks run (no .part files left behind).
+    raise SystemExit(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The `pymunk-bot` entry point; returns the exit status (see docs/cli.md)."""
     args = build_parser().parse_args(argv)
+    previous = None
     try:
-        return args.func(args)
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread: leave signals alone
+        pass
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", ScenarioWarning)
+            warnings.showwarning = _show_warning
+            return args.func(args)
     except ScenarioError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except ControllerError as exc:
+        traceback.print_exception(exc.__cause__ or exc, file=sys.stderr)
+        print(f"error: controller {exc} (a bug in the controller's code, not in the scenario)",
+              file=sys.stderr)
+        return EXIT_EXPECTATION_FAILED
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `pymunk-bot run ... | head -1`: the reader left, nothing to say
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit must not fail again
+        return 128 + signal.SIGPIPE
+    except Exception as exc:  # a bug in pymunk-bot itself: show everything
+        traceback.print_exc(file=sys.stderr)
+        print(f"internal error: {type(exc).__name__}: {exc} (this is a bug in pymunk-bot; "
+              "please report it with the traceback above)", file=sys.stderr)
+        return EXIT_INTERNAL_ERROR
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

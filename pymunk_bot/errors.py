@@ -20,3 +20,21 @@ class ScenarioError(Exception):
         line = f" (line {self.line})" if self.line is not None else ""
         # One line always, even when the problem quotes user text with line breaks in it.
         return f"{where}{self.problem}{line}".replace("\r", "\\r").replace("\n", "\\n")
+
+
+class ScenarioWarning(UserWarning):
+    """A doubtful but valid input (an angle that looks like degrees); the run goes on.
+    The CLI prints it as one line: ``warning: file: key.path: problem``."""
+
+    def __init__(self, source: str, path: str, problem: str, line: int | None = None) -> None:
+        super().__init__(ScenarioError(source, path, problem, line).format())
+
+
+class ControllerError(Exception):
+    """A user's controller code raised (in its import, constructor or compute): a bug in that
+    code, not bad scenario input. The CLI shows the traceback and exits 1."""
+
+    def __init__(self, where: str, problem: str) -> None:
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")

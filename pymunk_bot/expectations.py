@@ -82,3 +82,90 @@ def evaluate(expectations: dict, robots: dict) -> list[Check]:
                 f"outside at ({robot.pose[0]:.2f}, {robot.pose[1]:.2f})",
                 distance_to_polygon(robot.pose[:2], region), "m")
     return checks
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What a run can honestly claim about its expectations and controllers.
+
+    ``status``: "passed" (every expectation checked and held), "unchecked" (the scenario has no
+    expectations), "undecided" (none failed, but the run was too short to decide some),
+    "failed" (an expectation failed or a controller reported failure).
+    """
+
+    status: str
+    checks: list[Check]  # decided
+    undecided: list[Check]  # could change if the run went on to the scenario's duration
+    controller_failures: list[tuple[str, str]]  # (robot, the controller's message)
+    sim_time: float  # [s] how long the run was
+    needed: float  # [s] how long it must run to decide everything
+
+    @property
+    def passed(self) -> bool:
+        return self.status in ("passed", "unchecked")
+
+    def lines(self) -> list[str]:
+        """The summary's verdict lines, the last one the verdict itself."""
+        out = [f"expect {c.describe()}" for c in self.checks]
+        out += [f"expect {c.robot}.{c.key}: expected {c.expected}, got {c.actual} so far "
+                f"[undecided]" for c in self.undecided]
+        out += [f"{robot}: controller failed: {message or '(no message)'}"
+                for robot, message in self.controller_failures]
+        if self.status == "failed":
+            out.append("FAILED")
+        elif self.status == "undecided":
+            keys = ", ".join(f"{c.robot}.{c.key}" for c in self.undecided)
+            out.append(f"UNDECIDED: {keys} could not be decided in {self.sim_time:g} s "
+                       f"(run at least {self.needed:g} s)")
+        elif self.status == "unchecked":
+            out.append("nothing checked: the scenario has no expectations (add an 'expect' "
+                       "block)")
+        else:
+            out.append(f"PASSED ({len(self.checks)} expectation"
+                       f"{'s' if len(self.checks) != 1 else ''} checked)")
+        return out
+
+
+def unexpected_failures(expectations: dict, controller_status: dict[str, tuple[str | None, str]]
+                        ) -> list[tuple[str, str]]:
+    """(robot, message) of controllers that reported ``failed`` when the scenario did not
+    expect it: a scenario expecting ``goal_reached: false`` expects its controller to give up."""
+    return [(name, message) for name, (status, message) in controller_status.items()
+            if status == "failed" and not (name in expectations
+                                           and expectations[name].goal_reached is False)]
+
+
+def judge(expectations: dict, checks: list[Check], sim_time: float, planned: float,
+          controller_status: dict[str, tuple[str | None, str]], dt: float) -> Verdict:
+    """Sort checks into decided and undecided for a run of ``sim_time`` out of ``planned`` [s].
+
+    Safety checks (collisions, clearance, path length, never_enter) are judged over the run
+    that was asked for; what depends on the end state or a later time is undecided when the
+    run stopped before the scenario's duration (or before a ``within`` deadline).
+    """
+    short = sim_time + 0.5 * dt < planned
+    decided, undecided = [], []
+    for check in checks:
+        exp = expectations[check.robot]
+        if check.key == "within":
+            open_ = not check.passed and sim_time + 0.5 * dt < exp.within
+        elif check.key == "goal_reached":
+            deadline = exp.within if exp.within is not None else planned
+            open_ = (not check.passed and sim_time + 0.5 * dt < deadline) or (
+                check.passed and exp.goal_reached is False and short)
+        elif check.key == "end_in":
+            open_ = short
+        else:
+            open_ = False
+        (undecided if open_ else decided).append(check)
+    failures = unexpected_failures(expectations, controller_status)
+    needed = max([planned] + [expectations[c.robot].within or 0.0 for c in undecided])
+    if failures or not all(c.passed for c in decided):
+        status = "failed"
+    elif undecided:
+        status = "undecided"
+    elif not checks:
+        status = "unchecked"
+    else:
+        status = "passed"
+    return Verdict(status, decided, undecided, failures, sim_time, needed)

@@ -43,15 +43,33 @@ def segments_cross(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarra
 
 
 def is_simple_polygon(points: np.ndarray) -> bool:
-    """True when no two non-adjacent edges of the closed outline cross."""
-    n = len(points)
-    for i in range(n):
-        for j in range(i + 2, n):
-            if i == 0 and j == n - 1:
-                continue  # adjacent through the closing edge
-            if segments_cross(points[i], points[(i + 1) % n], points[j], points[(j + 1) % n]):
-                return False
+    """True when no two non-adjacent edges of the closed outline cross.
+
+    Vectorised over edge pairs in blocks of rows, so 2,000 points take well under a second.
+    """
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    a, b = pts, np.roll(pts, -1, axis=0)  # edge k runs from a[k] to b[k]
+    j = np.arange(n)
+    for start in range(0, n, _BLOCK):
+        i = np.arange(start, min(n, start + _BLOCK))[:, None]
+        p1, p2 = a[i[:, 0]][:, None, :], b[i[:, 0]][:, None, :]
+        d1, d2 = _cross_v(a, b, p1), _cross_v(a, b, p2)
+        d3, d4 = _cross_v(p1, p2, a[None]), _cross_v(p1, p2, b[None])
+        crossing = (d1 * d2 < 0) & (d3 * d4 < 0)
+        pairs = (j[None, :] >= i + 2) & ~((i == 0) & (j[None, :] == n - 1))
+        if np.any(crossing & pairs):
+            return False
     return True
+
+
+_BLOCK = 256  # rows of edge pairs tested at once (256 x n doubles per array)
+
+
+def _cross_v(o: np.ndarray, a: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """z of (a - o) x (p - o), broadcast over leading axes."""
+    return (a[..., 0] - o[..., 0]) * (p[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (
+        p[..., 0] - o[..., 0])
 
 
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -64,22 +82,32 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float
 def point_in_polygon(p: Point, points: np.ndarray) -> bool:
     """Even-odd rule; works for concave outlines of either winding."""
     x, y = float(p[0]), float(p[1])
-    inside = False
-    n = len(points)
-    for i in range(n):
-        (x1, y1), (x2, y2) = points[i], points[(i + 1) % n]
-        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
-            inside = not inside
-    return inside
+    pts = np.asarray(points, dtype=float)
+    x1, y1 = pts[:, 0], pts[:, 1]
+    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
+    spans = (y1 > y) != (y2 > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_at = x1 + (y - y1) * (x2 - x1) / (y2 - y1)
+    return bool(np.count_nonzero(spans & (x < x_at)) % 2)
+
+
+def _segment_distances(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points ``p`` to segments a-b, broadcast over leading axes."""
+    ab = b - a
+    denom = (ab * ab).sum(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(denom > 0, ((p - a) * ab).sum(axis=-1) / denom, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return np.hypot(*np.moveaxis(p - (a + t[..., None] * ab), -1, 0))
 
 
 def distance_to_polygon(p: Point, points: np.ndarray) -> float:
     """Distance from a point to a filled polygon: 0 inside, else to the nearest edge."""
     q = np.asarray(p, dtype=float)
-    if point_in_polygon(q, points):
+    pts = np.asarray(points, dtype=float)
+    if point_in_polygon(q, pts):
         return 0.0
-    n = len(points)
-    return min(point_segment_distance(q, points[i], points[(i + 1) % n]) for i in range(n))
+    return float(_segment_distances(q, pts, np.roll(pts, -1, axis=0)).min())
 
 
 def wrap_angle(angle: float) -> float:
@@ -91,11 +119,15 @@ def thinness(points: np.ndarray) -> float:
     """A lower bound on a simple polygon's thinnest width: the smallest distance from a vertex to
     an edge not touching it (equal to the minimum width for convex polygons; across a notch of a
     concave one it may underestimate, which only errs on the safe side)."""
-    n = len(points)
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    a, b = pts, np.roll(pts, -1, axis=0)  # edge j runs from vertex j to vertex j + 1
+    j = np.arange(n)
     best = math.inf
-    for i in range(n):
-        for j in range(n):
-            if j == i or (j + 1) % n == i:
-                continue
-            best = min(best, point_segment_distance(points[i], points[j], points[(j + 1) % n]))
+    for start in range(0, n, _BLOCK):
+        i = np.arange(start, min(n, start + _BLOCK))[:, None]
+        d = _segment_distances(pts[i[:, 0]][:, None, :], a[None], b[None])
+        touching = (j[None, :] == i) | ((j[None, :] + 1) % n == i)
+        d = np.where(touching, np.inf, d)
+        best = min(best, float(d.min()))
     return best

@@ -43,6 +43,11 @@ def make_figure(log: RunLog, kind: str = "all", robot: str | None = None):
                                            f"{', '.join(names)}")
     Figure, _, _ = _matplotlib()
     width, height = log.size
+    scanned = has_scans(log, robot)
+    if kind == "ranges" and not scanned:
+        which = f"robot '{robot}'" if robot is not None else "any robot"
+        raise ScenarioError("--kind", "", f"ranges: the log has no LiDAR scans of {which} "
+                                          "(give the robot a 'lidar' and run again)")
     if kind == "map":
         fig = Figure(figsize=_map_figsize(width, height), dpi=DPI, layout="constrained")
         draw_map(fig.add_subplot(), log, robot)
@@ -54,15 +59,26 @@ def make_figure(log: RunLog, kind: str = "all", robot: str | None = None):
         top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
         draw_scan_image(top, log, robot)
         draw_ranges(bottom, log, robot)
-    else:
+    elif scanned:
         fig = Figure(figsize=(13, 6), dpi=DPI, layout="constrained")
         grid = fig.add_gridspec(2, 2, width_ratios=(1.4, 1))
         draw_map(fig.add_subplot(grid[:, 0]), log, robot)
         draw_speed(fig.add_subplot(grid[0, 1]), log, robot)
         draw_ranges(fig.add_subplot(grid[1, 1]), log, robot)
+    else:  # no LiDAR: the speed plot takes the whole right column, no empty panel
+        fig = Figure(figsize=(13, 6), dpi=DPI, layout="constrained")
+        grid = fig.add_gridspec(1, 2, width_ratios=(1.4, 1))
+        draw_map(fig.add_subplot(grid[0, 0]), log, robot)
+        draw_speed(fig.add_subplot(grid[0, 1]), log, robot)
     fig.suptitle(f"{log.meta['scenario']} (seed {log.meta['seed']}), "
                  f"{float(log.time[-1]):.1f} s simulated")
     return fig
+
+
+def has_scans(log: RunLog, robot: str | None = None) -> bool:
+    """True when the log holds at least one LiDAR scan of the chosen robot(s)."""
+    return any(len(log.scans[log.robot_names[i]].time) for i in _chosen(log, robot)
+               if log.robot_names[i] in log.scans)
 
 
 def save_plot(log: RunLog, path: str | Path, kind: str = "all", robot: str | None = None) -> None:

@@ -20,6 +20,25 @@ def temp_beside(path: str | Path, suffix: str = ".tmp") -> str:
     return tmp
 
 
+def writable_problem(path: str | Path) -> str | None:
+    """Why ``path`` cannot be written atomically (None if it can): checked before a run, by
+    creating and removing a temporary file beside it (``os.access`` is fooled by /proc and
+    read-only mounts when running as root)."""
+    path = Path(path)
+    if path.is_dir():
+        return f"{path} is a directory"
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        return f"{path}: directory {parent} does not exist"
+    if path.exists() and not path.is_file():
+        return f"{path} exists and is not a regular file"
+    try:
+        Path(temp_beside(path)).unlink()
+    except OSError as exc:
+        return f"{path}: cannot write in {parent} ({exc.strerror or exc})"
+    return None
+
+
 def write_atomic(path: str | Path, data: bytes) -> None:
     """Write to a temporary file beside ``path``, fsync, then rename over ``path``."""
     tmp = temp_beside(path)

@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 from .errors import ScenarioError
+from .expectations import unexpected_failures
 
 YAML_SUFFIXES = (".yaml", ".yml")
 
@@ -95,6 +96,10 @@ def run_scenario(path: str | Path, seed: int | None = None,
         return outcome
     checks = sim.check_expectations()
     outcome.failures = [c.miss() for c in checks if not c.passed]
+    statuses = {r.name: (r.controller.status, r.controller.message)
+                for r in sim.robots.values() if r.controller is not None}
+    outcome.failures += [f"{name}: controller failed: {message}"
+                         for name, message in unexpected_failures(config.expect, statuses)]
     outcome.status = "passed" if not outcome.failures else "failed"
     outcome.sim_time = sim.time
     outcome.wall_time = time.perf_counter() - started
@@ -132,7 +137,11 @@ def format_table(outcomes: list[Outcome]) -> str:
 
 def command(args: argparse.Namespace) -> int:
     """``pymunk-bot test``: exit 0 all held, 1 an expectation failed, 2 a file is bad input."""
-    specs = args.paths or ["scenarios"]
+    specs = args.paths or _default_specs()
+    if not specs:
+        print("error: test: no ./scenarios folder here; name scenario files or folders "
+              "(pymunk-bot test PATH...)", file=sys.stderr)
+        return 2
     paths = discover(specs)
     if not paths:
         print(f"no scenario files with an 'expect' block under {', '.join(map(str, specs))}")
@@ -149,10 +158,35 @@ def command(args: argparse.Namespace) -> int:
     return 1 if counts["failed"] else 0
 
 
+def _jobs(text: str) -> int:
+    """argparse type: 1..256 processes."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
+    if not 1 <= value <= 256:
+        raise argparse.ArgumentTypeError(f"must be in 1..256 (got {value})")
+    return value
+
+
+def _default_specs() -> list[str]:
+    """./scenarios if there is one, else the shipped scenarios of this installation."""
+    if Path("scenarios").is_dir():
+        return ["scenarios"]
+    from .config.loader import shipped_scenario_dirs
+
+    dirs = [str(d) for d in shipped_scenario_dirs()]
+    if dirs:
+        print(f"no ./scenarios here: running the shipped scenarios in {', '.join(dirs)}")
+    return dirs
+
+
 def add_parser(sub) -> None:
     """Register the ``test`` subcommand on the CLI's subparsers."""
     test = sub.add_parser("test", help="run scenarios with an 'expect' block as regression tests")
     test.add_argument("paths", nargs="*", help="files or directories (default: ./scenarios)")
-    test.add_argument("--jobs", "-j", type=int, help="parallel processes (default: CPU count)")
-    test.add_argument("--seed", type=int, help="override every scenario's seed")
+    from .cli import _seed
+
+    test.add_argument("--jobs", "-j", type=_jobs, help="parallel processes (default: CPU count)")
+    test.add_argument("--seed", type=_seed, help="override every scenario's seed")
     test.set_defaults(func=command)

@@ -7,17 +7,20 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, Field
+from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
 
-from .types import Float, NonNegativeFloat, PositiveFloat, PositiveInt, Section, Vec2
+from .types import (
+    MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, PositiveFloat, PositiveInt,
+    PositiveShort, Rate, Section, Short, Speed, Vec2,
+)
 
 
 class _DrivingConfig(Section):
     """Keys every path- or goal-driving controller shares."""
 
-    rate: PositiveFloat = 10.0  # [Hz]
-    max_speed: PositiveFloat | None = None  # [m/s]; None = the robot's max wheel speed
-    tolerance: NonNegativeFloat | None = None  # [m] stop radius; None = the goal's tolerance
+    rate: Rate = 10.0  # [Hz]
+    max_speed: Speed | None = None  # [m/s]; None = the robot's max wheel speed
+    tolerance: Distance | None = None  # [m] stop radius; None = the goal's tolerance
 
 
 class _GoalConfig(_DrivingConfig):
@@ -28,9 +31,9 @@ class WheelsControllerConfig(Section):
     """Constant wheel speeds."""
 
     type: Literal["wheels"]
-    left: Float = 0.0  # [m/s]
-    right: Float = 0.0  # [m/s]
-    rate: PositiveFloat = 10.0  # [Hz]
+    left: Annotated[Float, Field(ge=-100, le=100)] = 0.0  # [m/s]
+    right: Annotated[Float, Field(ge=-100, le=100)] = 0.0  # [m/s]
+    rate: Rate = 10.0  # [Hz]
 
 
 class VelocityControllerConfig(Section):
@@ -47,19 +50,19 @@ class GoToGoalControllerConfig(_GoalConfig):
     """Proportional steering toward a point: v = k_rho * distance, omega = k_alpha * bearing."""
 
     type: Literal["go_to_goal"]
-    k_rho: PositiveFloat = 1.0  # [1/s]
-    k_alpha: PositiveFloat = 3.0  # [1/s]
+    k_rho: Annotated[PositiveFloat, Field(le=1e3)] = 1.0  # [1/s]
+    k_alpha: Annotated[PositiveFloat, Field(le=1e3)] = 3.0  # [1/s]
 
 
 class PursuitConfig(Section):
     """Pure-pursuit path following, shared by ``waypoints`` and ``navigate``."""
 
-    lookahead: PositiveFloat = 0.6  # [m] steering point ahead on the path, at full speed
-    lookahead_time: PositiveFloat = 0.4  # [s] lookahead = speed * this (0.2 m to ``lookahead``)
-    corner_radius: NonNegativeFloat = 0.5  # [m] corners are rounded with arcs up to this radius
-    lateral_accel: PositiveFloat = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
-    decel: PositiveFloat = 1.0  # [m/s^2] planned braking before bends and the end
-    rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot above
+    lookahead: PositiveShort = 0.6  # [m] steering point ahead, full speed
+    lookahead_time: PositiveShort = 0.4  # [s] lookahead = speed * this (0.2 m to ``lookahead``)
+    corner_radius: Short = 0.5  # [m] corners are rounded with arcs up to this radius
+    lateral_accel: Accel = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
+    decel: Accel = 1.0  # [m/s^2] planned braking before bends and the end
+    rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot
 
 
 class WaypointsControllerConfig(_DrivingConfig):
@@ -68,7 +71,7 @@ class WaypointsControllerConfig(_DrivingConfig):
     ``tolerance`` is the stop radius at the last point."""
 
     type: Literal["waypoints"]
-    points: list[Vec2] = Field(min_length=1)  # [m]
+    points: list[Vec2] = Field(min_length=1, max_length=MAX_WAYPOINTS)  # [m]
     loop: bool = False
     pursuit: PursuitConfig = PursuitConfig()
 
@@ -76,16 +79,16 @@ class WaypointsControllerConfig(_DrivingConfig):
 class DwaConfig(Section):
     """Dynamic Window Approach (Fox et al. 1997) tuning, shared by ``avoid`` and ``navigate``."""
 
-    horizon: PositiveFloat = 1.5  # [s] each candidate arc is simulated this far ahead
-    time_samples: PositiveInt = 12  # collision checks along each arc
-    v_samples: Annotated[PositiveInt, Field(ge=2)] = 7  # forward speeds tried per tick
-    w_samples: Annotated[PositiveInt, Field(ge=2)] = 15  # turn rates tried per tick
-    safety: NonNegativeFloat = 0.1  # [m] clearance below this counts as a collision
-    heading_weight: NonNegativeFloat = 0.4  # facing the target at the end of the arc
-    progress_weight: NonNegativeFloat = 1.0  # getting closer to the target along the arc
-    clearance_weight: NonNegativeFloat = 0.5  # closest approach on the arc (up to the cap)
-    speed_weight: NonNegativeFloat = 0.2  # driving fast
-    clearance_cap: PositiveFloat = 0.4  # [m] more clearance scores no better
+    horizon: Annotated[PositiveShort, Field(le=10)] = 1.5  # [s] each arc is simulated this far
+    time_samples: Annotated[PositiveInt, Field(le=100)] = 12  # collision checks along each arc
+    v_samples: Annotated[PositiveInt, Field(ge=2, le=50)] = 7  # forward speeds tried per tick
+    w_samples: Annotated[PositiveInt, Field(ge=2, le=100)] = 15  # turn rates tried per tick
+    safety: Annotated[Short, Field(le=10)] = 0.1  # [m] clearance below this counts as a collision
+    heading_weight: Gain = 0.4  # facing the target at the end of the arc
+    progress_weight: Gain = 1.0  # getting closer to the target along the arc
+    clearance_weight: Gain = 0.5  # closest approach on the arc (up to the cap)
+    speed_weight: Gain = 0.2  # driving fast
+    clearance_cap: PositiveShort = 0.4  # [m] more clearance scores no better
     allow_reverse: bool = False  # back away slowly when closer than ``safety`` to something
 
 
@@ -100,14 +103,14 @@ class NavigateControllerConfig(_GoalConfig):
     """Global A* on the scenario's map plus a local controller that follows the path."""
 
     type: Literal["navigate"]
-    resolution: Annotated[PositiveFloat, Field(ge=0.01)] = 0.1  # [m] planning grid cell size
-    margin: NonNegativeFloat = 0.25  # [m] clearance beyond the radius that paths try to keep
-    hard_margin: NonNegativeFloat = 0.02  # [m] beyond the radius: closer cells are blocked
-    clearance_cost: NonNegativeFloat = 4.0  # extra cost per metre next to an obstacle
+    resolution: Annotated[Distance, Field(ge=0.01, le=10)] = 0.1  # [m] planning grid cell size
+    margin: Short = 0.25  # [m] clearance beyond the radius that paths try to keep
+    hard_margin: Short = 0.02  # [m] beyond the radius: closer cells are blocked
+    clearance_cost: Gain = 4.0  # extra cost per metre next to an obstacle
     map_movable: bool = False  # plan around movable obstacles at their starting places
-    lookahead: PositiveFloat = 0.6  # [m] steering point ahead on the path
-    stuck_time: PositiveFloat = 3.0  # [s] without progress along the path before a replan
-    give_up_after: PositiveFloat = 10.0  # [s] of failed replans (blocked by unmapped things)
+    lookahead: PositiveShort = 0.6  # [m] steering point ahead on the path
+    stuck_time: Duration = 3.0  # [s] without progress along the path before a replan
+    give_up_after: Duration = 10.0  # [s] of failed replans (blocked by unmapped things)
     pursuit: PursuitConfig = PursuitConfig()
     dwa: DwaConfig = DwaConfig()
 
@@ -115,12 +118,12 @@ class NavigateControllerConfig(_GoalConfig):
 _CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
 
 
-def _importable(value: str) -> str:
+def _importable(value: str, info: ValidationInfo) -> str:
     if not _CLASS_PATH.match(value):
         raise ValueError(f"must be 'package.module:ClassName' (got {value!r})")
-    from ..controllers.python import import_class  # lazy: config must not need the controllers
+    from ..controllers.python import check_class_path  # lazy: config must not need controllers
 
-    import_class(value)  # raises ValueError with a one-line reason
+    check_class_path(value, (info.context or {}).get("base_dir"))  # runs no user code
     return value
 
 
@@ -130,5 +133,18 @@ class PythonControllerConfig(Section):
     type: Literal["python"]
     class_path: Annotated[str, AfterValidator(_importable)]
     params: dict[str, Any] = {}  # keyword arguments for the class's constructor
-    rate: PositiveFloat | None = None  # [Hz]; None = the class's own ``rate`` (default 10)
+    rate: Rate | None = None  # [Hz]; None = the class's own ``rate`` (default 10)
     goal: Vec2 | None = None  # [m]; None = the robot's goal
+    # The scenario file's folder, where ``class_path`` is looked for first (not a YAML key).
+    _base_dir: str | None = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _remember_base_dir(self, info: ValidationInfo) -> "PythonControllerConfig":
+        self._base_dir = (info.context or {}).get("base_dir")
+        return self
+
+    @property
+    def base_dir(self) -> str | None:
+        """The scenario file's folder (None for data not read from a file)."""
+        return self._base_dir
+

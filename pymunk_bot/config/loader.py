@@ -1,18 +1,20 @@
 """Scenario files -> validated, frozen ScenarioConfig (or one ScenarioError)."""
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, ScenarioWarning
 from . import semantics
 from .assemble import scenario_model
+from .checks import angle_warnings
 from .messages import describe, most_helpful, walk
 from .schema import ScenarioConfig
 from .world_map import attach_map
-from .yaml_source import line_of, parse_yaml
+from .yaml_source import line_of, parse_yaml, read_text
 
 PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"
 DEFAULT_SCENARIO = PACKAGE_DATA / "default.yaml"
@@ -53,17 +55,20 @@ def resolve(spec: str | Path | None) -> Path:
                         f"{did_you_mean(str(spec), shipped)}; see `pymunk-bot list`")
 
 
-def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
+def parse_scenario(data: Any, source: str, node=None,
+                   base_dir: str | Path | None = None) -> ScenarioConfig:
     """Validate already-parsed data; ``node`` (a YAML node tree) adds line numbers.
 
     ``source`` names the data in errors; when it is a file's path, a relative ``world.map`` is
-    resolved against that file's directory (else against the current directory)."""
+    resolved against that file's directory (else against the current directory). ``base_dir``
+    (the file's folder) is where a python controller's module is looked for first."""
     if not isinstance(data, dict):
         raise ScenarioError(source, "", "the file must be a YAML mapping of scenario keys "
                                         f"(got {type(data).__name__})")
     model = scenario_model()
     try:
-        config = model.model_validate(data)
+        context = {"base_dir": None if base_dir is None else str(base_dir)}
+        config = model.model_validate(data, context=context)
     except ValidationError as exc:
         errors = exc.errors()
         first = most_helpful(errors)
@@ -71,7 +76,7 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
         if first["type"] == "missing" and loc and isinstance(loc[-1], int):
             loc = loc[:-1]  # a short list: name the list, not its absent item
         path, clean_loc, owner = walk(model, loc)
-        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        more = _more_problems(errors, first)
         raise ScenarioError(source, path, describe(first, owner) + more,
                             line_of(node, clean_loc)) from None
     config = attach_map(config, source, node)
@@ -80,20 +85,28 @@ def parse_scenario(data: Any, source: str, node=None) -> ScenarioConfig:
     except semantics.SemanticError as exc:
         path, clean_loc, _ = walk(model, exc.loc)
         raise ScenarioError(source, path, exc.problem, line_of(node, clean_loc)) from None
+    for loc, problem in angle_warnings(config):
+        path, clean_loc, _ = walk(model, loc)
+        warnings.warn(ScenarioWarning(source, path, problem, line_of(node, clean_loc)),
+                      stacklevel=2)
     return config
+
+
+def _more_problems(errors: list[dict], first: dict) -> str:
+    """How many other problems pydantic found, worded so it cannot be read as the end of a
+    list of valid keys; a misspelt key's 'missing' twin is the same problem, not another."""
+    parent = first["loc"][:-1]
+    others = [e for e in errors if e is not first and not (
+        first["type"] == "extra_forbidden" and e["type"] == "missing" and e["loc"][:-1] == parent)]
+    if not others:
+        return ""
+    return f"; {len(others)} more problem{'s' if len(others) > 1 else ''} in the file"
 
 
 def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
     """Read and validate a scenario file (path or shipped name; None = built-in default)."""
     path = resolve(spec)
     source = str(spec) if spec is not None and Path(str(spec)).exists() else str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(source, "", "file not found") from None
-    except IsADirectoryError:
-        raise ScenarioError(source, "", "is a directory, not a scenario file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(source, "", f"cannot read: {exc}") from None
+    text = read_text(path, source)
     data, node = parse_yaml(text, source)
-    return parse_scenario(data, source, node)
+    return parse_scenario(data, source, node, base_dir=path.resolve().parent)

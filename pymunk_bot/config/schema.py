@@ -11,8 +11,9 @@ from pydantic import Field, PrivateAttr
 
 from ..localization.config import MappingConfig
 from .types import (
-    Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
-    Probability, Section, Vec2,
+    MAX_BEAMS, MAX_OBSTACLES, MAX_ROBOTS, Accel, Angle, Bias, Distance, Duration, Float,
+    FieldOfView, Friction, Int, Length, Mass, Name, Noise, Pose, PositiveFloat,
+    PositiveInt, Probability, Rate, Region, Resolution, Section, Speed, Vec2,
 )
 
 # ---------------------------------------------------------------------------- world
@@ -32,8 +33,8 @@ class WorldConfig(Section):
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
     # pymunk steps per dt; None = computed so nothing tunnels
     substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
-    duration: PositiveFloat = 30.0  # default run length [s]
-    wall_friction: NonNegativeFloat = 0.5  # contact friction of the arena walls
+    duration: Duration = 30.0  # default run length [s]
+    wall_friction: Friction = 0.5  # contact friction of the arena walls
     _map_path: str | None = PrivateAttr(default=None)  # ``map`` resolved (config.world_map)
 
     @property
@@ -57,17 +58,17 @@ class WorldConfig(Section):
 
 
 class _Solid(Section):
-    friction: NonNegativeFloat = 0.5  # contact friction (pymunk multiplies the two shapes')
+    friction: Friction = 0.5  # contact friction (pymunk multiplies the two shapes')
     movable: bool = False  # a dynamic body the robots can push
     mass: Mass = 1.0  # [kg], movable only
-    ground_friction: NonNegativeFloat = 0.5  # floor friction coefficient mu, movable only
+    ground_friction: Friction = 0.5  # floor friction coefficient mu, movable only
 
 
 class BoxObstacle(_Solid):
     type: Literal["box"]
     center: Vec2  # [m]
     size: tuple[Length, Length]  # width, height [m]
-    angle: Float = 0.0  # [rad]
+    angle: Angle = 0.0  # [rad]
 
 
 class CircleObstacle(_Solid):
@@ -78,7 +79,7 @@ class CircleObstacle(_Solid):
 
 class PolygonObstacle(_Solid):
     type: Literal["polygon"]
-    points: list[Vec2] = Field(min_length=3)  # outline [m], either winding, concave allowed
+    points: Region  # outline [m], either winding, concave allowed
 
 
 class WallObstacle(Section):
@@ -86,7 +87,7 @@ class WallObstacle(Section):
     start: Vec2  # [m]
     end: Vec2  # [m]
     thickness: Length = 0.05  # [m]
-    friction: NonNegativeFloat = 0.5
+    friction: Friction = 0.5
 
 
 
@@ -94,33 +95,33 @@ class WallObstacle(Section):
 
 
 class LidarConfig(Section):
-    beams: PositiveInt = 360
+    beams: Annotated[PositiveInt, Field(le=MAX_BEAMS)] = 360
     fov: FieldOfView = 2 * math.pi  # [rad], centred on the heading
-    max_range: PositiveFloat = 8.0  # [m]
-    min_range: NonNegativeFloat = 0.05  # [m]; closer returns read max_range (no return)
-    noise_std: NonNegativeFloat = 0.0  # Gaussian range noise [m]
-    rate: PositiveFloat = 10.0  # scans per second [Hz]
+    max_range: Annotated[PositiveFloat, Field(le=1e4)] = 8.0  # [m]
+    min_range: Distance = 0.05  # [m]; closer returns read max_range (no return)
+    noise_std: Annotated[Distance, Field(le=100)] = 0.0  # Gaussian range noise [m]
+    rate: Rate = 10.0  # scans per second [Hz]
     offset: Pose = (0.0, 0.0, 0.0)  # mounting pose in the robot frame [m, m, rad]
     dropout: Probability = 0.0  # chance that a beam has no return (reads max_range)
 
 
 class OdometryConfig(Section):
-    wheel_noise_std: NonNegativeFloat = 0.0  # [m per sqrt(m)]: travel error std after 1 m
+    wheel_noise_std: Noise = 0.0  # [m per sqrt(m)]: travel error std after 1 m
     # Fractional errors: odometry believes a wheel radius (track width) of true * (1 + error).
-    left_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # left wheel radius
-    right_scale_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # right wheel radius
-    track_width_error: Annotated[Float, Field(gt=-1.0)] = 0.0  # track width
-    encoder_resolution: NonNegativeFloat = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
+    left_scale_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # left wheel radius
+    right_scale_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # right wheel radius
+    track_width_error: Annotated[Float, Field(gt=-1.0, le=10.0)] = 0.0  # track width
+    encoder_resolution: Resolution = 0.0  # wheel travel per encoder tick [m]; 0 = ideal
 
 
 class ImuConfig(Section):
-    rate: PositiveFloat | None = None  # [Hz]; None = every physics step
-    gyro_noise_std: NonNegativeFloat = 0.0  # yaw-rate white noise [rad/s]
-    gyro_bias: Float = 0.0  # constant yaw-rate bias [rad/s]
-    accel_noise_std: NonNegativeFloat = 0.0  # white noise per axis [m/s^2]
-    accel_bias: Vec2 = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
-    gyro_bias_walk: NonNegativeFloat = 0.0  # yaw-rate bias random walk [rad/s per sqrt(s)]
-    accel_bias_walk: NonNegativeFloat = 0.0  # accel bias random walk per axis [m/s^2 per sqrt(s)]
+    rate: Rate | None = None  # [Hz]; None = every physics step
+    gyro_noise_std: Noise = 0.0  # yaw-rate white noise [rad/s]
+    gyro_bias: Bias = 0.0  # constant yaw-rate bias [rad/s]
+    accel_noise_std: Noise = 0.0  # white noise per axis [m/s^2]
+    accel_bias: tuple[Bias, Bias] = (0.0, 0.0)  # constant bias, robot frame [m/s^2]
+    gyro_bias_walk: Noise = 0.0  # yaw-rate bias random walk [rad/s per sqrt(s)]
+    accel_bias_walk: Noise = 0.0  # accel bias random walk per axis [m/s^2 per sqrt(s)]
 
 
 # ---------------------------------------------------------------------------- robots
@@ -128,7 +129,7 @@ class ImuConfig(Section):
 
 class GoalConfig(Section):
     position: Vec2  # [m]
-    tolerance: PositiveFloat = 0.2  # [m]
+    tolerance: Annotated[PositiveFloat, Field(le=1e4)] = 0.2  # [m]
 
 
 class RobotConfig(Section):
@@ -139,7 +140,7 @@ class RobotConfig(Section):
     pose: Pose  # x [m], y [m], theta [rad]
     radius: Length = 0.2  # [m]
     mass: Mass = 5.0  # [kg]
-    friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
+    friction: Friction = 0.5  # contact friction of the robot's body
     # The pose estimate controllers see: a registered localizer's name or {type: name, ...}.
     localization: Any = "odometry"
     lidar: LidarConfig | None = None
@@ -172,14 +173,14 @@ class DiffRobotConfig(RobotConfig):
 
 class RobotExpectation(Section):
     goal_reached: bool | None = None
-    max_collisions: Annotated[Int, Field(ge=0)] | None = None
-    within: PositiveFloat | None = None  # goal reached by this simulated time [s]
-    min_clearance: NonNegativeFloat | None = None  # [m], closest approach to any obstacle
-    max_path_length: PositiveFloat | None = None  # [m]
-    never_enter: list[list[Vec2]] = []  # polygons the robot's centre must never enter
-    end_in: list[Vec2] | None = None  # polygon the robot's centre must end inside
+    max_collisions: Annotated[Int, Field(ge=0, le=10**9)] | None = None
+    within: Duration | None = None  # goal reached by this simulated time [s]
+    min_clearance: Distance | None = None  # [m], closest approach to any obstacle
+    max_path_length: Annotated[PositiveFloat, Field(le=1e7)] | None = None  # [m]
+    never_enter: Annotated[list[Region], Field(max_length=100)] = []  # polygons the centre avoids
+    end_in: Region | None = None  # polygon the robot's centre must end inside
     # [m] the localizer's position RMSE against the truth (needs a `localization` on the robot)
-    localization_rmse: PositiveFloat | None = None
+    localization_rmse: Annotated[PositiveFloat, Field(le=1e3)] | None = None
 
 
 # ---------------------------------------------------------------------------- scenario
@@ -191,11 +192,11 @@ class ScenarioConfig(Section):
     that span several keys run after it."""
 
     name: Name
-    description: str = ""
+    description: Annotated[str, Field(max_length=10_000)] = ""
     seed: Annotated[Int, Field(ge=0)] = 0
     world: WorldConfig
-    obstacles: list[Any] = []  # each a registered obstacle kind's section
-    robots: list[RobotConfig] = Field(min_length=1)
+    obstacles: Annotated[list[Any], Field(max_length=MAX_OBSTACLES)] = []  # registered kinds' sections
+    robots: list[RobotConfig] = Field(min_length=1, max_length=MAX_ROBOTS)
     expect: dict[str, RobotExpectation] = {}
 
     @classmethod

@@ -155,3 +155,4 @@ def check(scenario: ScenarioConfig) -> None:
         needs_goal = expectation.goal_reached is not None or expectation.within is not None
         if needs_goal and scenario.robots[names[name]].goal is None:
             raise SemanticError(("expect", name), "expects a goal but the robot has no 'goal'")
+    from .checks import check as check_more; check_more(scenario)  # noqa: E702 (issue 9)

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..config.controllers import AvoidControllerConfig, DwaConfig
 from ..planning.dwa import DwaParams, DynamicWindow, free_runs, scan_points
-from ..planning.tracking import MovingObstacleTracker
+from ..planning.tracking import MovingObstacleTracker, PassingSide
 from .base import STOP, Command, Controller, Observation, RobotSpec
 
 PROGRESS_WINDOW = 10.0  # [s] without getting closer to the goal before the message says so
@@ -22,8 +22,6 @@ STALL_SPEED = 0.02  # [m/s] DWA commands slower than this count as stalled
 STALL_TIME = 1.0  # [s] stalled before an escape
 ESCAPE_DISTANCE = 0.8  # [m] how far an escape aims along the free direction it picks
 ESCAPE_TIME = 3.0  # [s] an escape gives up after this
-PASS_AHEAD = 1.0  # [m] the point we aim at to pass it is at least this far ahead
-SIDE_MEMORY = 1.0  # [s] the side chosen for an encounter holds this long after it ends
 
 
 def dwa_params(config: DwaConfig, max_speed: float) -> DwaParams:
@@ -57,7 +55,7 @@ class AvoidController(Controller):
         self._stalled_since: float | None = None
         self._escape: tuple | None = None  # (world point [m], until [s])
         self.tracker = MovingObstacleTracker()
-        self._side: tuple | None = None  # (-1 right or +1 left, last time [s]) of an encounter
+        self.passing = PassingSide()  # keeps right in head-on encounters
 
     def compute(self, obs: Observation) -> Command:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
@@ -92,27 +90,9 @@ class AvoidController(Controller):
 
     def _passing_target(self, obs: Observation, oncoming: tuple | None,
                         target: np.ndarray) -> np.ndarray:
-        """DWA's target, swapped for a point beside something coming at us, on our right.
-
-        Two robots that treat each other as obstacles and meet head-on each pick a side from
-        what they see; exactly head-on that is a coin toss, and when the coins differ they both
-        step the same way and block each other again (the sidewalk dance). So, as in traffic,
-        we keep right: we aim to pass it with ``gap`` between centres on our right, unless it is
-        already more than our radius to our right (then on our left, which is shorter and what
-        the other one, seeing the mirror image, does too). The side holds for the encounter.
-        """
-        if oncoming is None:
-            if self._side is not None and obs.time - self._side[1] > SIDE_MEMORY:
-                self._side = None
-            return target
-        ahead, aside, gap = oncoming
-        if ahead >= float(np.hypot(*target)):
-            return target  # the goal comes first
-        side = self._side[0] if self._side is not None else (
-            -1.0 if aside > -obs.robot.radius else 1.0)
-        self._side = (side, obs.time)
-        # Never aim sharply sideways: the point stays at least PASS_AHEAD ahead.
-        return np.array([max(ahead, PASS_AHEAD), aside + side * gap])
+        """DWA's target, swapped for a point beside something coming at us, on our right
+        (see :class:`~pymunk_bot.planning.tracking.PassingSide`)."""
+        return self.passing.target(obs.time, oncoming, target, obs.robot.radius)
 
     def _escape_target(self, obs: Observation, points: np.ndarray, target: np.ndarray) -> np.ndarray:
         """DWA's target, swapped for a point along free space while escaping a stall.

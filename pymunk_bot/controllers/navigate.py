@@ -22,7 +22,8 @@ from ..planning.dwa import DynamicWindow, scan_points
 from ..planning.grid import ClearanceGrid
 from ..planning.map import MapInfo
 from ..planning.paths import shortcut
-from .avoid import dwa_params
+from ..planning.tracking import MovingObstacleTracker, PassingSide
+from .avoid import dwa_params, to_robot_frame
 from .base import STOP, Command, Controller, Observation, RobotSpec
 from .waypoints import PathFollower, pursuit_gains
 
@@ -57,6 +58,8 @@ class NavigateController(Controller):
         self._permanent = False
         self._progress = (0.0, 0.0)  # (path progress [m], when [s])
         self.command = (0.0, 0.0)  # last (v, omega)
+        self.tracker = MovingObstacleTracker()  # other robots, from successive scans
+        self.passing = PassingSide()
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -96,8 +99,19 @@ class NavigateController(Controller):
         self.status = "running"
         v, omega, _ = self.follower.command(obs.pose)
         if points is not None:
-            # The LiDAR vetoes arcs that would hit something the map did not show.
-            v, omega = self.window.track(*self.command, points, v, omega)
+            # Other robots move: predict them, and keep right when one comes at us head-on.
+            velocities, oncoming = self.tracker.update(
+                obs.scan.time, obs.pose, points, float(self.command[0]),
+                self.robot.radius + self.window.params.safety)
+            if oncoming is not None:
+                carrot, speed, _ = self.follower.carrot(obs.pose)
+                ahead = to_robot_frame(obs.pose, carrot)
+                target = self.passing.target(obs.time, oncoming, ahead, self.robot.radius)
+                v, omega = self.window.choose(*self.command, points, target, speed, velocities)
+            else:
+                self.passing.target(obs.time, None, np.zeros(2), self.robot.radius)
+                # The LiDAR vetoes arcs that would hit something the map did not show.
+                v, omega = self.window.track(*self.command, points, v, omega, velocities)
         self.command = (v, omega)
         return Command(v, omega)
 
@@ -196,7 +210,8 @@ class NavigateController(Controller):
         ranges = np.asarray(scan.ranges)
         diff = np.abs((bearing[:, None] - angles[None, :] + np.pi) % (2 * np.pi) - np.pi)
         beam = diff.argmin(axis=1)
-        step = 2 * np.pi / len(angles) if len(angles) > 1 else np.inf
+        # Beam spacing from the beams themselves: a 90-degree LiDAR is not a full circle.
+        step = float(np.median(np.abs(np.diff(angles)))) if len(angles) > 1 else np.inf
         covered = diff[np.arange(len(keys)), beam] <= step
         seen_through = covered & (ranges[beam] > dist + 2.0 * res)
         for key, gone in zip(keys, seen_through):

@@ -40,6 +40,10 @@ class PathFollower:
             return tracker.point_at(tracker.s + lookahead), speed, math.inf
         end = tracker.points[-1]
         to_end = math.hypot(end[0] - x, end[1] - y)
+        if tracker.remaining() > max(lookahead, to_end):
+            # Far along the path from the end, though maybe close to it in space (a route
+            # that ends where it starts): what is left to drive is the path, not the gap.
+            to_end = tracker.remaining()
         # Brake to a stop at the end point itself: v <= sqrt(2 a d), proportional when close.
         speed = min(speed, math.sqrt(2.0 * g.decel * to_end), 1.5 * to_end)
         if tracker.remaining() > lookahead:

@@ -187,14 +187,14 @@ class DynamicWindow:
         return float(v[best]), float(w[best])
 
     def track(self, v0: float, w0: float, obstacles: np.ndarray, v_ref: float,
-              w_ref: float) -> tuple[float, float]:
+              w_ref: float, velocities: np.ndarray | None = None) -> tuple[float, float]:
         """The admissible (v, omega) nearest to a reference command (a safety filter).
 
         A path follower proposes (v_ref, w_ref); if its arc is safe it is (nearly) what runs,
         otherwise the closest safe arc, slower or veering, with clearance breaking ties.
         """
         p = self.params
-        found = self.candidates(v0, w0, obstacles, max(v_ref, 0.0))
+        found = self.candidates(v0, w0, obstacles, max(v_ref, 0.0), velocities)
         if found is None:
             self.last_clearance = 0.0
             return 0.0, 0.0

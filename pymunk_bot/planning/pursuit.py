@@ -70,10 +70,11 @@ def round_corners(points: Sequence[Point], radius: float, loop: bool = False,
 
 @dataclass(frozen=True)
 class PursuitGains:
-    """Tuning of path following (units next to each)."""
+    """Tuning of path following (units next to each). The defaults shared with the scenario's
+    ``pursuit`` section (:class:`~pymunk_bot.config.controllers.PursuitConfig`) are its own."""
 
-    lookahead: float = 0.5  # [m] at full speed
-    lookahead_time: float = 0.5  # [s]; lookahead = speed * this, between the min and the max
+    lookahead: float = 0.6  # [m] at full speed
+    lookahead_time: float = 0.4  # [s]; lookahead = speed * this, between the min and the max
     min_lookahead: float = 0.2  # [m]
     max_speed: float = 1.0  # [m/s]
     corner_radius: float = 0.5  # [m] fillet radius of waypoint corners

@@ -114,3 +114,37 @@ class MovingObstacleTracker:
                 oncoming = (float(ahead), float(aside), gap)
         self._moving = [(stamp, c0, v0) for c0, v0 in moving]
         return velocities, oncoming
+
+
+PASS_AHEAD = 1.0  # [m] the point we aim at to pass something is at least this far ahead
+SIDE_MEMORY = 1.0  # [s] the side chosen for an encounter holds this long after it ends
+
+
+class PassingSide:
+    """Keep right when something comes at us head-on (shared by ``avoid`` and ``navigate``).
+
+    Two robots that treat each other as obstacles and meet head-on each pick a side from what
+    they see; exactly head-on that is a coin toss, and when the coins differ they both step the
+    same way and block each other again (the sidewalk dance). So, as in traffic, we keep right:
+    we aim to pass it with ``gap`` between centres on our right, unless it is already more than
+    our radius to our right (then on our left, which is shorter and what the other one, seeing
+    the mirror image, does too). The side holds for the encounter.
+    """
+
+    def __init__(self) -> None:
+        self._side: tuple[float, float] | None = None  # (-1 right or +1 left, last time [s])
+
+    def target(self, now: float, oncoming: tuple | None, target: np.ndarray,
+               radius: float) -> np.ndarray:
+        """``target`` (robot frame [m]), or a point beside what is coming at us."""
+        if oncoming is None:
+            if self._side is not None and now - self._side[1] > SIDE_MEMORY:
+                self._side = None
+            return target
+        ahead, aside, gap = oncoming
+        if ahead >= float(np.hypot(*target)):
+            return target  # the target comes first
+        side = self._side[0] if self._side is not None else (-1.0 if aside > -radius else 1.0)
+        self._side = (side, now)
+        # Never aim sharply sideways: the point stays at least PASS_AHEAD ahead.
+        return np.array([max(ahead, PASS_AHEAD), aside + side * gap])

@@ -10,12 +10,13 @@ from __future__ import annotations
 import math
 import time as wallclock
 from collections import deque
+from typing import Callable
 
 import numpy as np
 import pygame
 
 from .camera import Camera
-from .draw import Layers, draw_scene
+from .draw import Layers, StaticLayer, draw_scene
 from .hud import Hud, HudState
 from .scene import Scene
 
@@ -32,11 +33,16 @@ CLICK_SLOP = 5  # [px] a press that moves further than this is a drag, not a cli
 class Viewer:
     """State of one window (live run or replay) and everything a key or click can do."""
 
-    def __init__(self, source, viewport: tuple[int, int], duration: float | None = None) -> None:
+    def __init__(self, source, viewport: tuple[int, int], duration: float | None = None,
+                 clock: Callable[[], float] = wallclock.perf_counter) -> None:
+        """``clock`` [s] measures the real time spent stepping in a frame (FRAME_BUDGET); tests
+        inject a fake one so that step counts do not depend on the machine's load."""
         pygame.font.init()
+        self._wallclock = clock
         self.source = source
         self.camera = Camera(viewport)
         self.layers = Layers()
+        self.static = StaticLayer()  # the frame's fixed part, redrawn only when the view moves
         self.hud = Hud()
         self.label_font = pygame.font.Font(None, 18)
         self.duration = duration
@@ -109,14 +115,14 @@ class Viewer:
         return taken
 
     def _step_for(self, budget: float, steps: int | None) -> int:
-        started = wallclock.perf_counter()
+        started = self._wallclock()
         taken = 0
         while steps is None or taken < steps:
             if self._at_stop():
                 break
             self.source.step()
             taken += 1
-            if wallclock.perf_counter() - started > budget:
+            if self._wallclock() - started > budget:
                 break
         self._at_stop()
         return taken
@@ -234,6 +240,10 @@ class Viewer:
             return
         if self.selected is None:
             return
+        if self.ended:
+            # Nothing steps any more: a goal set now would never be driven to.
+            self.say("the run has ended: space runs on past its duration, then click a goal")
+            return
         x, y = self.camera.to_world(px, py)
         width, height = self.source.size
         x0, y0 = getattr(self.source, "origin", (0.0, 0.0))
@@ -301,7 +311,7 @@ class Viewer:
         """Render the present state (with the HUD); changes nothing but ``surface``."""
         scene = self.scene()
         draw_scene(surface, scene, self.camera, self.layers, self.selected, self.label_font,
-                   halo=not self.recording)
+                   halo=not self.recording, static=self.static)
         if not hud:
             return
         selected = next((r for r in scene.robots if r.name == self.selected), None)

@@ -7,11 +7,12 @@ imports pygame or matplotlib at module level.
 from __future__ import annotations
 
 import math
-import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import ScenarioError
+from ..results import writable_problem
 
 VIDEO_FORMATS = (".mp4", ".gif")
 LOG_FORMATS = (".npz", ".mcap")
@@ -25,13 +26,9 @@ def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:
         got = f"'{path.suffix}'" if path.suffix else "no extension"
         raise ScenarioError(option, "", f"{path}: unsupported file type ({got}); use "
                                         f"{' or '.join(formats)}")
-    if path.is_dir():
-        raise ScenarioError(option, "", f"{path} is a directory")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ScenarioError(option, "", f"{path}: directory {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ScenarioError(option, "", f"{path}: directory {parent} is not writable")
+    problem = writable_problem(path)
+    if problem is not None:
+        raise ScenarioError(option, "", problem)
     return path
 
 
@@ -93,12 +90,15 @@ class RunOutputs:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
         from . import ViewerUnavailable, record_video
 
+        started = time.perf_counter()
         try:
             frames = record_video(sim, self.record, duration, fps=self.fps, size=self.size,
                                   progress=True)
         except ViewerUnavailable as exc:
             raise ScenarioError("--record", "", str(exc)) from None
-        print(f"wrote {self.record} ({frames} frames)")
+        spent = max(time.perf_counter() - started, 1e-9)  # [s] of wall time, drawing included
+        print(f"wrote {self.record} ({frames} frames in {spent:.1f} s: {frames / spent:.0f} "
+              f"frames/s, {duration / spent:.2f}x real time)")
 
     def finish(self) -> None:
         """Write the run log, if one was asked for."""

@@ -85,7 +85,8 @@ class Hud:
             lines.append((state.ended, pal.HUD_WARN))
         if state.hint:
             lines.append(("h: keys", pal.HUD_DIM))
-        self._panel(surface, lines, (8, 8), self.font)
+        panel = self._render_panel(lines, self.font)
+        surface.blit(panel, self._free_corner(surface, panel.get_size(), scene, camera))
         self._scale_bar(surface, camera)
         if state.message:
             text = self.font.render(state.message, True, pal.HUD_TEXT)
@@ -96,6 +97,31 @@ class Hud:
             self._help(surface, HELP_REPLAY if state.replay else HELP_LIVE)
 
     def _panel(self, surface: pygame.Surface, lines, pos: tuple[int, int], font) -> None:
+        surface.blit(self._render_panel(lines, font), pos)
+
+    @staticmethod
+    def _free_corner(surface: pygame.Surface, size: tuple[int, int], scene: Scene,
+                     camera: Camera) -> tuple[int, int]:
+        """Top left, unless a robot is under it there: then the top corner (or, failing that,
+        the bottom right) with the fewest robots under it. The HUD never hides a robot that
+        could be shown."""
+        w, h = surface.get_size()
+        pw, ph = size
+        corners = [(8, 8), (w - pw - 8, 8), (w - pw - 8, h - ph - 48)]
+
+        def covered(corner: tuple[int, int]) -> int:
+            rect = pygame.Rect(corner, size)
+            count = 0
+            for robot in scene.robots:
+                sx, sy = camera.to_screen(float(robot.pose[0]), float(robot.pose[1]))
+                r = robot.radius * camera.scale + 4
+                if rect.inflate(2 * r, 2 * r).collidepoint(sx, sy):
+                    count += 1
+            return count
+
+        return min(corners, key=lambda c: (covered(c), corners.index(c)))
+
+    def _render_panel(self, lines, font) -> pygame.Surface:
         rendered = [font.render(text, True, colour) for text, colour in lines]
         width = max(t.get_width() for t in rendered) + 16
         height = sum(t.get_height() + 2 for t in rendered) + 10
@@ -105,7 +131,7 @@ class Hud:
         for t in rendered:
             panel.blit(t, (8, y))
             y += t.get_height() + 2
-        surface.blit(panel, pos)
+        return panel
 
     def _scale_bar(self, surface: pygame.Surface, camera: Camera) -> None:
         """A bar of a round length near 100 px, bottom left."""

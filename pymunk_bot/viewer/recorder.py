@@ -22,7 +22,8 @@ from .camera import FIT_MARGIN  # noqa: E402
 from .sources import LiveSource, ReplaySource  # noqa: E402
 
 FORMATS = (".mp4", ".gif")
-DEFAULT_FPS = {".mp4": 30.0, ".gif": 20.0}  # [Hz]; GIF delays are whole 1/100 s: 20 fps is exact
+DEFAULT_FPS = {".mp4": 30.0, ".gif": 10.0}  # [Hz]; GIF delays are whole 1/100 s: 10 fps is exact
+GIF_COLOURS = 64  # one palette for a whole GIF: the scene's flat colours and their edges
 LONG_SIDE = {".mp4": 1280, ".gif": 720}  # [px] default frame size along the arena's long side
 MARGIN = FIT_MARGIN  # [px] around the arena
 
@@ -113,9 +114,10 @@ def _progress(frames, enabled: bool, name: str):
 class _GifWriter:
     """GIF through Pillow (imageio's own GIF backend), called directly to control quantisation.
 
-    Each frame is reduced to its own 256-colour palette on arrival, without dithering: line
-    art stays crisp, compresses well, and a long GIF costs one byte per pixel in memory until
-    it is written.
+    One palette for the whole clip, made from the first frame (the scene's colours do not
+    change): successive frames then differ only where something moved, so Pillow stores just
+    the changed rectangle of each, and LZW compresses the unchanged colours well. No dithering:
+    line art stays crisp. Memory: one byte per pixel per frame until the file is written.
     """
 
     def __init__(self, path: str, fps: float) -> None:
@@ -124,18 +126,24 @@ class _GifWriter:
         self._image = Image
         self._path = path
         self._frames: list = []
+        self._palette = None
         self._delay = int(round(1000.0 / fps))  # [ms]; GIF stores whole hundredths of a second
 
     def append(self, frame: np.ndarray) -> None:
         Image = self._image
-        self._frames.append(Image.fromarray(frame).quantize(
-            colors=256, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE))
+        image = Image.fromarray(frame)
+        if self._palette is None:
+            self._palette = image.quantize(colors=GIF_COLOURS, method=Image.Quantize.FASTOCTREE,
+                                           dither=Image.Dither.NONE)
+            self._frames.append(self._palette)
+            return
+        self._frames.append(image.quantize(palette=self._palette, dither=Image.Dither.NONE))
 
     def close(self) -> None:
         if self._frames:
             first, rest = self._frames[0], self._frames[1:]
             first.save(self._path, format="GIF", save_all=True, append_images=rest,
-                       duration=self._delay, loop=0, optimize=False)
+                       duration=self._delay, loop=0, optimize=False, disposal=1)
         self._frames = []
 
 

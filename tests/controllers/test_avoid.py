@@ -4,7 +4,9 @@ import math
 
 from pathlib import Path
 
-from pymunk_bot import Simulation
+import pytest
+
+from pymunk_bot import ScenarioError, Simulation
 from pymunk_bot.config import load_scenario
 
 from helpers import clutter_case, parallel, run_until_goal, scenario
@@ -59,12 +61,9 @@ def test_gets_stuck_in_the_u_trap_that_navigate_escapes():
     assert planned["goal_reached"] and planned["collisions"] == 0
 
 
-def test_without_a_lidar_it_refuses_instead_of_driving_blind():
-    config = scenario((5.0, 5.0), [], [{"name": "r", "pose": [1.0, 1.0, 0.0],
-                                        "controller": {"type": "avoid"},
-                                        "goal": {"position": [4.0, 4.0]}}])
-    sim = Simulation(config)
-    sim.run(2.0)
-    robot = sim.robots["r"]
-    assert robot.controller.status == "failed" and "lidar" in robot.controller.message
-    assert robot.distance < 1e-6
+def test_without_a_lidar_it_is_refused_when_the_file_is_validated():
+    with pytest.raises(ScenarioError) as err:
+        scenario((5.0, 5.0), [], [{"name": "r", "pose": [1.0, 1.0, 0.0],
+                                   "controller": {"type": "avoid"},
+                                   "goal": {"position": [4.0, 4.0]}}])
+    assert "robots[0].controller: avoid steers by the LiDAR" in str(err.value)

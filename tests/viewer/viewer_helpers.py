@@ -27,6 +27,18 @@ def wheels(left, right):
     return {"type": "wheels", "left": left, "right": right}
 
 
+class FakeClock:
+    """A wall clock that moves 0.1 ms per reading: frame budgets cut at the same step on any
+    machine, however loaded."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        self.now += 1e-4
+        return self.now
+
+
 class Harness:
     """A Viewer on an offscreen surface, fed synthetic events."""
 
@@ -34,7 +46,7 @@ class Harness:
         source = sim_or_source if hasattr(sim_or_source, "scene") else LiveSource(sim_or_source)
         self.source = source
         self.surface = pygame.Surface(size)
-        self.viewer = Viewer(source, size, duration)
+        self.viewer = Viewer(source, size, duration, clock=FakeClock())
         self.input = InputHandler(self.viewer)
 
     def key(self, key, unicode="", up=False):

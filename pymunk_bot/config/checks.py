@@ -1,0 +1,130 @@
+"""Checks a file's keys allow but its meaning does not: things outside the arena, controllers
+that cannot work with what the robot carries, grids too big for memory, angles in degrees.
+
+``check(scenario)`` raises :class:`~.semantics.SemanticError` (exit 2); ``angle_warnings``
+returns the doubtful angles (a warning, the run goes on). ``check_seed`` guards the Python API.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+from .controllers import (
+    AvoidControllerConfig, GoToGoalControllerConfig, NavigateControllerConfig,
+    WaypointsControllerConfig,
+)
+from .schema import CircleObstacle, RobotConfig, ScenarioConfig
+from .semantics import SemanticError, distance_to_obstacle, obstacle_outline
+
+MAX_GRID_CELLS = 4_000_000  # planning grid cells (a 200 m x 200 m arena at 0.1 m): ~100 MB
+MAX_SEED = 2**63 - 1
+
+
+def check_seed(seed: object) -> int | None:
+    """A seed for the Python API: None, or an integer in [0, 2**63 - 1].
+
+    Raises TypeError for a non-integer (1.7 is not silently 1) and ValueError when out of range.
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed must be an integer (got {seed!r})")
+    if not 0 <= int(seed) <= MAX_SEED:
+        raise ValueError(f"seed must be in [0, 2**63 - 1] (got {seed})")
+    return int(seed)
+
+
+def check(scenario: ScenarioConfig) -> None:
+    """Raise SemanticError for the first problem found."""
+    width, height = scenario.world.size
+    for i, obstacle in enumerate(scenario.obstacles):
+        _check_obstacle_in_arena(i, obstacle, width, height)
+    for i, robot in enumerate(scenario.robots):
+        _check_controller(i, robot, scenario)
+
+
+def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) -> None:
+    if isinstance(obstacle, CircleObstacle):
+        (cx, cy), r = obstacle.center, obstacle.radius
+        low, high = np.array([cx - r, cy - r]), np.array([cx + r, cy + r])
+    else:
+        outline = obstacle_outline(obstacle)
+        low, high = outline.min(axis=0), outline.max(axis=0)
+    if high[0] <= 0 or high[1] <= 0 or low[0] >= width or low[1] >= height:
+        raise SemanticError(
+            ("obstacles", index),
+            f"{obstacle.type} lies outside the arena [0, {width:g}] x [0, {height:g}] "
+            f"(it spans [{low[0]:g}, {high[0]:g}] x [{low[1]:g}, {high[1]:g}])")
+
+
+def _outside(point, width: float, height: float) -> bool:
+    return not (0 <= point[0] <= width and 0 <= point[1] <= height)
+
+
+def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
+    controller = robot.controller
+    loc = ("robots", index, "controller")
+    width, height = scenario.world.size
+    if isinstance(controller, WaypointsControllerConfig):
+        for k, point in enumerate(controller.points):
+            if _outside(point, width, height):
+                raise SemanticError(loc + ("points", k),
+                                    f"({point[0]:g}, {point[1]:g}) is outside the arena "
+                                    f"[0, {width:g}] x [0, {height:g}]")
+    needs_goal = (GoToGoalControllerConfig, AvoidControllerConfig, NavigateControllerConfig)
+    if isinstance(controller, needs_goal) and controller.goal is None and robot.goal is None:
+        raise SemanticError(loc, f"{controller.type} needs a goal: set controller.goal or the "
+                                 "robot's goal")
+    if isinstance(controller, AvoidControllerConfig) and robot.lidar is None:
+        raise SemanticError(loc, "avoid steers by the LiDAR: add a 'lidar' to the robot")
+    if isinstance(controller, NavigateControllerConfig):
+        _check_navigate(index, robot, controller, scenario)
+
+
+def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControllerConfig,
+                    scenario: ScenarioConfig) -> None:
+    loc = ("robots", index, "controller")
+    width, height = scenario.world.size
+    cells = math.ceil(width / controller.resolution) * math.ceil(height / controller.resolution)
+    if cells > MAX_GRID_CELLS:
+        raise SemanticError(loc + ("resolution",),
+                            f"a {width:g} m x {height:g} m arena at {controller.resolution:g} m "
+                            f"is {cells} planning cells (at most {MAX_GRID_CELLS}); "
+                            "use a coarser resolution")
+    unmapped = [o.type for o in scenario.obstacles
+                if getattr(o, "movable", False) and not controller.map_movable]
+    if robot.lidar is None and (unmapped or len(scenario.robots) > 1):
+        what = "movable obstacles" if unmapped else "the other robots"
+        raise SemanticError(loc, f"navigate needs a 'lidar' on the robot to avoid {what}, "
+                                 "which are not on its map")
+    goal_loc = loc + ("goal",) if controller.goal is not None else ("robots", index, "goal",
+                                                                    "position")
+    goal = controller.goal if controller.goal is not None else robot.goal.position
+    for k, obstacle in enumerate(scenario.obstacles):
+        if getattr(obstacle, "movable", False):
+            continue
+        if distance_to_obstacle(goal, obstacle) < robot.radius:
+            raise SemanticError(goal_loc, f"({goal[0]:g}, {goal[1]:g}) is inside or within the "
+                                          f"robot's radius of obstacles[{k}] ({obstacle.type}): "
+                                          "navigate cannot reach it")
+
+
+def angle_warnings(scenario: ScenarioConfig) -> list[tuple[tuple, str]]:
+    """(key path, problem) of every angle that looks like degrees (|angle| > 2 pi)."""
+    found = []
+    for i, robot in enumerate(scenario.robots):
+        found += _degrees(("robots", i, "pose", 2), robot.pose[2])
+        if robot.lidar is not None:
+            found += _degrees(("robots", i, "lidar", "offset", 2), robot.lidar.offset[2])
+    for i, obstacle in enumerate(scenario.obstacles):
+        found += _degrees(("obstacles", i, "angle"), getattr(obstacle, "angle", 0.0))
+    return found
+
+
+def _degrees(loc: tuple, angle: float) -> list[tuple[tuple, str]]:
+    if abs(angle) <= 2 * math.pi + 1e-9:
+        return []
+    return [(loc, f"angle {angle:g} rad is more than a full turn: degrees? "
+                  f"(radians are meant; {angle:g} degrees is {math.radians(angle):.4g} rad)")]
