@@ -57,8 +57,7 @@ def _display_available() -> bool:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .config import load_scenario
-    from .expectations import judge
-    from .results import write_json, writable_problem
+    from .results import writable_problem
     from .sim import Simulation
 
     if args.out is not None and (problem := writable_problem(args.out)) is not None:
@@ -94,13 +93,7 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
             print("note: no display found; running headless (pass --headless to silence this)")
         outputs.run_headless(sim, duration)
     result = sim.result()
-    statuses = {name: (r["controller_status"], r["controller_message"])
-                for name, r in result["robots"].items()}
-    verdict = judge(config.expect, sim.check_expectations(), sim.time, config.world.duration,
-                    statuses, sim.dt)
-    result["passed"] = verdict.passed
-    result["verdict"] = verdict.status
-    result["undecided"] = [f"{c.robot}.{c.key}" for c in verdict.undecided]
+    verdict = sim.verdict()
     outputs.finish()
     if args.out:
         write_json(args.out, result)

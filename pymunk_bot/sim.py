@@ -11,7 +11,7 @@ import numpy as np
 
 from .build import Built, build
 from .config import ScenarioConfig, load_scenario
-from .expectations import Check, evaluate
+from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .readings import Observation
 from .robot import Robot
@@ -217,15 +217,25 @@ class Simulation:
     def check_expectations(self) -> list[Check]:
         return evaluate(self.config.expect, self.robots)
 
+    def verdict(self) -> Verdict:
+        """The run so far against its expectations and its controllers' status: passed,
+        failed, undecided (too short to tell) or unchecked (nothing to check)."""
+        statuses = {name: (r.controller.status if r.controller is not None else None,
+                           r.controller.message if r.controller is not None else "")
+                    for name, r in self.robots.items()}
+        return judge(self.config.expect, self.check_expectations(), self.time,
+                     self.config.world.duration, statuses, self.dt)
+
     def _mean_speed(self, robot: Robot) -> float:
         """Up to the goal if reached (not diluted by waiting there), else over the whole run."""
-        if robot.time_to_goal:
+        if robot.time_to_goal is not None and robot.time_to_goal > 0:
             return (robot.distance_to_goal or 0.0) / robot.time_to_goal
         return robot.distance / self.time if self.time > 0 else 0.0
 
     def result(self) -> dict:
         """The JSON-ready summary of the run so far (see docs/cli.md)."""
-        checks = self.check_expectations()
+        verdict = self.verdict()
+        checks = verdict.checks + verdict.undecided
         sim_time = self.time
         robots = {}
         for name, r in self.robots.items():
@@ -255,7 +265,9 @@ class Simulation:
             "substeps": self.substeps,
             "wall_time": self.wall_time,
             "real_time_factor": sim_time / self.wall_time if self.wall_time > 0 else None,
-            "passed": all(c.passed for c in checks),
+            "passed": verdict.passed,
+            "verdict": verdict.status,
+            "undecided": [f"{c.robot}.{c.key}" for c in verdict.undecided],
             "expectations": [c.describe() for c in checks],
             "robots": robots,
         }

@@ -13,6 +13,7 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag, create_model
 
 from .. import plugins
 from .schema import RobotConfig, ScenarioConfig
+from .types import MAX_OBSTACLES, MAX_ROBOTS
 
 _cache: dict[str, Any] = {"key": None, "model": None}
 
@@ -70,7 +71,8 @@ def scenario_model() -> type[ScenarioConfig]:
         obstacles = obstacle_union()
         _cache["model"] = create_model(
             "ScenarioConfig", __base__=ScenarioConfig, __module__=ScenarioConfig.__module__,
-            obstacles=(list[obstacles], []),  # type: ignore[valid-type]
-            robots=(list[_robot_models()], Field(min_length=1)))  # type: ignore[misc]
+            obstacles=(list[obstacles], Field([], max_length=MAX_OBSTACLES)),  # type: ignore[valid-type]
+            robots=(list[_robot_models()],  # type: ignore[misc]
+                    Field(min_length=1, max_length=MAX_ROBOTS)))
         _cache["key"] = key
     return _cache["model"]

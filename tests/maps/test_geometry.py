@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pymunk
 import pytest
-from helpers import cast, turtlebot_map, write_map
+from map_helpers import cast, turtlebot_map, write_map
 from pymunk import autogeometry
 
 from pymunk_bot.maps.geometry import add_to_space, free_disc, geometry_from_grid, trace_outlines

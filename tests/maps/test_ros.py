@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import turtlebot_map, write_map
+from map_helpers import turtlebot_map, write_map
 
 from pymunk_bot.errors import ScenarioError
 from pymunk_bot.maps.grid import OccupancyGrid

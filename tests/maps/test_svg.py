@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pymunk
 import pytest
-from helpers import cast
+from map_helpers import cast
 
 from pymunk_bot.errors import ScenarioError
 from pymunk_bot.maps.files import load_world_map

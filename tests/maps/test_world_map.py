@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from helpers import write_map
+from map_helpers import write_map
 
 from pymunk_bot import Simulation
 from pymunk_bot.cli import main

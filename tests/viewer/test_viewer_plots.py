@@ -38,7 +38,7 @@ def test_map_shows_the_true_path_in_the_robots_colour(tmp_path, log):
     for k in (40, 100, 160):
         px, py = ax.transData.transform(true[k])
         row, col = int(round(height - py)), int(round(px))
-        patch = image[row - 2:row + 3, col - 2:col + 3, :3].reshape(-1, 3)
+        patch = image[row - 3:row + 4, col - 3:col + 4, :3].reshape(-1, 3)  # the 2 px line, rounding
         assert any(near(c, colour, 20) for c in patch), k
     # Odometry drifted away from the truth; its dashed line is elsewhere.
     assert np.hypot(*(log.odometry[-1, 0, :2] - true[-1])) > 0.1
