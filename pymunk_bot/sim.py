@@ -188,6 +188,8 @@ class Simulation:
                 robot._drive_group.set_command(robot._di, command)
 
     def _read_sensors(self, now: float) -> None:
+        if self._lidars:
+            self.world.ray_caster().begin_frame()  # every LiDAR of this tick sees one scene
         for k in self._lidar_schedule.due(now).tolist():
             lidar = self._lidars[k]
             lidar.record(now, lidar.true_ranges())

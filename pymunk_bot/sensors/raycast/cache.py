@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pymunk
 
-from .geometry import AX, AY, BX, BY, RAD, ROWS, Collector, World, body_transform, kind_slices, moved, transforms
+from .geometry import (AX, AY, BX, BY, RAD, ROWS, Collector, World, body_transform, kind_slices,
+                       merge, moved, transforms)
 
 
 def bounding_boxes(world: World) -> np.ndarray:
@@ -68,9 +69,18 @@ class SceneCache:
     def __init__(self, space: pymunk.Space) -> None:
         self.space = space
         self._key: tuple[pymunk.Shape, ...] | None = None
+        self._framed = False  # True once frames are used: the scene is frozen between them
+        self._frame: tuple | None = None  # this frame's (merged table, bounds), built on demand
 
     def invalidate(self) -> None:
         self._key = None
+        self._frame = None
+
+    def begin_frame(self) -> None:
+        """Bodies have moved (a physics step): until the next call, every cast sees this same
+        scene, so moving shapes are transformed, and shapes checked for changes, once."""
+        self._framed = True
+        self._frame = None
 
     def world(self, f: pymunk.ShapeFilter) -> tuple[list[World], np.ndarray, np.ndarray, int]:
         """World primitive tables (static, then moving shapes), every shape's bounding circle
@@ -78,16 +88,25 @@ class SceneCache:
 
         Moving shapes the filter rejects are not moved: a robot's LiDAR never sees its own
         body, so in a world where only robots move that skips the per-cast transform."""
-        key = tuple(self.space.shapes)
-        if key != self._key or any(body_transform(b) != tf for b, tf in self._static_tf.items()):
-            self._build(key)
+        if not (self._framed and self._frame is not None):
+            key = tuple(self.space.shapes)
+            if key != self._key or any(body_transform(b) != tf
+                                       for b, tf in self._static_tf.items()):
+                self._build(key)
         keep, n_keep, static_keep, n_static_keep = self._admitted_for(f)
         if not self._bodies or static_keep is not None:
+            if self._framed and self._frame is None:
+                self._frame = (None, None)  # checked this frame; moving shapes not needed yet
             return [self._static], self._static.bound, static_keep, n_static_keep
-        tf = transforms(self._handles)
-        rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body, self._shape_body)
-        moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
-        return [self._static, moving], np.concatenate((self._static.bound, bound), axis=1), keep, n_keep
+        if self._frame is None or self._frame[0] is None or not self._framed:
+            tf = transforms(self._bodies)
+            rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body,
+                                self._shape_body)
+            moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
+            self._frame = (merge([self._static, moving]),
+                           np.concatenate((self._static.bound, bound), axis=1))
+        merged, bounds = self._frame
+        return [merged], bounds, keep, n_keep
 
     def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
         static = [s for s in key if s.body.body_type == pymunk.Body.STATIC]
@@ -119,7 +138,6 @@ class SceneCache:
             collect.add(s, len(static) + i)
         self._local = World(*collect.tables())
         self._bodies = list({id(s.body): s.body for s in dynamic}.values())
-        self._handles = [b._body for b in self._bodies]
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]

@@ -33,23 +33,19 @@ KINDS = 4
 
 
 def body_transform(body: pymunk.Body) -> tuple[float, float, float, float]:
-    """(cos, sin, tx, ty) of the body's cpTransform, read exactly.
-
-    cpBodyGetRotation returns the transform's (a, b) and cpBodyGetPosition its (tx, ty)
-    (c = -b, d = a); the public properties return the same numbers at ~3x the cost."""
-    rot = pymunk.cp.cpBodyGetRotation(body._body)
-    pos = pymunk.cp.cpBodyGetPosition(body._body)
+    """(cos, sin, tx, ty) of the body's transform, read exactly through pymunk's public API
+    (``rotation_vector`` is the transform's (a, b), ``position`` its (tx, ty))."""
+    rot, pos = body.rotation_vector, body.position
     return rot.x, rot.y, pos.x, pos.y
 
 
-def transforms(handles: list) -> np.ndarray:
-    """(4, n) cos, sin, tx, ty of many bodies (their cffi handles), as body_transform."""
-    rotation, position = pymunk.cp.cpBodyGetRotation, pymunk.cp.cpBodyGetPosition
+def transforms(bodies: list[pymunk.Body]) -> np.ndarray:
+    """(4, n) cos, sin, tx, ty of many bodies, as body_transform."""
     out: list[float] = []
     add = out.extend
-    for h in handles:
-        r, p = rotation(h), position(h)
-        add((r.x, r.y, p.x, p.y))
+    for body in bodies:
+        rot, pos = body.rotation_vector, body.position
+        add((rot.x, rot.y, pos.x, pos.y))
     return np.array(out).reshape(-1, 4).T
 
 
