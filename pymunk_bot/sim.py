@@ -189,10 +189,15 @@ class Simulation:
 
     def _read_sensors(self, now: float) -> None:
         if self._lidars:
-            self.world.ray_caster().begin_frame()  # every LiDAR of this tick sees one scene
-        for k in self._lidar_schedule.due(now).tolist():
-            lidar = self._lidars[k]
-            lidar.record(now, lidar.true_ranges())
+            caster = self.world.ray_caster()
+            caster.begin_frame()  # every LiDAR of this tick sees one scene
+            due = [self._lidars[k] for k in self._lidar_schedule.due(now).tolist()]
+            if len(due) > 1:  # one pass for all of them
+                casts = caster.cast_many(*zip(*(lidar.cast_request() for lidar in due)))
+                for lidar, true_ranges in zip(due, casts):
+                    lidar.record(now, true_ranges)
+            elif due:
+                due[0].record(now, due[0].true_ranges())
         for sensor in self._sensors:
             sensor.update(now)
 

@@ -92,10 +92,13 @@ class Lidar:
         p = self._body.local_to_world(self._mount)
         return (p.x, p.y)
 
+    def cast_request(self) -> tuple[tuple[float, float], np.ndarray, float, pymunk.ShapeFilter]:
+        """(origin, world-frame beam angles, max range, filter) of a cast from here now."""
+        return self.origin(), self._body.angle + self._angles, self.config.max_range, self._filter
+
     def true_ranges(self) -> np.ndarray:
         """Noise-free distances [m] to the first thing each beam meets, capped at max_range."""
-        world_angles = self._body.angle + self._angles
-        return self._caster.cast(self.origin(), world_angles, self.config.max_range, self._filter)
+        return self._caster.cast(*self.cast_request())
 
     def scan(self) -> np.ndarray:
         """Cast the beams now at the current pose: ranges [m] with the configured errors."""

@@ -40,7 +40,8 @@ def circle_pairs(cx: np.ndarray, cy: np.ndarray, r: np.ndarray, ray: np.ndarray,
 def segment_pairs(k: np.ndarray, ray: np.ndarray, bxy: np.ndarray, best: np.ndarray,
                   ox: float, oy: float) -> None:
     """cpSegmentShapeSegmentQuery with query radius 0, including the rounded end caps.
-    k holds per-pair rows ax, ay, bx, by, r, (unused), nx, ny."""
+    k holds per-pair rows ax, ay, bx, by, r, (unused), nx, ny; ox, oy are floats, or arrays
+    with one origin per pair."""
     tax, tay, tbx, tby, r, _, nx, ny = k
     bx, by = bxy
     d = (tax - ox) * nx + (tay - oy) * ny
@@ -57,6 +58,8 @@ def segment_pairs(k: np.ndarray, ray: np.ndarray, bxy: np.ndarray, best: np.ndar
     np.minimum.at(best, ray.compress(ok), t.compress(ok))
     c = np.flatnonzero(~straddle & (r != 0.0))
     if c.shape[0]:
+        if np.ndim(ox):  # one origin per pair (a batched pass)
+            ox, oy = ox[c], oy[c]
         t1, ok1 = circle_alpha(ox - tax[c], oy - tay[c], bx[c] - tax[c], by[c] - tay[c], r[c])
         t2, ok2 = circle_alpha(ox - tbx[c], oy - tby[c], bx[c] - tbx[c], by[c] - tby[c], r[c])
         # Chipmunk keeps cap 1 only if its alpha (1.0 when missed) is strictly smaller.

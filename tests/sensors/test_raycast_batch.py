@@ -1,0 +1,87 @@
+"""Many casts in one pass (RayCaster.cast_many) give what pymunk gives, ray for ray."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+import pytest
+from test_raycast import add_robot, arena, box, mixed_world
+
+from pymunk_bot.sensors.raycast import RayCaster, reference_cast
+
+
+def sharp_world(seed: int, size: float = 12.0) -> tuple[pymunk.Space, list[pymunk.Body]]:
+    """Boxes, circles, segments and moving robots, with no rounded polygon (the batch's case)."""
+    rng = np.random.default_rng(seed)
+    space = arena(size, size)
+    sb = space.static_body
+    for _ in range(25):
+        angle = rng.uniform(0, math.pi) if rng.random() < 0.5 else 0.0
+        space.add(box(sb, *rng.uniform(0, size, 2), *rng.uniform(0.1, 1.2, 2), angle))
+    for _ in range(4):
+        space.add(pymunk.Circle(sb, rng.uniform(0.05, 0.6), tuple(rng.uniform(0, size, 2))))
+    for _ in range(4):
+        a = rng.uniform(0, size, 2)
+        space.add(pymunk.Segment(sb, tuple(a), tuple(a + rng.uniform(-3, 3, 2)),
+                                 float(rng.choice([0.0, 0.02, 0.3]))))
+    robots = [add_robot(space, *rng.uniform(0.5, size - 0.5, 2), group=i + 1) for i in range(12)]
+    for body in robots:
+        body.velocity = tuple(rng.uniform(-1, 1, 2))
+    for _ in range(5):
+        space.step(0.05)
+    return space, robots
+
+
+def cast_all(space: pymunk.Space, robots: list[pymunk.Body], beams: int, max_range: float,
+             rng: np.random.Generator, extra_origins: int = 8):
+    """Casts from every robot (its own filter) and from random points (no filter)."""
+    origins = [tuple(b.position) for b in robots]
+    filters = [pymunk.ShapeFilter(group=i + 1) for i in range(len(robots))]
+    origins += [tuple(rng.uniform(-0.5, 12.5, 2)) for _ in range(extra_origins)]
+    filters += [pymunk.ShapeFilter()] * extra_origins
+    angles = [rng.uniform(-math.pi, math.pi) + np.linspace(-math.pi, math.pi, beams, endpoint=False)
+              for _ in origins]
+    return origins, angles, [max_range] * len(origins), filters
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("beams", [64, 360])
+def test_batched_casts_equal_pymunk_bit_for_bit(seed, beams):
+    space, robots = sharp_world(seed)
+    caster = RayCaster(space)
+    caster.begin_frame()
+    rng = np.random.default_rng(100 + seed)
+    requests = cast_all(space, robots, beams, float(rng.uniform(3.0, 15.0)), rng)
+    got = caster.cast_many(*requests)
+    for origin, angles, max_range, f, ranges in zip(*requests, got):
+        want = reference_cast(space, origin, angles, max_range, f)
+        assert np.array_equal(ranges, want), (origin, np.flatnonzero(ranges != want)[:5])
+
+
+def test_batched_casts_hand_hard_origins_to_the_single_cast():
+    """Rounded polygons, origins inside shapes: still what pymunk says."""
+    space, robots = mixed_world(3)
+    caster = RayCaster(space)
+    caster.begin_frame()
+    rng = np.random.default_rng(7)
+    requests = cast_all(space, robots, 90, 8.0, rng, extra_origins=20)
+    origins = list(requests[0]) + [(1.5, 1.3)]  # inside the rounded triangle
+    angles = list(requests[1]) + [np.linspace(0.0, 6.0, 90)]
+    requests = (origins, angles, list(requests[2]) + [8.0], list(requests[3]) + [pymunk.ShapeFilter()])
+    for origin, a, max_range, f, ranges in zip(*requests, caster.cast_many(*requests)):
+        assert np.array_equal(ranges, reference_cast(space, origin, a, max_range, f))
+
+
+def test_a_frame_sees_moved_bodies_only_after_the_next_begin_frame():
+    space = arena(10.0, 10.0)
+    body = add_robot(space, 5.0, 5.0, group=1)
+    caster = RayCaster(space)
+    caster.begin_frame()
+    ahead = np.array([0.0])
+    before = caster.cast((2.0, 5.0), ahead, 9.0)
+    body.position = (7.0, 5.0)
+    space.reindex_shapes_for_body(body)
+    caster.begin_frame()
+    after = caster.cast((2.0, 5.0), ahead, 9.0)
+    assert before[0] == pytest.approx(2.8) and after[0] == pytest.approx(4.8)
