@@ -180,6 +180,7 @@ class RobotExpectation(Section):
     end_in: list[Vec2] | None = None  # polygon the robot's centre must end inside
     # [m] the localizer's position RMSE against the truth (needs a `localization` on the robot)
     localization_rmse: PositiveFloat | None = None
+    localization_final_error: PositiveFloat | None = None  # [m] the same, at the run's end
 
 
 # ---------------------------------------------------------------------------- scenario
