@@ -172,7 +172,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("log", type=Path, help="a run log written by `run --log`")
     plot.add_argument("-o", "--output", type=Path,
                       help="image file (.png, .pdf, .svg; default: next to the log)")
-    plot.add_argument("--kind", choices=("all", "map", "speed", "ranges"), default="all",
+    plot.add_argument("--kind", choices=("all", "map", "speed", "ranges", "localization"),
+                      default="all",
                       help="which figure (default: all)")
     plot.add_argument("--robot", help="only this robot (default: all robots)")
     plot.set_defaults(func=_cmd_plot)
