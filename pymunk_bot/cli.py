@@ -94,7 +94,7 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
         outputs.run_headless(sim, duration)
     result = sim.result()
     verdict = sim.verdict()
-    outputs.finish()
+    outputs.finish(sim)  # the run log, the built map (--map-out)
     if args.out:
         write_json(args.out, result)
     _print_summary(result, verdict.lines())
@@ -206,12 +206,16 @@ def build_parser() -> argparse.ArgumentParser:
     from .cli_foxglove import add_parser as add_convert_parser, add_run_options
 
     add_run_options(run)  # --foxglove --port --host --speed
+    from .cli_localization import add_run_options as add_map_options
+
+    add_map_options(run)  # --map-out --map-robot
     run.set_defaults(func=_cmd_run)
     plot = sub.add_parser("plot", help="plot a run log (trajectories, speed, LiDAR ranges)")
     plot.add_argument("log", type=Path, help="a run log written by `run --log`")
     plot.add_argument("-o", "--output", type=Path,
                       help="image file (.png, .pdf, .svg; default: next to the log)")
-    plot.add_argument("--kind", choices=("all", "map", "speed", "ranges"), default="all",
+    plot.add_argument("--kind", choices=("all", "map", "speed", "ranges", "localization"),
+                      default="all",
                       help="which figure (default: all)")
     plot.add_argument("--robot", help="only this robot (default: all robots)")
     plot.set_defaults(func=_cmd_plot)

@@ -69,12 +69,15 @@ def evaluate(expectations: dict, robots: dict) -> list[Check]:
             entered = robot.metrics.entered[i]
             add(f"never_enter[{i}]", entered is None, "never",
                 "never" if entered is None else f"entered at t={entered:.2f} s")
-        if exp.localization_rmse is not None:
+        for key, field in (("localization_rmse", "rmse"), ("localization_final_error", "final_error")):
+            limit = getattr(exp, key)
+            if limit is None:
+                continue
             score = getattr(robot, "localization_score", None)
-            rmse = score.block()["rmse"] if score is not None else None
-            add("localization_rmse", rmse is not None and rmse <= exp.localization_rmse,
-                f"<= {exp.localization_rmse:g} m", "not localized" if rmse is None else rmse,
-                None if rmse is None else rmse - exp.localization_rmse, "m")
+            value = score.block()[field] if score is not None else None
+            add(key, value is not None and value <= limit, f"<= {limit:g} m",
+                "not localized" if value is None else value,
+                None if value is None else value - limit, "m")
         if exp.end_in is not None:
             region = np.asarray(exp.end_in, dtype=float)
             inside = point_in_polygon(robot.pose[:2], region)

@@ -13,7 +13,7 @@ from .errors import ScenarioError
 from .runlog import RunLog
 from .viewer import palette as pal
 
-KINDS = ("all", "map", "speed", "ranges")
+KINDS = ("all", "map", "speed", "ranges", "localization")
 FORMATS = (".png", ".pdf", ".svg")
 DPI = 120
 
@@ -34,7 +34,7 @@ def robot_colour(index: int) -> str:
 
 
 def make_figure(log: RunLog, kind: str = "all", robot: str | None = None):
-    """A matplotlib Figure of ``kind`` ("all", "map", "speed" or "ranges")."""
+    """A matplotlib Figure of ``kind`` ("all", "map", "speed", "ranges" or "localization")."""
     if kind not in KINDS:
         raise ValueError(f"unknown plot kind '{kind}'; valid: {', '.join(KINDS)}")
     names = log.robot_names
@@ -48,7 +48,11 @@ def make_figure(log: RunLog, kind: str = "all", robot: str | None = None):
         which = f"robot '{robot}'" if robot is not None else "any robot"
         raise ScenarioError("--kind", "", f"ranges: the log has no LiDAR scans of {which} "
                                           "(give the robot a 'lidar' and run again)")
-    if kind == "map":
+    if kind == "localization":  # estimate vs truth: plots_localization.py
+        from .plots_localization import localization_figure
+
+        fig = localization_figure(log, robot, Figure, robot_colour, DPI)
+    elif kind == "map":
         fig = Figure(figsize=_map_figsize(width, height), dpi=DPI, layout="constrained")
         draw_map(fig.add_subplot(), log, robot)
     elif kind == "speed":

@@ -10,7 +10,7 @@ from __future__ import annotations
 import io
 import json
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +62,8 @@ class RunLog:
     teleop: np.ndarray
     obstacle_pose: np.ndarray
     scans: dict[str, ScanLog]
+    # robots that localize or map: estimate, covariance, particles, built map (docs/viewer.md)
+    localization: dict = field(default_factory=dict)
 
     @property
     def robot_names(self) -> list[str]:
@@ -99,6 +101,8 @@ class RunLog:
             arrays[f"scan.{name}.ranges"] = scan.ranges
             arrays[f"scan.{name}.angles"] = scan.angles
             arrays[f"scan.{name}.offset"] = scan.offset
+        for name, track in self.localization.items():
+            arrays.update(track.arrays(f"loc.{name}"))
         buffer = io.BytesIO()
         np.savez_compressed(buffer, meta=np.array(json.dumps(self.meta)), **arrays)
         write_atomic(path, buffer.getvalue())
@@ -120,6 +124,7 @@ class RunLogger:
         self._last_scan: dict[str, object] = {}
         self._meta: dict = {}
         self._movable: list = []
+        self._localization = None
 
     def attach(self, sim) -> "RunLogger":
         """Start logging ``sim`` from its present state and observe its every step."""
@@ -154,6 +159,9 @@ class RunLogger:
         self._rows = {name: [] for name in ("time", *_PER_STEP)}
         self._scan_rows = {r.name: [] for r in sim.robots.values() if r.lidar is not None}
         self._last_scan = {}
+        from .localization.recording import LocalizationRecorder
+
+        self._localization = LocalizationRecorder(sim)
         self(sim)
 
     def __call__(self, sim) -> None:
@@ -176,6 +184,7 @@ class RunLogger:
             if scan is not None and scan is not self._last_scan.get(robot.name):
                 self._last_scan[robot.name] = scan
                 self._scan_rows[robot.name].append((scan, robot.pose))
+        self._localization(sim)
 
     def log(self) -> RunLog:
         """What has been recorded so far."""
@@ -208,7 +217,8 @@ class RunLogger:
                 pose=np.array([p for _, p in rows], dtype=float).reshape(-1, 3),
                 ranges=ranges, angles=np.asarray(angles, dtype=float),
                 offset=np.asarray(offset, dtype=float), max_range=float(max_range))
-        return RunLog(meta=dict(self._meta), scans=scans, **arrays)
+        return RunLog(meta=dict(self._meta), scans=scans,
+                      localization=self._localization.tracks(float(arrays["time"][-1])), **arrays)
 
     def save(self, path: str | Path) -> None:
         """Write what has been recorded to ``path`` (.npz), atomically."""
@@ -271,7 +281,11 @@ def _assemble(meta: dict, files: dict) -> RunLog:
     if absent:
         raise KeyError(absent[0])
     per_step = {name: files[name] for name in ("time", *_PER_STEP)}
-    return RunLog(meta=meta, scans=scans, **per_step)
+    from .localization.recording import LocalizationTrack
+
+    tracks = {r["name"]: LocalizationTrack.from_arrays(files, f"loc.{r['name']}")
+              for r in meta["robots"] if f"loc.{r['name']}.estimate" in files}
+    return RunLog(meta=meta, scans=scans, localization=tracks, **per_step)
 
 
 def _geometry_to_json(g: ShapeGeometry) -> dict:

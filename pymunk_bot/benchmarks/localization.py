@@ -37,10 +37,10 @@ from ..maps.rasterize import scenario_grid
 from ..sim import Simulation
 from . import localization_worlds as worlds
 
-# The settings of scenarios/drafts/mcl_office.yaml and global_localization.yaml.
+# The settings of scenarios/mcl_office.yaml and global_localization.yaml.
 TRACKING = MclConfig(sigma_hit=0.05, update_min_d=0.05, update_min_a=0.05)
-GLOBAL = MclConfig(initial="global", max_particles=5000, recovery_alpha_slow=0.001,
-                   recovery_alpha_fast=0.1)
+GLOBAL = MclConfig(initial="global", max_particles=5000, update_min_d=0.1, update_min_a=0.1,
+                   recovery_alpha_slow=0.001, recovery_alpha_fast=0.1)
 MAX_TIME = 120.0  # [s] of simulated time per run
 GLOBAL_TIME = 20.0  # [s]
 

@@ -181,6 +181,7 @@ class RobotExpectation(Section):
     end_in: Region | None = None  # polygon the robot's centre must end inside
     # [m] the localizer's position RMSE against the truth (needs a `localization` on the robot)
     localization_rmse: Annotated[PositiveFloat, Field(le=1e3)] | None = None
+    localization_final_error: Annotated[PositiveFloat, Field(le=1e3)] | None = None  # [m] at the end
 
 
 # ---------------------------------------------------------------------------- scenario

@@ -73,6 +73,7 @@ class RunOutputs:
     log_path: Path | None = None
     logger: object = None
     foxglove: object = None  # cli_foxglove.FoxgloveOutputs: an MCAP log and/or a live server
+    map_out: object = None  # cli_localization.MapOutput: the map a robot built (--map-out)
 
     def run_headless(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` (paced at real time while serving Foxglove live)."""
@@ -100,8 +101,10 @@ class RunOutputs:
         print(f"wrote {self.record} ({frames} frames in {spent:.1f} s: {frames / spent:.0f} "
               f"frames/s, {duration / spent:.2f}x real time)")
 
-    def finish(self) -> None:
-        """Write the run log, if one was asked for."""
+    def finish(self, sim=None) -> None:
+        """Write the run log and the built map (--map-out), if asked for."""
+        if self.map_out is not None and sim is not None:
+            self.map_out.save(sim)
         if self.logger is not None:
             self.logger.save(self.log_path)
             steps = len(self.logger.log().time) - 1
@@ -112,7 +115,10 @@ class RunOutputs:
 
 def prepare_outputs(args, sim) -> RunOutputs:
     """Check --record/--fps/--size/--log before the run and start the logger."""
-    outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size)
+    from ..cli_localization import prepare_map_output
+
+    outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size,
+                         map_out=prepare_map_output(args, sim))
     if args.log is not None:
         from ..runlog import RunLogger
 

@@ -10,6 +10,7 @@ import pygame
 from . import palette as pal
 from . import primitives as prim
 from .camera import Camera
+from .draw_localization import draw_built_map, draw_localization
 from .scene import RobotView, Scene, ShapeView
 
 GRID_SPACINGS = (0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)  # [m]
@@ -29,6 +30,10 @@ class Layers:
     ghost: bool = True  # odometry estimate
     paths: bool = True
     labels: bool = True
+    built_map: bool = True  # the occupancy grid a robot is building (mapping / slam)
+    particles: bool = True  # the localizer's particle cloud
+    covariance: bool = True  # the estimate's 95 % ellipse
+    estimate: bool = True  # the localizer's pose, beside the true one
 
 
 class StaticLayer:
@@ -77,8 +82,11 @@ def draw_scene(surface: pygame.Surface, scene: Scene, camera: Camera, layers: La
     else:
         _draw_static(surface, scene, camera, layers.grid,
                      [s for s in scene.shapes if not s.movable])
-    _shapes(surface, camera, [s for s in scene.shapes if s.movable])
     robots = scene.robots
+    if layers.built_map:  # what the robots' mapping has built so far, over the fixed scene
+        for r in robots:
+            draw_built_map(surface, camera, r)
+    _shapes(surface, camera, [s for s in scene.shapes if s.movable])
     if layers.rays:
         # Beyond a budget, lines for the selected robot only: thousands of rays hide the scene
         # and take longer to draw than the physics takes to run.
@@ -98,6 +106,8 @@ def draw_scene(surface: pygame.Surface, scene: Scene, camera: Camera, layers: La
     if layers.ghost:
         for r in robots:
             _ghost(surface, camera, r)
+    for r in robots:
+        draw_localization(surface, camera, r, layers)
     for r in robots:
         _robot(surface, camera, r, halo and r.name == selected)
     if layers.labels and font is not None and len(robots) > 1:

@@ -14,7 +14,8 @@ TELEOP_KEYS = {
     pygame.K_RIGHT: "right", pygame.K_d: "right",
 }
 LAYER_KEYS = {pygame.K_l: "rays", pygame.K_t: "trails", pygame.K_g: "grid",
-              pygame.K_o: "ghost", pygame.K_p: "paths"}
+              pygame.K_o: "ghost", pygame.K_p: "paths", pygame.K_m: "built_map",
+              pygame.K_k: "particles", pygame.K_v: "covariance", pygame.K_e: "estimate"}
 FASTER = {pygame.K_PLUS, pygame.K_EQUALS, pygame.K_KP_PLUS}
 SLOWER = {pygame.K_MINUS, pygame.K_KP_MINUS, pygame.K_UNDERSCORE}
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -73,6 +74,10 @@ class RobotView:
     collisions: int = 0
     status: str = ""  # the controller's status
     teleop: bool = False  # wheel speeds set by hand (or by the log's override flag)
+    estimate: np.ndarray | None = None  # the localizer's pose [x, y, theta], if it has one
+    covariance: np.ndarray | None = None  # (3, 3) the estimate's covariance
+    particles: np.ndarray | None = None  # (N, 3) the particle cloud (MCL)
+    built_map: Any = None  # OccupancyGrid the robot has built so far (mapping / slam)
 
 
 @dataclass

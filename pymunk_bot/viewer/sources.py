@@ -124,9 +124,30 @@ class LiveSource:
                 scan_origin=origin, scan_points=points, scan_hit=hit,
                 collisions=robot.collisions,
                 status=_status(controller),
-                teleop=robot.overridden))
+                teleop=robot.overridden, **_live_localization(robot)))
         return Scene(self.sim.world.width, self.sim.world.height, self.sim.time, shapes, robots,
                      self.sim.config.name, self.origin)
+
+
+def _live_localization(robot) -> dict:
+    """The RobotView fields of a robot's localizer and map, when the scenario names them."""
+    fields: dict = {}
+    if getattr(robot, "localization_score", None) is not None:
+        localizer = robot.localizer
+        fields["estimate"] = np.array(localizer.pose, dtype=float)
+        fields["covariance"] = np.array(localizer.covariance, dtype=float)
+        fields["particles"] = localizer.debug().get("particles")
+    if getattr(robot, "mapper", None) is not None:
+        fields["built_map"] = robot.mapper.grid
+    return fields
+
+
+def _replay_localization(track, i: int, time: float) -> dict:
+    """The same fields from a run log's LocalizationTrack at step ``i``."""
+    if track is None:
+        return {}
+    return {"estimate": track.estimate[i], "covariance": track.covariance[i],
+            "particles": track.cloud_at(time), "built_map": track.map_at(time)}
 
 
 def _status(controller) -> str:
@@ -216,7 +237,9 @@ class ReplaySource:
                 goal_reached=bool(log.goal_reached[i, j]),
                 trail=log.pose[: i + 1, j, :2], scan_origin=origin, scan_points=points,
                 scan_hit=hit, collisions=int(log.collisions[i, j]),
-                teleop=bool(log.teleop[i, j])))
+                teleop=bool(log.teleop[i, j]),
+                **_replay_localization(getattr(log, "localization", {}).get(name), i,
+                                       float(log.time[i]))))
         width, height = log.size
         return Scene(width, height, self.time, shapes, robots, f"replay: {log.meta['scenario']}",
                      log.origin)

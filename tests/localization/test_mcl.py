@@ -8,7 +8,7 @@ from pymunk_bot.localization import MclConfig, MclLocalizer
 from pymunk_bot.localization.mcl import kld_limit, low_variance_indices
 from pymunk_bot.localization.motion import sample_motion
 
-# The scenario drafts' tracking settings: a sharp likelihood (the LiDAR is good to 1 cm) and
+# The shipped scenarios' tracking settings: a sharp likelihood (the LiDAR is good to 1 cm) and
 # frequent updates; the rest are ROS AMCL's defaults.
 TRACKING = dict(sigma_hit=0.05, update_min_d=0.05, update_min_a=0.05)
 
