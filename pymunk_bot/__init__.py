@@ -5,11 +5,32 @@
 >>> sim.run(1.0)
 >>> round(sim.time, 6)
 1.0
-"""
-from .config import ScenarioConfig, load_scenario
-from .errors import ScenarioError
-from .robot import Robot
-from .sim import Simulation
 
-__all__ = ["Robot", "ScenarioConfig", "ScenarioError", "Simulation", "load_scenario"]
-__version__ = "0.1.0"
+The names below load on first use, so ``import pymunk_bot`` costs little more than its
+dependencies (the scenario schema is built when the first scenario is read).
+"""
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .command import Command
+    from .config import ScenarioConfig, load_scenario
+    from .errors import ScenarioError
+    from .robot import Robot
+    from .sim import Simulation
+
+_EXPORTS = {"Command": "command", "Robot": "robot", "ScenarioConfig": "config",
+            "ScenarioError": "errors", "Simulation": "sim", "load_scenario": "config"}
+
+__all__ = sorted(_EXPORTS)
+__version__ = "0.2.0"
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -68,4 +68,5 @@ FieldOfView = Annotated[Float, AfterValidator(_angle_within_full_circle)]
 class Section(BaseModel):
     """Base of every scenario section: frozen, unknown keys are errors."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # defer_build: schemas are built on first use, so `import pymunk_bot` stays light
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
