@@ -113,7 +113,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
         robot.localizer = _make_localizer(robot, index, maps, source, localizer_rng, config)
         if robot.config.mapping is not None:
             from .localization.mapping import OccupancyMapper
-            robot.mapper = OccupancyMapper.for_arena(robot.config.mapping, tuple(config.world.size))
+            robot.mapper = OccupancyMapper.for_arena(robot.config.mapping, config.world.arena)
         elif hasattr(robot.localizer, "grid"):  # slam builds its own map
             robot.mapper = robot.localizer
     built = Built(world, robots, fleet, drive_groups, odometry_groups,
@@ -189,7 +189,7 @@ def _make_localizer(robot: Robot, index: int, maps: MapSource, source: str,
     lidar = robot.lidar
     context = LocalizerContext(
         robot=robot.spec, start_pose=np.array(robot.config.pose, dtype=float), rng=rng,
-        arena=tuple(config.world.size), map=maps.grid() if needs_map else None,
+        arena=config.world.arena, map=maps.grid() if needs_map else None,
         lidar_offset=lidar.offset if lidar is not None else (0.0, 0.0, 0.0))
     kwargs: dict[str, Any] = {}
     if section.type == "ground_truth":

@@ -68,28 +68,31 @@ def _register_builtins() -> None:
     from .config import schema as s
 
     drives.add("diff", "pymunk_bot.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
-    for name, model in (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
-                        ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle)):
+    obstacle_models: tuple[tuple[str, type], ...] = (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
+                        ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle))
+    for name, model in obstacle_models:
         obstacles.add(name, "pymunk_bot.obstacles:build_obstacle", model)
     # Registration order fixes each sensor's random stream: keep new sensors after these.
     sensors.add("lidar", "pymunk_bot.sensors.attach:make_lidar", s.LidarConfig)
     sensors.add("imu", "pymunk_bot.sensors.attach:make_imu", s.ImuConfig)
-    for name, cls, model in (
+    builtin_controllers: tuple[tuple[str, str, type], ...] = (
             ("wheels", "wheels:WheelsController", c.WheelsControllerConfig),
             ("velocity", "velocity:VelocityController", c.VelocityControllerConfig),
             ("go_to_goal", "go_to_goal:GoToGoalController", c.GoToGoalControllerConfig),
             ("waypoints", "waypoints:WaypointsController", c.WaypointsControllerConfig),
             ("avoid", "avoid:AvoidController", c.AvoidControllerConfig),
             ("navigate", "navigate:NavigateController", c.NavigateControllerConfig),
-            ("python", "python:PythonController", c.PythonControllerConfig)):
+            ("python", "python:PythonController", c.PythonControllerConfig))
+    for name, cls, model in builtin_controllers:
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
     from .localization import config as lc
 
-    for name, cls, model in (
+    builtin_localizers: tuple[tuple[str, str, type], ...] = (
             ("ground_truth", "simple:GroundTruthLocalizer", loc.GroundTruthLocalizerConfig),
             ("odometry", "simple:OdometryLocalizer", loc.OdometryLocalizerConfig),
             ("mcl", "mcl:MclLocalizer", lc.MclConfig),
             ("ekf", "ekf:EkfLocalizer", lc.EkfConfig),
             ("slam", "slam:SlamLocalizer", lc.SlamConfig),
-            ("python", "python:PythonLocalizer", loc.PythonLocalizerConfig)):
+            ("python", "python:PythonLocalizer", loc.PythonLocalizerConfig))
+    for name, cls, model in builtin_localizers:
         localizers.add(name, f"pymunk_bot.localization.{cls}", model)

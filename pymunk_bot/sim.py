@@ -93,7 +93,7 @@ class Simulation:
         self.wall_time = 0.0  # [s] spent inside step()
         self._robots = list(self.robots.values())
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
-        self._control = ScheduleArray([built.control_schedules[i] for i in self._controlled])
+        self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
         self._lidars = [r.lidar for r in self._robots if r.lidar is not None]
         self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self._lidars])
         self._sensors = [s for r in self._robots for s in r.sensors

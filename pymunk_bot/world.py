@@ -19,7 +19,7 @@ class World:
 
     def __init__(self, config: ScenarioConfig) -> None:
         self.config = config
-        self.width, self.height = config.world.size
+        self.width, self.height = config.world.arena
         # (x0, y0, x1, y1) [m]: [0, width] x [0, height], or a map's extent in the map's frame
         self.extent: tuple[float, float, float, float] = config.world.extent
         self.space = physics.new_space(
@@ -39,7 +39,7 @@ class World:
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
         boxes = [(-t, -t, 0, h + t), (w, -t, w + t, h + t), (0, -t, w, 0), (0, h, w, h + t)]
-        shapes = []
+        shapes: list[pymunk.Shape] = []
         for x0, y0, x1, y1 in boxes:
             shape = pymunk.Poly(self.space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
             shape.friction = self.config.world.wall_friction

@@ -41,12 +41,13 @@ def _robot_models() -> Any:
     controllers = [e.config for e in plugins.controllers.entries()]
     localizers = [e.config for e in plugins.localizers.entries()]
     controller_union = _tagged_union(controllers, "type")
-    localizer_union = Annotated[_tagged_union(localizers, "type"), BeforeValidator(_as_section)]
+    localizer_union = Annotated[_tagged_union(localizers, "type"),  # type: ignore[valid-type]
+                                BeforeValidator(_as_section)]
     sensor_fields = {e.name: (e.config | None, None) for e in plugins.sensors.entries()
                      if e.name not in RobotConfig.model_fields}
     members = []
     for entry in plugins.drives.entries():
-        model = create_model(
+        model = create_model(  # type: ignore[call-overload]  # field types built at run time
             entry.config.__name__, __base__=entry.config, __module__=entry.config.__module__,
             controller=(controller_union | None, None),
             localization=(localizer_union, Field(default="odometry", validate_default=True)),
@@ -72,7 +73,7 @@ def scenario_model() -> type[ScenarioConfig]:
         _cache["model"] = create_model(
             "ScenarioConfig", __base__=ScenarioConfig, __module__=ScenarioConfig.__module__,
             obstacles=(list[obstacles], Field([], max_length=MAX_OBSTACLES)),  # type: ignore[valid-type]
-            robots=(list[_robot_models()],  # type: ignore[misc]
+            robots=(list[_robot_models()],  # type: ignore[misc,arg-type]
                     Field(min_length=1, max_length=MAX_ROBOTS)))
         _cache["key"] = key
     return _cache["model"]

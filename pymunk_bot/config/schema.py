@@ -46,6 +46,13 @@ class WorldConfig(Section):
         assert self.size is not None  # parse_scenario guarantees one of size and map
         return (0.0, 0.0, float(self.size[0]), float(self.size[1]))
 
+    @property
+    def arena(self) -> tuple[float, float]:
+        """Width and height of the arena [m] (a map's extent when ``size`` was left out)."""
+        if self.size is None:
+            raise ValueError("world.size is not known before the map is loaded")
+        return (float(self.size[0]), float(self.size[1]))
+
     def map_geometry(self) -> Any:
         """The :class:`~pymunk_bot.maps.geometry.MapGeometry` of ``map`` (loaded once), or None."""
         if self.map is None:

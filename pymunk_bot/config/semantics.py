@@ -21,7 +21,10 @@ class SemanticError(Exception):
 
 
 def obstacle_outline(obstacle) -> np.ndarray | None:
-    """Polygon outline of an obstacle, or None for circles."""
+    """Polygon outline of an obstacle [m], or None for circles. A plugin's obstacle kind gives
+    its own through an ``outline()`` method."""
+    if hasattr(obstacle, "outline"):
+        return np.asarray(obstacle.outline(), dtype=float)
     if isinstance(obstacle, BoxObstacle):
         return geo.box_corners(obstacle.center, obstacle.size, obstacle.angle)
     if isinstance(obstacle, WallObstacle):
@@ -35,7 +38,16 @@ def distance_to_obstacle(point, obstacle) -> float:
     """Distance from a point to an obstacle's surface (0 inside)."""
     if isinstance(obstacle, CircleObstacle):
         return max(0.0, math.dist(point, obstacle.center) - obstacle.radius)
-    return geo.distance_to_polygon(point, obstacle_outline(obstacle))
+    return geo.distance_to_polygon(point, polygon_of(obstacle))
+
+
+def polygon_of(obstacle) -> np.ndarray:
+    """The outline of an obstacle that is not a circle (TypeError if it has none)."""
+    outline = obstacle_outline(obstacle)
+    if outline is None:
+        raise TypeError(f"obstacle type '{obstacle.type}' has no outline: give its config "
+                        "model an outline() method")
+    return outline
 
 
 def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
@@ -65,7 +77,7 @@ def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig)
         if problem is not None:
             raise SemanticError(("robots", index, "pose"), f"robot of radius {r:g} at {problem}")
     else:
-        width, height = scenario.world.size
+        width, height = scenario.world.arena
         if not (r <= x <= width - r and r <= y <= height - r):
             raise SemanticError(
                 ("robots", index, "pose"),
@@ -89,7 +101,7 @@ def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
         if problem is not None:
             raise SemanticError(loc, problem)
         return
-    width, height = scenario.world.size
+    width, height = scenario.world.arena
     if not (0 <= point[0] <= width and 0 <= point[1] <= height):
         raise SemanticError(loc, f"({point[0]:g}, {point[1]:g}) is outside the arena "
                                  f"[0, {width:g}] x [0, {height:g}]")
@@ -104,7 +116,7 @@ def _check_localization(index: int, robot: RobotConfig, scenario: ScenarioConfig
         raise SemanticError(("robots", index, "localization"), str(exc)) from None
     if robot.mapping is not None:
         try:
-            check_mapping(robot.mapping, tuple(scenario.world.size))
+            check_mapping(robot.mapping, scenario.world.arena)
         except ValueError as exc:
             raise SemanticError(("robots", index, "mapping"), str(exc)) from None
 

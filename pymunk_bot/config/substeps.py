@@ -24,8 +24,8 @@ def half_width(obstacle) -> float:
     """Half the thinnest extent of an obstacle: what a fast robot must not skip over."""
     if isinstance(obstacle, CircleObstacle):
         return obstacle.radius
-    from .semantics import obstacle_outline
-    return geo.thinness(obstacle_outline(obstacle)) / 2.0
+    from .semantics import polygon_of
+    return geo.thinness(polygon_of(obstacle)) / 2.0
 
 
 # [m] the most two bodies may move into each other in one substep: contact starts with at most

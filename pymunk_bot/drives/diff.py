@@ -37,10 +37,10 @@ class DiffDriveGroup(DriveGroup):
         self.small = self.n < SMALL_GROUP
         zeros = (lambda: [[0.0, 0.0] for _ in range(self.n)]) if self.small else (
             lambda: np.zeros((self.n, 2)))
-        self.target = zeros()  # commanded wheel speeds after the speed limit [m/s]
-        self.commanded = zeros()  # acceleration-limited speeds sent to the motors [m/s]
-        self.turning = zeros()  # speeds the wheels turn at in this substep [m/s]
-        self._travel = zeros()  # wheel travel since take_travel [m]
+        self.target: Any = zeros()  # commanded wheel speeds after the speed limit [m/s]
+        self.commanded: Any = zeros()  # acceleration-limited speeds sent to the motors [m/s]
+        self.turning: Any = zeros()  # speeds the wheels turn at in this substep [m/s]
+        self._travel: Any = zeros()  # wheel travel since take_travel [m]
         self._accel = self.max_accel.tolist()
         self._track = self.track.tolist()
 
@@ -124,7 +124,7 @@ class DiffDriveGroup(DriveGroup):
         """Wheel-encoder odometry for every robot of the group (one generator each)."""
         from ..sensors.odometry import DiffOdometryGroup
         return DiffOdometryGroup([c.odometry for c in self.configs], [c.pose for c in self.configs],
-                                 self.track, rngs)
+                                 self.track.tolist(), rngs)
 
     def handle(self, i: int) -> "DiffDrive":
         return DiffDrive(self, i)

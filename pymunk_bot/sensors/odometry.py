@@ -43,7 +43,7 @@ class DiffOdometryGroup:
         self.configs = list(configs)
         n = len(self.configs)
         self._rngs = list(rngs)
-        self.pose = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
+        self.pose: Any = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
         self.believed_track = np.array(
             [t * (1.0 + c.track_width_error) for t, c in zip(track_widths, configs)])  # [m]
         self.scale = np.array([(1.0 + c.left_scale_error, 1.0 + c.right_scale_error)
@@ -54,7 +54,7 @@ class DiffOdometryGroup:
         self._quantised = np.flatnonzero(self.resolution > 0.0)
         self._cumulative = np.zeros((n, 2))  # measured travel before quantisation [m]
         self._ticks = np.zeros((n, 2))  # whole encoder ticks counted so far
-        self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
+        self.wheel_travel: Any = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
         # A few noise-free robots are integrated one by one on lists of floats (numpy's per-call
         # cost dominates there); otherwise as arrays. Both index as pose[i] -> (x, y, theta).

@@ -65,10 +65,10 @@ class ScheduleArray:
         if time + TIME_TOLERANCE < self._earliest:
             return self._none
         if self._each is not None:  # a few: the schedules themselves are cheaper than numpy
-            due = [k for k, schedule in enumerate(self._each) if schedule.due(time)]
+            hits = [k for k, schedule in enumerate(self._each) if schedule.due(time)]
             self._earliest = min((s.start + s._next * s.period if s.period is not None else -math.inf
                                   for s in self._each), default=math.inf)
-            return np.array(due, dtype=np.intp)
+            return np.array(hits, dtype=np.intp)
         elapsed = time - self.start + TIME_TOLERANCE
         due = self.every_tick | (elapsed >= self.next * np.where(self.every_tick, 0.0, self.period))
         index = np.flatnonzero(due)

@@ -60,6 +60,14 @@ def corner_flags(world: World, box: np.ndarray) -> World:
     return World(np.concatenate(pieces, axis=1), np.concatenate(owners), counts, world.bound)
 
 
+def _body(shape: pymunk.Shape) -> pymunk.Body:
+    """The body of a shape in a space (pymunk types it Optional: a loose shape has none)."""
+    body = shape.body
+    if body is None:
+        raise ValueError("a shape in the space has no body")
+    return body
+
+
 class SceneCache:
     """Static geometry kept in world coordinates; dynamic geometry moved on every cast.
 
@@ -97,6 +105,8 @@ class SceneCache:
         if not self._bodies or static_keep is not None:
             if self._framed and self._frame is None:
                 self._frame = (None, None)  # checked this frame; moving shapes not needed yet
+            if static_keep is None:  # nothing moves: the static table is all there is
+                return [self._static], self._static.bound, keep, n_keep
             return [self._static], self._static.bound, static_keep, n_static_keep
         if self._frame is None or self._frame[0] is None or not self._framed:
             tf = transforms(self._bodies)
@@ -109,21 +119,23 @@ class SceneCache:
         return [merged], bounds, keep, n_keep
 
     def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
-        static = [s for s in key if s.body.body_type == pymunk.Body.STATIC]
-        dynamic = [s for s in key if s.body.body_type != pymunk.Body.STATIC]
+        static = [s for s in key if _body(s).body_type == pymunk.Body.STATIC]
+        dynamic = [s for s in key if _body(s).body_type != pymunk.Body.STATIC]
         self.shapes: list[pymunk.Shape] = static + dynamic
         filters = [s.filter for s in self.shapes]
         self.groups = np.array([f.group for f in filters], dtype=np.uint64)
         self.categories = np.array([f.categories for f in filters], dtype=np.uint64)
         self.masks = np.array([f.mask for f in filters], dtype=np.uint64)
-        self._admitted: dict[pymunk.ShapeFilter, tuple[np.ndarray, int]] = {}
+        self._admitted: dict[pymunk.ShapeFilter,
+                             tuple[np.ndarray, int, np.ndarray | None, int]] = {}
 
         collect = Collector()
         for i, s in enumerate(static):
             collect.add(s, i)
         rows, owner, counts, bound = collect.tables()
-        self._static_tf = {b: body_transform(b) for b in {id(s.body): s.body for s in static}.values()}
-        tf = np.array([self._static_tf[s.body] for s in static]).reshape(-1, 4).T
+        self._static_tf = {b: body_transform(b)
+                           for b in {id(_body(s)): _body(s) for s in static}.values()}
+        tf = np.array([self._static_tf[_body(s)] for s in static]).reshape(-1, 4).T
         rows, bound = moved(rows, bound, tf, owner, np.arange(len(static)))
         static_world = World(rows, owner, counts, bound)
         box = bounding_boxes(static_world)
@@ -137,7 +149,7 @@ class SceneCache:
         for i, s in enumerate(dynamic):
             collect.add(s, len(static) + i)
         self._local = World(*collect.tables())
-        self._bodies = list({id(s.body): s.body for s in dynamic}.values())
+        self._bodies = list({id(_body(s)): _body(s) for s in dynamic}.values())
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]

@@ -115,7 +115,8 @@ class RayCaster:
         pymunk's box test is then decided by rounding (see cache.corner_flags). The tolerances
         are generous because flagged rays are exact anyway, only slower."""
         near, corner = 1e-7 * scale, EDGE_NEAR * scale
-        directions, close = [], 0
+        directions: list[float] = []
+        close = 0
         for sides, v, along in ((self._cache.side_x, ox, (-0.5 * math.pi, 0.5 * math.pi)),
                                 (self._cache.side_y, oy, (-math.pi, 0.0, math.pi))):
             i = bisect.bisect_left(sides, v - corner)
@@ -127,6 +128,6 @@ class RayCaster:
         if close == 2:
             return False
         if directions:
-            lohi = np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
+            lohi: np.ndarray = np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
             fan.flagged.append(fan.every.expand(*fan.every.ranges(lohi, None))[0])
         return True

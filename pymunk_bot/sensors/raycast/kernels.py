@@ -58,7 +58,7 @@ def segment_pairs(k: np.ndarray, ray: np.ndarray, bxy: np.ndarray, best: np.ndar
     np.minimum.at(best, ray.compress(ok), t.compress(ok))
     c = np.flatnonzero(~straddle & (r != 0.0))
     if c.shape[0]:
-        if np.ndim(ox):  # one origin per pair (a batched pass)
+        if isinstance(ox, np.ndarray) and isinstance(oy, np.ndarray):  # one origin per pair
             ox, oy = ox[c], oy[c]
         t1, ok1 = circle_alpha(ox - tax[c], oy - tay[c], bx[c] - tax[c], by[c] - tay[c], r[c])
         t2, ok2 = circle_alpha(ox - tbx[c], oy - tby[c], bx[c] - tbx[c], by[c] - tby[c], r[c])

@@ -89,7 +89,10 @@ class Scene:
         # Tables from merge or take are this cast's own, so d and a.n can go straight into
         # them once read; the cached static table keeps a scratch copy for them instead.
         static = not subset and len(parts) == 1
-        work = world.scratch if static else rows
+        work = rows
+        if static:
+            assert world.scratch is not None  # made by _static_selection above
+            work = world.scratch
         dan = work[RAD:VN + 1, :n_e] if static else np.empty((2, n_e))
         # Chipmunk's plane test for edges: d = a.n - v0.n - r; the edge is skipped if d < 0.
         an = np.multiply(rows[NX, :n_e], ox, out=dan[1])
