@@ -237,7 +237,7 @@ def report(result: dict) -> None:
     print(f"  IR-SIM {result['irsim_version']} {result['irsim_cpu_s']:7.3f} s")
     print(f"  ratio {result['ratio']:.1f}x (target >= {TARGET:g}x): "
           f"{'PASS' if result['passed'] else 'MISS'}")
-    print(f"  same world: {result['beams_within_2cm']:.1%} of beams agree within 2 cm (median "
+    print(f"  same world: {result['beams_within_2cm']:.2%} of beams agree within 2 cm (median "
           f"{result['median_scan_diff_m'] * 1000:.2f} mm); final poses within "
           f"{result['final_pose_gap_m'] * 100:.1f} cm")
 
