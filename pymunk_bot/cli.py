@@ -165,7 +165,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmarks import run_all
 
-    run_all(quick=args.quick)
+    run_all(quick=args.quick, only=args.only)
     return EXIT_OK
 
 
@@ -230,6 +230,9 @@ def build_parser() -> argparse.ArgumentParser:
     listing.set_defaults(func=_cmd_list)
     bench = sub.add_parser("bench", help="measure simulation and LiDAR speed")
     bench.add_argument("--quick", action="store_true", help="fewer repeats")
+    from .benchmarks import SECTIONS  # only names: the sections import lazily
+    bench.add_argument("--only", action="append", choices=list(SECTIONS), metavar="NAME",
+                       help=f"run only this section (repeatable): {', '.join(SECTIONS)}")
     bench.set_defaults(func=_cmd_bench)
     from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
 

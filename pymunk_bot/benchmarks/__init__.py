@@ -1,15 +1,163 @@
-"""Speed benchmarks (`pymunk-bot bench`): ratios measured in one run, never timed unit tests."""
+"""Speed benchmarks (`pymunk-bot bench [--quick] [--only NAME]`): ratios measured in one run,
+in CPU time where two things are compared, never timed unit tests.
+
+Each section prints its figures, then one line per target: PASS, MISS, or SKIP (with why). A
+section that fails outright is reported as ERROR and the others still run.
+"""
 from __future__ import annotations
 
+import importlib.util
+import time
+import traceback
+from typing import Callable
 
-def run_all(quick: bool = False) -> None:
-    from . import lidar, maps, simulation
+Verdict = tuple[str, "bool | None"]  # (target, passed; None: skipped or informational)
 
-    print("Simulation: 60 s of simulated time, median of repeats")
+
+def _simulation(quick: bool) -> list[Verdict]:
+    from . import simulation
+    print("60 s of simulated time, median of repeats (wall time)")
     simulation.main(repeats=2 if quick else 5)
-    print()
-    print("LiDAR: microseconds per ray, 360-beam scans")
+    return []
+
+
+def _lidar(quick: bool) -> list[Verdict]:
+    from . import lidar
+    print("microseconds per ray, 360-beam scans: RayCaster against segment_query_first")
     lidar.main()
-    print()
-    print("Maps: build time; LiDAR on a map world vs the same world as boxes")
+    return []
+
+
+def _contacts(quick: bool) -> list[Verdict]:
+    from . import contacts
+    summary = contacts.main(100 if quick else 1000)
+    return [(f"{summary.trials} trials: 0 crossings", summary.crossings == 0),
+            (f"{summary.trials} trials: penetration <= 1 cm", summary.max_penetration <= 0.01)]
+
+
+def _fleet(quick: bool) -> list[Verdict]:
+    from . import fleet
+    result = fleet.run(quick)
+    fleet.report(result)
+    o = result["overhead_1000"]
+    verdicts = [(f"1000 robots, no sensors: <= {o['target']:g}x bare space.step "
+                 f"(got {o['ratio']:.1f}x)", o["passed"])]
+    for key in ("lidar32_1000", "lidar360_100"):
+        r = result[key]
+        verdicts.append((f"{r['robots']} robots, {r['beams']}-beam LiDAR: >= {r['target']:g}x "
+                         f"real time (got {r['real_time_factor']:.2f}x)", r["passed"]))
+    return verdicts
+
+
+def _learning_loop(quick: bool) -> list[Verdict]:
+    from . import learning_loop
+    result = learning_loop.run(quick)
+    learning_loop.report(result)
+    return [(f"learning loop: >= {result['target']:g}x bare pymunk (got {result['ratio']:.2f}x)",
+             result["passed"])]
+
+
+def _irsim(quick: bool) -> list[Verdict]:
+    from . import irsim
+    result = irsim.run(quick)
+    irsim.report(result)
+    target = f"10 robots x 360 beams: >= {irsim.TARGET:g}x IR-SIM {irsim.IRSIM_VERSION}"
+    if "skipped" in result:
+        return [(f"{target} (skipped: {result['skipped']})", None)]
+    return [(f"{target} (got {result['ratio']:.1f}x)", result["passed"])]
+
+
+def _maps(quick: bool) -> list[Verdict]:
+    from . import maps
+    print("build time; LiDAR on a map world vs the same world as boxes")
     maps.main(quick=quick)
+    return []
+
+
+def _localization(quick: bool) -> list[Verdict]:
+    from . import localization
+    result = localization.run_all(quick=True)  # the full run (10 seeds) is its own command
+    verdicts: list[Verdict] = []
+    for world in ("office", "ros_map"):
+        mcl, glob = result[world]["mcl"], result[world]["global"]
+        print(f"  {world}: mcl rmse {mcl['rmse']['worst'] * 100:.1f} cm, heading "
+              f"{mcl['heading_rmse_deg']['worst']:.2f} deg; global localization "
+              f"{glob['time_to_localize']['worst']:.1f} s; ekf rmse "
+              f"{result[world]['ekf']['rmse']['worst'] * 100:.1f} cm; slam ATE "
+              f"{result[world]['slam']['ate_rmse']['worst'] * 100:.1f} cm "
+              f"(worst of {result['seeds']} seeds)")
+        verdicts += [(f"{world}: mcl rmse <= 5 cm", mcl["rmse"]["worst"] <= 0.05),
+                     (f"{world}: mcl heading rmse <= 2 deg", mcl["heading_rmse_deg"]["worst"] <= 2.0),
+                     (f"{world}: global localization <= 15 s",
+                      glob["time_to_localize"]["worst"] <= 15.0)]
+    print("  mcl update: " + ", ".join(f"{n} particles {ms:.1f} ms"
+                                       for n, ms in result["mcl_update_ms"].items()))
+    return verdicts
+
+
+def _learning(quick: bool) -> list[Verdict]:
+    if importlib.util.find_spec("gymnasium") is None:
+        return [("learning environments (skipped: gymnasium is not installed; "
+                 "pip install 'pymunk-bot[rl]')", None)]
+    from . import learning
+    learning.run(quick)
+    return []
+
+
+def _fuzz(quick: bool) -> list[Verdict]:
+    from . import fuzz
+    files = 30 if quick else 1000
+    counts = fuzz.fuzz(files=files)
+    bad = {k: sum(c[k] for c in counts.values()) for k in ("traceback", "hang", "bad-message")}
+    for command, counter in counts.items():
+        print(f"  {command:<8} ok {counter['ok']}, exit-2 {counter['exit-2']}, "
+              f"bad message {counter['bad-message']}, tracebacks {counter['traceback']}, "
+              f"hangs {counter['hang']}")
+    return [(f"{files} mutated scenarios: 0 tracebacks, 0 hangs, 0 bad messages", not any(bad.values()))]
+
+
+# name -> (title, section); the order they run in
+SECTIONS: dict[str, tuple[str, Callable[[bool], list[Verdict]]]] = {
+    "simulation": ("Simulation speed", _simulation),
+    "lidar": ("LiDAR ray casting", _lidar),
+    "contacts": ("Contacts that hold", _contacts),
+    "fleet": ("Swarms", _fleet),
+    "learning_loop": ("Learning loop against bare pymunk", _learning_loop),
+    "irsim": ("Against IR-SIM", _irsim),
+    "maps": ("Maps", _maps),
+    "localization": ("Localization (quick)", _localization),
+    "learning": ("Learning environments and sweeps", _learning),
+    "fuzz": ("Fuzzing the command line", _fuzz),
+}
+
+
+def _mark(passed: bool | None) -> str:
+    return "SKIP" if passed is None else ("PASS" if passed else "MISS")
+
+
+def run_all(quick: bool = False, only: list[str] | None = None) -> dict[str, list[Verdict]]:
+    """Run the sections (``only``: these names), print each with its targets; returns the
+    verdicts by section."""
+    unknown = sorted(set(only or []) - set(SECTIONS))
+    if unknown:
+        raise ValueError(f"unknown bench section(s) {', '.join(unknown)}; "
+                         f"valid: {', '.join(SECTIONS)}")
+    verdicts: dict[str, list[Verdict]] = {}
+    for name, (title, section) in SECTIONS.items():
+        if only and name not in only:
+            continue
+        print(f"== {title} [{name}]")
+        started = time.perf_counter()
+        try:
+            verdicts[name] = section(quick)
+        except Exception as exc:  # one broken section must not hide the others' figures
+            traceback.print_exc()
+            verdicts[name] = [(f"section failed: {type(exc).__name__}: {exc}", False)]
+        for target, passed in verdicts[name]:
+            print(f"  {_mark(passed)}  {target}")
+        print(f"  ({time.perf_counter() - started:.0f} s)\n")
+    print("== Summary")
+    for name, rows in verdicts.items():
+        for target, passed in rows:
+            print(f"  {_mark(passed)}  [{name}] {target}")
+    return verdicts

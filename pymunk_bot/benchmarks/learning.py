@@ -44,7 +44,7 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     sim, task = env.sim, env.episode.task
     robot = sim.robots[task.name]
     space, body = sim.world.space, robot.body
-    control = robot.drive.control  # the kinematic body the pivot and gear joints pull on
+    control = robot.control  # the kinematic body the pivot and gear joints pull on
     h = sim.dt / sim.substeps
     substeps = env.episode.steps_per_action * sim.substeps
     angles = robot.lidar.angles
