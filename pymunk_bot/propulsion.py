@@ -44,6 +44,9 @@ class Propulsion:
         if self.batched:
             self._read, self._write = batch.Buffer(), batch.Buffer()
             self._rows = -1  # bodies the last index was built for
+        # What each control body was last given: a write (a pymunk call) is skipped when the
+        # new value is the same, as it is while a robot drives straight at a steady speed.
+        self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
 
     def substep(self, h: float) -> None:
         """Advance every drive by one substep of ``h`` [s] and set the control velocities."""
@@ -86,12 +89,18 @@ class Propulsion:
         for group, idx in self.groups:
             for k, twist in zip(idx.tolist(), zip(*group.advance(h))):
                 twists[k] = twist
-        for body, control, (ux, uy, omega) in zip(self.bodies, self.controls, twists):
+        given = self._given
+        for k, (body, control, (ux, uy, omega)) in enumerate(zip(self.bodies, self.controls, twists)):
             heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
             chord = _sinc_half(omega * h)
             c, s = math.cos(heading), math.sin(heading)
-            control.velocity = ((ux * c - uy * s) * chord, (ux * s + uy * c) * chord)
-            control.angular_velocity = omega
+            vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
+            last = given[k]
+            if vx != last[0] or vy != last[1]:
+                control.velocity = (vx, vy)
+            if omega != last[2]:
+                control.angular_velocity = omega
+            given[k] = (vx, vy, omega)
 
     def _index(self, rows: int) -> None:
         """Where each robot's body and control body sit in pymunk's body order."""
