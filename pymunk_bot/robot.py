@@ -177,6 +177,14 @@ class Robot:
         self.nav_goal = (x, y)
         fleet.watch_goal(i)
 
+    def set_nav_goal(self, position: tuple[float, float]) -> None:
+        """Send the controller somewhere (e.g. a click in the viewer) without changing the task:
+        expectations still judge the scenario's goal."""
+        x, y = float(position[0]), float(position[1])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError(f"goal must be finite (got {position!r})")
+        self.nav_goal = (x, y)
+
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""
         return {s.name: s.reading for s in self.sensors if s is not self.lidar}
