@@ -64,13 +64,20 @@ _entry_points_loaded: set[str] = set()
 
 def _register_builtins() -> None:
     from .config import controllers as c
+    from .config import drives as d
+    from .config import motion as m
     from .config import localization as loc
     from .config import schema as s
 
     drives.add("diff", "pymunk_bot.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
+    drives.add("ackermann", "pymunk_bot.drives.ackermann:AckermannDriveGroup",
+               d.AckermannRobotConfig)
+    drives.add("omni", "pymunk_bot.drives.omni:OmniDriveGroup", d.OmniRobotConfig)
     for name, model in (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
                         ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle)):
         obstacles.add(name, "pymunk_bot.obstacles:build_obstacle", model)
+    obstacles.add("pedestrian", "pymunk_bot.actors.pedestrians:build_pedestrian",
+                  m.PedestrianObstacle)
     # Registration order fixes each sensor's random stream: keep new sensors after these.
     sensors.add("lidar", "pymunk_bot.sensors.attach:make_lidar", s.LidarConfig)
     sensors.add("imu", "pymunk_bot.sensors.attach:make_imu", s.ImuConfig)

@@ -9,6 +9,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
+from .footprint import FootprintConfig
+from .motion import MotionConfig
 from .types import (
     Float, FieldOfView, Int, Length, Mass, Name, NonNegativeFloat, Pose, PositiveFloat, PositiveInt,
     Probability, Section, Vec2,
@@ -36,6 +38,7 @@ class _Solid(Section):
     movable: bool = False  # a dynamic body the robots can push
     mass: Mass = 1.0  # [kg], movable only
     ground_friction: NonNegativeFloat = 0.5  # floor friction coefficient mu, movable only
+    motion: MotionConfig | None = None  # scripted path (a kinematic body); not with movable
 
 
 class BoxObstacle(_Solid):
@@ -112,7 +115,8 @@ class RobotConfig(Section):
     name: Name
     drive: str = "diff"  # a registered drive: diff (built in), or a plugin's
     pose: Pose  # x [m], y [m], theta [rad]
-    radius: Length = 0.2  # [m]
+    radius: Length = 0.2  # [m] of the default disc footprint
+    footprint: FootprintConfig | None = None  # robot frame; None: a disc of ``radius``
     mass: Mass = 5.0  # [kg]
     friction: NonNegativeFloat = 0.5  # contact friction of the robot's body
     # The pose estimate controllers see: a registered localizer's name or {type: name, ...}.

@@ -1,0 +1,180 @@
+"""Pedestrians walking between their goals with the social force model.
+
+Helbing & Molnar, "Social force model for pedestrian dynamics", Phys. Rev. E 51, 4282 (1995).
+Per unit mass, walker a feels
+- a driving force (v0 e - v) / tau toward its current goal (e the unit direction, v0 its
+  desired speed, tau the relaxation time);
+- from every other walker and robot b a repulsion -grad V0 exp(-b / sigma), where b is the
+  semi-minor axis of the ellipse through a with foci at b and at b's next step
+  (2b = sqrt((|r| + |r - s|)^2 - |s|^2), r = r_a - r_b, s = v_b * STEP_TIME); we measure b
+  between body edges (minus both radii), so large robots are kept farther away; forces from
+  behind (outside a 200 deg field of view) count at SIGHT_WEIGHT;
+- from walls and obstacles a repulsion U0 exp(-d / R) away from the nearest surface;
+- optionally a random fluctuation, from the run's seeded generator.
+All walkers are updated together as numpy arrays. Each walker is a dynamic disc: contacts push
+it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0.
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+import pymunk
+
+from .. import physics
+from ..obstacles import Obstacle
+
+STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
+SIGHT_COS = math.cos(math.radians(100.0))  # half the field of view
+SIGHT_WEIGHT = 0.5  # weight of forces from outside the field of view
+MAX_SPEED_FACTOR = 1.3  # speed cap relative to the desired speed
+WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
+PEDESTRIAN_FRICTION = 0.3
+
+
+def build_pedestrian(space: pymunk.Space, config) -> Obstacle:
+    """A walker's body: a dynamic disc that does not spin."""
+    body = pymunk.Body(config.mass, math.inf)
+    body.position = tuple(config.center)
+    shape = pymunk.Circle(body, config.radius)
+    shape.friction = PEDESTRIAN_FRICTION
+    shape.collision_type = physics.MOVABLE
+    space.add(body, shape)
+    return Obstacle(config, body, [shape])
+
+
+class Crowd:
+    """Every pedestrian of a world (an actor: ``before_step`` each tick)."""
+
+    def __init__(self, walkers: Sequence[Obstacle], robots: Sequence, space: pymunk.Space,
+                 rng: np.random.Generator) -> None:
+        self.walkers = list(walkers)
+        self.robots = list(robots)
+        self.space = space
+        self.rng = rng
+        cfg = [w.config for w in self.walkers]
+        n = len(cfg)
+        self.radius = np.array([c.radius for c in cfg])  # [m]
+        base = np.array([c.speed for c in cfg])
+        spread = np.array([c.speed_std for c in cfg])
+        draws = rng.standard_normal(n)
+        # Desired speeds [m/s]: at least 10 % of the nominal one, whatever the draw.
+        self.desired = np.maximum(base + spread * draws, 0.1 * base)
+        self.tau = np.array([c.relaxation_time for c in cfg])  # [s]
+        self.v0 = np.array([c.social_strength for c in cfg])  # [m^2/s^2]
+        self.sigma = np.array([c.social_range for c in cfg])  # [m]
+        self.u0 = np.array([c.wall_strength for c in cfg])  # [m^2/s^2]
+        self.wall_range = np.array([c.wall_range for c in cfg])  # [m]
+        self.fluctuation = np.array([c.fluctuation for c in cfg])  # [m/s^2]
+        self.goals = [np.asarray(c.goals, dtype=float) for c in cfg]
+        self.target = [0] * n  # index of the current goal
+        self.direction = [1] * n  # +1 forward through the goals, -1 back (pingpong)
+        self.done = np.zeros(n, dtype=bool)  # a "once" walker at its last goal
+        self._robot_radius = np.array([r.spec.radius for r in self.robots])
+        self._exclude = {s for r in self.robots for s in getattr(r, "shapes", [r.shape])}
+        self._exclude |= {s for w in self.walkers for s in w.shapes}
+
+    # ------------------------------------------------------------------ state
+    def positions(self) -> np.ndarray:
+        return np.array([tuple(w.body.position) for w in self.walkers]).reshape(-1, 2)
+
+    def velocities(self) -> np.ndarray:
+        return np.array([tuple(w.body.velocity) for w in self.walkers]).reshape(-1, 2)
+
+    def goal_points(self) -> np.ndarray:
+        return np.array([g[k] for g, k in zip(self.goals, self.target)]).reshape(-1, 2)
+
+    # ------------------------------------------------------------------ the tick
+    def before_step(self, time: float, dt: float) -> None:
+        pos, vel = self.positions(), self.velocities()
+        self._advance_goals(pos)
+        to_goal = self.goal_points() - pos
+        dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
+        e = to_goal / np.maximum(dist, 1e-9)[:, None]
+        wish = np.where(self.done, 0.0, self.desired)
+        force = (wish[:, None] * e - vel) / self.tau[:, None]
+        force += self._social(pos, vel, e)
+        force += self._walls(pos)
+        if self.fluctuation.any():
+            force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
+        new = vel + force * dt
+        speed = np.hypot(new[:, 0], new[:, 1])
+        cap = MAX_SPEED_FACTOR * self.desired
+        new *= np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
+        for walker, (vx, vy) in zip(self.walkers, new.tolist()):
+            walker.body.velocity = (vx, vy)
+
+    def _advance_goals(self, pos: np.ndarray) -> None:
+        for i, walker in enumerate(self.walkers):
+            goals, k = self.goals[i], self.target[i]
+            if self.done[i] or math.dist(pos[i], goals[k]) > walker.config.goal_tolerance:
+                continue
+            mode, last = walker.config.mode, len(goals) - 1
+            if mode == "loop":
+                self.target[i] = (k + 1) % len(goals)
+            elif mode == "once":
+                if k == last:
+                    self.done[i] = True
+                else:
+                    self.target[i] = k + 1
+            else:  # pingpong
+                if last == 0:
+                    continue
+                if not 0 <= k + self.direction[i] <= last:
+                    self.direction[i] = -self.direction[i]
+                self.target[i] = k + self.direction[i]
+
+    def _others(self, pos: np.ndarray, vel: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Positions, velocities and radii of everything a walker avoids: walkers, robots."""
+        if not self.robots:
+            return pos, vel, self.radius
+        bodies = [r.body for r in self.robots]
+        rpos = np.array([tuple(b.local_to_world(b.center_of_gravity)) for b in bodies])
+        rvel = np.array([tuple(b.velocity) for b in bodies])
+        return (np.vstack([pos, rpos]), np.vstack([vel, rvel]),
+                np.concatenate([self.radius, self._robot_radius]))
+
+    def _social(self, pos: np.ndarray, vel: np.ndarray, e: np.ndarray) -> np.ndarray:
+        """Sum of the elliptical repulsions (per unit mass) on every walker, shape (n, 2)."""
+        opos, ovel, orad = self._others(pos, vel)
+        n = len(pos)
+        r = pos[:, None, :] - opos[None, :, :]  # (n, m, 2) from each other to each walker
+        s = (ovel * STEP_TIME)[None, :, :]
+        q = r - s
+        rn = np.maximum(np.hypot(r[..., 0], r[..., 1]), 1e-9)
+        qn = np.maximum(np.hypot(q[..., 0], q[..., 1]), 1e-9)
+        sn2 = (s[..., 0] ** 2 + s[..., 1] ** 2)
+        two_b = np.sqrt(np.maximum((rn + qn) ** 2 - sn2, 1e-12))
+        b = 0.5 * two_b
+        grad_b = ((rn + qn) / (2.0 * two_b))[..., None] * (r / rn[..., None] + q / qn[..., None])
+        gap = np.maximum(b - self.radius[:, None] - orad[None, :], 0.0)
+        magnitude = (self.v0 / self.sigma)[:, None] * np.exp(-gap / self.sigma[:, None])
+        seen = (-(r * e[:, None, :]).sum(axis=2) / rn) >= SIGHT_COS
+        weight = np.where(seen, 1.0, SIGHT_WEIGHT)
+        weight[np.arange(n), np.arange(n)] = 0.0  # no force on oneself
+        return ((magnitude * weight)[..., None] * grad_b).sum(axis=1)
+
+    def _walls(self, pos: np.ndarray) -> np.ndarray:
+        """Repulsion from the nearest surface of each wall, obstacle and arena side."""
+        force = np.zeros_like(pos)
+        for i, (x, y) in enumerate(pos.tolist()):
+            reach = WALL_REACH * self.wall_range[i] + self.radius[i]
+            hits = self.space.point_query((x, y), reach, pymunk.ShapeFilter())
+            for hit in hits:
+                if hit.shape in self._exclude:
+                    continue
+                gap = max(hit.distance - self.radius[i], 0.0)  # negative inside: push out hard
+                push = self.u0[i] / self.wall_range[i] * math.exp(-gap / self.wall_range[i])
+                gx, gy = hit.gradient
+                force[i, 0] += push * gx
+                force[i, 1] += push * gy
+        return force
+
+
+def make_crowd(world, robots: Sequence, rng: np.random.Generator) -> Crowd | None:
+    """The crowd of a world's pedestrians (None when it has none)."""
+    walkers = [o for o in world.obstacles if getattr(o.config, "type", "") == "pedestrian"]
+    if not walkers:
+        return None
+    return Crowd(walkers, robots, world.space, rng)
