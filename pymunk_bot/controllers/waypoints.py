@@ -7,6 +7,7 @@ import numpy as np
 
 from ..config.controllers import PursuitConfig, WaypointsControllerConfig
 from ..geometry import wrap_angle
+from ..planning.steering import car_pursue, holonomic_toward
 from ..planning.pursuit import PathTracker, PursuitGains, pursue, round_corners
 from .base import STOP, Command, Controller, Observation, RobotSpec
 
@@ -14,11 +15,18 @@ from .base import STOP, Command, Controller, Observation, RobotSpec
 def pursuit_gains(config: PursuitConfig, robot: RobotSpec, max_speed: float,
                   lookahead: float | None = None) -> PursuitGains:
     """The tracker gains a pursuit section describes, for this robot."""
+    car = robot.min_turn_radius > 0
     return PursuitGains(lookahead=lookahead or config.lookahead, max_speed=max_speed,
                         lookahead_time=config.lookahead_time,
-                        corner_radius=config.corner_radius, lateral_accel=config.lateral_accel,
-                        decel=config.decel, rotate_threshold=config.rotate_threshold,
-                        track_width=robot.track_width)
+                        # A car's corners are no tighter than its turning circle.
+                        corner_radius=max(config.corner_radius, robot.min_turn_radius),
+                        lateral_accel=config.lateral_accel,
+                        decel=config.decel,
+                        # Only a diff drive turns on the spot.
+                        rotate_threshold=config.rotate_threshold if robot.drive == "diff" else math.pi,
+                        track_width=robot.track_width if robot.drive == "diff" else 0.0,
+                        drive="ackermann" if car else ("omni" if robot.holonomic else "diff"),
+                        min_turn_radius=robot.min_turn_radius, max_omega=robot.max_omega)
 
 
 class PathFollower:
@@ -45,6 +53,20 @@ class PathFollower:
         if tracker.remaining() > lookahead:
             return tracker.point_at(tracker.s + lookahead), speed, to_end
         return np.asarray(end), speed, to_end
+
+    def drive(self, pose) -> tuple[Command, float]:
+        """(the command for this robot's drive, distance left to the end [m]; inf on a loop)."""
+        g = self.gains
+        if g.drive == "diff":
+            v, omega, to_end = self.command(pose)
+            return Command(v, omega), to_end
+        carrot, speed, to_end = self.carrot(pose)
+        if g.drive == "omni":
+            tracker = self.tracker
+            ahead = tracker.point_at(tracker.s + g.lookahead) - tracker.point_at(tracker.s)
+            face = math.atan2(ahead[1], ahead[0]) if np.hypot(*ahead) > 1e-6 else None
+            return holonomic_toward(pose, carrot, speed, face, g.max_omega), to_end
+        return car_pursue(pose, carrot, speed, g.min_turn_radius), to_end
 
     def command(self, pose) -> tuple[float, float, float]:
         """(v, omega, distance left to the end [m]) for the pose; the distance is inf on a loop."""
@@ -92,7 +114,7 @@ class WaypointsController(Controller):
                 follower = self.lead_in
             else:
                 self.lead_in = None
-        v, omega, left = follower.command(obs.pose)
+        command, left = follower.drive(obs.pose)
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         if follower is self.follower and not self.config.loop and (
                 left <= 0.5 * tolerance or (left <= tolerance and follower.tracker.remaining() < 1e-6)):
@@ -101,4 +123,4 @@ class WaypointsController(Controller):
         self.status = "running"
         if self.config.loop and self.lead_in is None:
             self.message = f"patrolling, lap {self.follower.tracker.laps + 1}"
-        return Command(v, omega)
+        return command
