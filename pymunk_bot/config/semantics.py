@@ -119,6 +119,17 @@ def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig)
             raise SemanticError(("robots", index, "pose"), f"robot overlaps robots[{k}] ({other.name})")
 
 
+def _check_sideways(index: int, robot: RobotConfig) -> None:
+    """Only a holonomic drive takes a lateral speed."""
+    vy = getattr(robot.controller, "vy", 0.0)
+    if vy:
+        from .. import plugins
+        if not getattr(plugins.drives.get(robot.drive), "holonomic", False):
+            raise SemanticError(("robots", index, "controller", "vy"),
+                                f"a {robot.drive} drive cannot move sideways: vy must be 0 "
+                                f"(got {vy:g}); use drive: omni")
+
+
 def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
     width, height = scenario.world.size
     if not (0 <= point[0] <= width and 0 <= point[1] <= height):
@@ -148,6 +159,7 @@ def check(scenario: ScenarioConfig) -> None:
         if footprint is not None and footprint.type == "polygon":
             check_footprint_polygon(("robots", i, "footprint", "points"), footprint.points)
         _check_robot_start(i, robot, scenario)
+        _check_sideways(i, robot)
         if robot.goal is not None:
             _check_point_in_arena(("robots", i, "goal", "position"), robot.goal.position, scenario)
         controller_goal = getattr(robot.controller, "goal", None)

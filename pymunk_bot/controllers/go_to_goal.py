@@ -43,7 +43,8 @@ class GoToGoalController(Controller):
         bearing = wrap_angle(math.atan2(dy, dx) - theta)
         speed = min(self.max_speed, self.config.k_rho * distance)
         if self.robot.holonomic:
-            return holonomic_toward(obs.pose, goal, speed, math.atan2(dy, dx), self.robot.max_omega)
+            return holonomic_toward(obs.pose, goal, speed, math.atan2(dy, dx),
+                                    self.robot.max_omega, 1.0 / self.rate)
         if self.robot.min_turn_radius > 0:
             return self._car(obs.pose, goal, speed, bearing)
         v = min(self.max_speed, self.config.k_rho * distance) * max(0.0, math.cos(bearing))

@@ -32,8 +32,10 @@ def pursuit_gains(config: PursuitConfig, robot: RobotSpec, max_speed: float,
 class PathFollower:
     """Drives along a polyline: rounded corners, a speed profile, pure pursuit, a clean stop."""
 
-    def __init__(self, points, loop: bool, gains: PursuitGains, corner_radius: float) -> None:
+    def __init__(self, points, loop: bool, gains: PursuitGains, corner_radius: float,
+                 period: float = 0.1) -> None:
         self.gains = gains
+        self.period = period  # [s] between commands
         self.tracker = PathTracker(round_corners(points, corner_radius, loop), loop, gains)
 
     def carrot(self, pose) -> tuple[np.ndarray, float, float]:
@@ -65,7 +67,7 @@ class PathFollower:
             tracker = self.tracker
             ahead = tracker.point_at(tracker.s + g.lookahead) - tracker.point_at(tracker.s)
             face = math.atan2(ahead[1], ahead[0]) if np.hypot(*ahead) > 1e-6 else None
-            return holonomic_toward(pose, carrot, speed, face, g.max_omega), to_end
+            return holonomic_toward(pose, carrot, speed, face, g.max_omega, self.period), to_end
         return car_pursue(pose, carrot, speed, g.min_turn_radius), to_end
 
     def command(self, pose) -> tuple[float, float, float]:

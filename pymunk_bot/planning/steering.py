@@ -19,20 +19,23 @@ MIN_CAR_SPEED_FRACTION = 0.3  # a car facing away from its target still creeps a
 
 
 def holonomic_toward(pose: Sequence[float], target: Sequence[float], speed: float,
-                     face: float | None, max_omega: float) -> Command:
-    """Move at ``speed`` [m/s] straight toward ``target`` [m], turning toward ``face`` [rad]."""
+                     face: float | None, max_omega: float, period: float = 0.1) -> Command:
+    """Move at ``speed`` [m/s] straight toward ``target`` [m], turning toward ``face`` [rad].
+
+    The command holds for a control ``period`` [s] while the robot turns, so the world
+    direction is turned into the robot frame at the heading of the period's middle."""
     x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
-    dx, dy = float(target[0]) - x, float(target[1]) - y
-    distance = math.hypot(dx, dy)
-    if distance < 1e-9:
-        vx = vy = 0.0
-    else:
-        c, s = math.cos(theta), math.sin(theta)
-        vx = speed * (c * dx + s * dy) / distance
-        vy = speed * (-s * dx + c * dy) / distance
     omega = 0.0
     if face is not None:
         omega = max(-max_omega, min(max_omega, K_FACE * wrap_angle(face - theta)))
+    dx, dy = float(target[0]) - x, float(target[1]) - y
+    distance = math.hypot(dx, dy)
+    if distance < 1e-9:
+        return Command(0.0, omega, 0.0)
+    mid = theta + 0.5 * omega * period
+    c, s = math.cos(mid), math.sin(mid)
+    vx = speed * (c * dx + s * dy) / distance
+    vy = speed * (-s * dx + c * dy) / distance
     return Command(vx, omega, vy)
 
 
