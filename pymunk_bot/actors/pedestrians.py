@@ -6,11 +6,14 @@ Per unit mass, walker a feels
   desired speed, tau the relaxation time);
 - from every other walker and robot b a repulsion -grad V0 exp(-b / sigma), where b is the
   semi-minor axis of the ellipse through a with foci at b and at b's next step
-  (2b = sqrt((|r| + |r - s|)^2 - |s|^2), r = r_a - r_b, s = v_b * STEP_TIME); we measure b
-  between body edges (minus both radii), so large robots are kept farther away; forces from
-  behind (outside a 200 deg field of view) count at SIGHT_WEIGHT;
-- from walls and obstacles a repulsion U0 exp(-d / R) away from the nearest surface;
-- optionally a random fluctuation, from the run's seeded generator.
+  (2b = sqrt((|r| + |r - s|)^2 - |s|^2), r = r_a - r_b, s = v_b * STEP_TIME), b less the
+  bodies' size beyond NOMINAL_RADIUS each (so a large robot is avoided from farther); forces
+  from behind (outside a 200 deg field of view) count at SIGHT_WEIGHT;
+- from walls, obstacles and robots' footprints a repulsion U0 exp(-d / R) away from the nearest surface (d from the
+  centre, less the walker's size beyond NOMINAL_RADIUS);
+- optionally a random fluctuation, from the run's seeded generator;
+- a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
+  walker back is turned to its right, so head-on encounters resolve the way people do.
 All walkers are updated together as numpy arrays. Each walker is a dynamic disc: contacts push
 it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0.
 """
@@ -28,6 +31,12 @@ from ..obstacles import Obstacle
 STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
 SIGHT_COS = math.cos(math.radians(100.0))  # half the field of view
 SIGHT_WEIGHT = 0.5  # weight of forces from outside the field of view
+# People facing each other head-on both step to their right: without this a walker and a robot
+# on one line balance forever. Part of a repulsion from ahead is turned to the walker's right.
+KEEP_RIGHT = 0.5
+# The 1995 paper measures distances between centres, for people of about this radius [m]; a
+# bigger body (a robot, a large walker) is felt from farther by its excess size.
+NOMINAL_RADIUS = 0.25
 MAX_SPEED_FACTOR = 1.3  # speed cap relative to the desired speed
 WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
 PEDESTRIAN_FRICTION = 0.3
@@ -72,8 +81,9 @@ class Crowd:
         self.direction = [1] * n  # +1 forward through the goals, -1 back (pingpong)
         self.done = np.zeros(n, dtype=bool)  # a "once" walker at its last goal
         self._robot_radius = np.array([r.spec.radius for r in self.robots])
-        self._exclude = {s for r in self.robots for s in getattr(r, "shapes", [r.shape])}
-        self._exclude |= {s for w in self.walkers for s in w.shapes}
+        # Walkers feel each other through the elliptical potential only; robots also repel like
+        # walls, from their real footprint (a robot standing still is an obstacle).
+        self._exclude = {s for w in self.walkers for s in w.shapes}
 
     # ------------------------------------------------------------------ state
     def positions(self) -> np.ndarray:
@@ -94,7 +104,10 @@ class Crowd:
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         wish = np.where(self.done, 0.0, self.desired)
         force = (wish[:, None] * e - vel) / self.tau[:, None]
-        force += self._social(pos, vel, e)
+        social = self._social(pos, vel, e)
+        against = np.maximum(-(social * e).sum(axis=1), 0.0)  # the part that holds us back
+        social += KEEP_RIGHT * against[:, None] * np.column_stack([e[:, 1], -e[:, 0]])
+        force += social
         force += self._walls(pos)
         if self.fluctuation.any():
             force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
@@ -148,7 +161,7 @@ class Crowd:
         two_b = np.sqrt(np.maximum((rn + qn) ** 2 - sn2, 1e-12))
         b = 0.5 * two_b
         grad_b = ((rn + qn) / (2.0 * two_b))[..., None] * (r / rn[..., None] + q / qn[..., None])
-        gap = np.maximum(b - self.radius[:, None] - orad[None, :], 0.0)
+        gap = np.maximum(b - (self.radius[:, None] + orad[None, :] - 2 * NOMINAL_RADIUS), 0.0)
         magnitude = (self.v0 / self.sigma)[:, None] * np.exp(-gap / self.sigma[:, None])
         seen = (-(r * e[:, None, :]).sum(axis=2) / rn) >= SIGHT_COS
         weight = np.where(seen, 1.0, SIGHT_WEIGHT)
@@ -156,7 +169,7 @@ class Crowd:
         return ((magnitude * weight)[..., None] * grad_b).sum(axis=1)
 
     def _walls(self, pos: np.ndarray) -> np.ndarray:
-        """Repulsion from the nearest surface of each wall, obstacle and arena side."""
+        """Repulsion from the nearest surface of each wall, obstacle, robot and arena side."""
         force = np.zeros_like(pos)
         for i, (x, y) in enumerate(pos.tolist()):
             reach = WALL_REACH * self.wall_range[i] + self.radius[i]
@@ -164,7 +177,7 @@ class Crowd:
             for hit in hits:
                 if hit.shape in self._exclude:
                     continue
-                gap = max(hit.distance - self.radius[i], 0.0)  # negative inside: push out hard
+                gap = max(hit.distance - (self.radius[i] - NOMINAL_RADIUS), 0.0)
                 push = self.u0[i] / self.wall_range[i] * math.exp(-gap / self.wall_range[i])
                 gx, gy = hit.gradient
                 force[i, 0] += push * gx
