@@ -135,7 +135,8 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     robot.config = rc
     robot.spec = group.spec(j) if hasattr(group, "spec") else RobotSpec(
         rc.name, of_robot(rc).bounding_radius, getattr(rc, "track_width", 0.0), rc.top_speed(),
-        getattr(rc, "max_accel", 0.0), drive=rc.drive)
+        getattr(rc, "max_accel", 0.0), drive=rc.drive,
+        footprint=of_robot(rc))
     x, y, theta = rc.pose
     if getattr(rc, "footprint", None) is None:
         body = pymunk.Body(rc.mass, pymunk.moment_for_circle(rc.mass, 0, rc.radius))

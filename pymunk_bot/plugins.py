@@ -87,7 +87,7 @@ def _register_builtins() -> None:
             ("go_to_goal", "go_to_goal:GoToGoalController", c.GoToGoalControllerConfig),
             ("waypoints", "waypoints:WaypointsController", c.WaypointsControllerConfig),
             ("avoid", "avoid:AvoidController", c.AvoidControllerConfig),
-            ("navigate", "navigate:NavigateController", c.NavigateControllerConfig),
+            ("navigate", "navigate_any:make_navigate", c.NavigateControllerConfig),
             ("python", "python:PythonController", c.PythonControllerConfig)):
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
     for name, cls, model in (

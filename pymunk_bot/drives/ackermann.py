@@ -109,7 +109,8 @@ class AckermannDriveGroup(DriveGroup):
                          float(self.max_v[i]), float(self.max_accel[i]), drive=self.name,
                          max_speed=float(self.max_v[i]),
                          max_omega=float(self.max_v[i]) / self.min_turn_radius(i),
-                         holonomic=False, min_turn_radius=self.min_turn_radius(i))
+                         holonomic=False, min_turn_radius=self.min_turn_radius(i),
+                         footprint=of_robot(c))
 
     def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
         from ..sensors.odometry_ackermann import AckermannOdometryGroup

@@ -92,7 +92,8 @@ class OmniDriveGroup(DriveGroup):
         c = self.configs[i]
         return RobotSpec(c.name, of_robot(c).bounding_radius, 0.0, float(self.max_v[i]),
                          float(self.max_accel[i]), drive=self.name, max_speed=float(self.max_v[i]),
-                         max_omega=float(self.max_w[i]), holonomic=True)
+                         max_omega=float(self.max_w[i]), holonomic=True,
+                         footprint=of_robot(c))
 
     def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
         from ..sensors.odometry_omni import OmniOdometryGroup
