@@ -60,6 +60,9 @@ class PursuitConfig(Section):
     lateral_accel: PositiveFloat = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
     decel: PositiveFloat = 1.0  # [m/s^2] planned braking before bends and the end
     rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot above
+    # Omni robots only: "path" turns to face along the path, "keep" holds the heading it had
+    # when it started and slides (e.g. to keep facing a shelf).
+    heading: Literal["path", "keep"] = "path"
 
 
 class WaypointsControllerConfig(_DrivingConfig):

@@ -36,6 +36,7 @@ class PathFollower:
                  period: float = 0.1) -> None:
         self.gains = gains
         self.period = period  # [s] between commands
+        self.keep_heading: float | None = None  # omni "keep": the heading to hold [rad]
         self.tracker = PathTracker(round_corners(points, corner_radius, loop), loop, gains)
 
     def carrot(self, pose) -> tuple[np.ndarray, float, float]:
@@ -67,6 +68,8 @@ class PathFollower:
             tracker = self.tracker
             ahead = tracker.point_at(tracker.s + g.lookahead) - tracker.point_at(tracker.s)
             face = math.atan2(ahead[1], ahead[0]) if np.hypot(*ahead) > 1e-6 else None
+            if self.keep_heading is not None:
+                face = self.keep_heading
             return holonomic_toward(pose, carrot, speed, face, g.max_omega, self.period), to_end
         return car_pursue(pose, carrot, speed, g.min_turn_radius), to_end
 
@@ -104,11 +107,17 @@ class WaypointsController(Controller):
         if self.follower is None:
             start = (float(x), float(y))
             if self.config.loop:
-                self.lead_in = PathFollower([start, self.points[0]], False, self.gains, 0.0)
-                self.follower = PathFollower(self.points, True, self.gains, self.corner_radius)
+                self.lead_in = PathFollower([start, self.points[0]], False, self.gains, 0.0,
+                                            1.0 / self.rate)
+                self.follower = PathFollower(self.points, True, self.gains, self.corner_radius,
+                                             1.0 / self.rate)
             else:
                 self.follower = PathFollower([start] + self.points, False, self.gains,
-                                             self.corner_radius)
+                                             self.corner_radius, 1.0 / self.rate)
+            if self.config.pursuit.heading == "keep":
+                for each in (self.lead_in, self.follower):
+                    if each is not None:
+                        each.keep_heading = float(obs.pose[2])
         follower = self.follower
         if self.lead_in is not None:
             # Join the loop once its first point is within a lookahead.
