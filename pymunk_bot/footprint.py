@@ -101,6 +101,13 @@ def _slice_points(points: np.ndarray, along: np.ndarray, a0: float, a1: float) -
     return np.concatenate(out)
 
 
+def drawn_outline(footprint: "Footprint | None") -> np.ndarray | None:
+    """The outline views draw (robot frame), or None for a plain disc about the pose point."""
+    if footprint is None or (footprint.points is None and footprint.center == (0.0, 0.0)):
+        return None
+    return footprint.outline()
+
+
 def transform(points: np.ndarray, pose) -> np.ndarray:
     """Robot-frame points [m] -> world frame at ``pose`` (x, y, theta)."""
     c, s = math.cos(pose[2]), math.sin(pose[2])

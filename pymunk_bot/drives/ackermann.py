@@ -145,6 +145,22 @@ class AckermannDrive:
     def command(self) -> Command:
         return self._group.command_of(self._i)
 
+    def _rear(self, speed: float, steer: float) -> tuple[float, float]:
+        half_turn = 0.5 * float(self._group.track[self._i]) * math.tan(steer) / self.wheelbase
+        return speed * (1.0 - half_turn), speed * (1.0 + half_turn)
+
+    @property
+    def target(self) -> tuple[float, float]:
+        """(left, right) rear-wheel speeds the command asks for [m/s] (as a diff drive's)."""
+        g = self._group
+        return self._rear(float(g.target_speed[self._i]), float(g.target_steer[self._i]))
+
+    @property
+    def wheel_speeds(self) -> tuple[float, float]:
+        """(left, right) rear-wheel speeds in the last substep [m/s]."""
+        g = self._group
+        return self._rear(float(g.driven_speed[self._i]), float(g.driven_steer[self._i]))
+
     def set_steering(self, speed: float, steer: float) -> None:
         """Drive at ``speed`` [m/s] with steering angle ``steer`` [rad] (both clipped)."""
         self._group.set_steering(self._i, speed, steer)

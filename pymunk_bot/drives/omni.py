@@ -121,3 +121,15 @@ class OmniDrive:
     @property
     def command(self) -> Command:
         return self._group.command_of(self._i)
+
+    @property
+    def target(self) -> tuple[float, float]:
+        """Commanded (vx, vy) [m/s] (run logs keep this where a diff drive logs wheel speeds)."""
+        vx, vy, _ = self._group.target[self._i]
+        return float(vx), float(vy)
+
+    @property
+    def wheel_speeds(self) -> tuple[float, float]:
+        """(vx, vy) the motors drive now [m/s], robot frame."""
+        vx, vy, _ = self._group.current[self._i]
+        return float(vx), float(vy)

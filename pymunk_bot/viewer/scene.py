@@ -73,6 +73,9 @@ class RobotView:
     collisions: int = 0
     status: str = ""  # the controller's status
     teleop: bool = False  # wheel speeds set by hand (or by the log's override flag)
+    footprint: np.ndarray | None = None  # (N, 2) outline in the robot frame; None: the disc
+    steering: float | None = None  # a car's steering angle [rad]
+    wheelbase: float = 0.0  # [m], with ``steering``
 
 
 @dataclass

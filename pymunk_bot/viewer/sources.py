@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from ..footprint import drawn_outline
 from .scene import RobotView, Scene, ShapeView, body_pose, scan_end_points, world_geometry
 
 TRAIL_SPACING = 0.01  # [m]; a trail point is added once the robot has moved this far
@@ -119,7 +120,9 @@ class LiveSource:
                 scan_origin=origin, scan_points=points, scan_hit=hit,
                 collisions=robot.collisions,
                 status=_status(controller),
-                teleop=robot.overridden))
+                teleop=robot.overridden, footprint=drawn_outline(robot.spec.footprint),
+                steering=getattr(robot.drive, "steering_angle", None),
+                wheelbase=float(getattr(robot.drive, "wheelbase", 0.0))))
         return Scene(self.sim.world.width, self.sim.world.height, self.sim.time, shapes, robots,
                      self.sim.config.name)
 
@@ -206,7 +209,8 @@ class ReplaySource:
                 goal_reached=bool(log.goal_reached[i, j]),
                 trail=log.pose[: i + 1, j, :2], scan_origin=origin, scan_points=points,
                 scan_hit=hit, collisions=int(log.collisions[i, j]),
-                teleop=bool(log.teleop[i, j])))
+                teleop=bool(log.teleop[i, j]),
+                footprint=None if not meta.get("footprint") else np.asarray(meta["footprint"])))
         width, height = log.size
         return Scene(width, height, self.time, shapes, robots, f"replay: {log.meta['scenario']}")
 
