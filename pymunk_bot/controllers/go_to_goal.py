@@ -14,6 +14,10 @@ from ..planning.steering import car_pursue, holonomic_toward
 from .base import STOP, Command, Controller, Observation, RobotSpec
 
 
+REVERSE_CLEARANCE = 1.15  # a car backs up until the goal is this many turning radii from the
+# centre of the circle it would turn on toward it
+
+
 class GoToGoalController(Controller):
     """Steers straight at one goal point and stops inside the tolerance.
 
@@ -52,14 +56,18 @@ class GoToGoalController(Controller):
         return Command(v, omega)
 
     def _car(self, pose, goal, speed: float, bearing: float) -> Command:
-        """Forward pursuit, or reverse while the goal is inside an unreachable turning circle."""
+        """Forward pursuit; while the goal lies inside the turning circle on its side (it cannot
+        be reached forward), back up with the wheels turned the other way, which swings the
+        nose toward the goal (the middle leg of a three-point turn)."""
         r = self.robot.min_turn_radius
         x, y, theta = (float(v) for v in pose[:3])
         side = math.copysign(1.0, bearing)
         centre = (x - side * r * math.sin(theta), y + side * r * math.cos(theta))
-        inside = math.dist(centre, goal) < r
-        if inside:
+        gap = math.dist(centre, goal)
+        if gap < r:
             self._reversing = True
-        elif abs(bearing) < math.pi / 2 or math.dist(centre, goal) > 1.5 * r:
+        elif gap > REVERSE_CLEARANCE * r:
             self._reversing = False
-        return car_pursue(pose, goal, speed, r, reverse=self._reversing)
+        if self._reversing:
+            return Command(-speed, side * speed / r)
+        return car_pursue(pose, goal, speed, r)
