@@ -126,7 +126,7 @@ def _check_sideways(index: int, robot: RobotConfig) -> None:
         from .. import plugins
         if not getattr(plugins.drives.get(robot.drive), "holonomic", False):
             raise SemanticError(("robots", index, "controller", "vy"),
-                                f"a {robot.drive} drive cannot move sideways: vy must be 0 "
+                                f"the {robot.drive} drive cannot move sideways: vy must be 0 "
                                 f"(got {vy:g}); use drive: omni")
 
 
