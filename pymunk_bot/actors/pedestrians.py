@@ -40,6 +40,10 @@ NOMINAL_RADIUS = 0.25
 MAX_SPEED_FACTOR = 1.3  # speed cap relative to the desired speed
 WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
 PEDESTRIAN_FRICTION = 0.3
+SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are left out (< 1 %)
+# Walkers carry their own category bit, so the wall queries can skip them in C.
+WALKER_CATEGORY = 1 << 30
+_NOT_WALKERS = pymunk.ShapeFilter(mask=pymunk.ShapeFilter.ALL_MASKS() ^ WALKER_CATEGORY)
 
 
 def build_pedestrian(space: pymunk.Space, config) -> Obstacle:
@@ -49,6 +53,7 @@ def build_pedestrian(space: pymunk.Space, config) -> Obstacle:
     shape = pymunk.Circle(body, config.radius)
     shape.friction = PEDESTRIAN_FRICTION
     shape.collision_type = physics.MOVABLE
+    shape.filter = pymunk.ShapeFilter(categories=WALKER_CATEGORY)
     space.add(body, shape)
     return Obstacle(config, body, [shape])
 
@@ -81,9 +86,8 @@ class Crowd:
         self.direction = [1] * n  # +1 forward through the goals, -1 back (pingpong)
         self.done = np.zeros(n, dtype=bool)  # a "once" walker at its last goal
         self._robot_radius = np.array([r.spec.radius for r in self.robots])
-        # Walkers feel each other through the elliptical potential only; robots also repel like
-        # walls, from their real footprint (a robot standing still is an obstacle).
-        self._exclude = {s for w in self.walkers for s in w.shapes}
+        # Walkers feel each other through the elliptical potential only (the wall queries skip
+        # them by category); robots also repel like walls, from their real footprint.
 
     # ------------------------------------------------------------------ state
     def positions(self) -> np.ndarray:
@@ -149,34 +153,44 @@ class Crowd:
                 np.concatenate([self.radius, self._robot_radius]))
 
     def _social(self, pos: np.ndarray, vel: np.ndarray, e: np.ndarray) -> np.ndarray:
-        """Sum of the elliptical repulsions (per unit mass) on every walker, shape (n, 2)."""
+        """Sum of the elliptical repulsions (per unit mass) on every walker, shape (n, 2).
+
+        Only pairs closer than the other's step plus SOCIAL_CUTOFF are evaluated: farther ones
+        contribute less than exp(-SOCIAL_CUTOFF / sigma) of the force at contact."""
         opos, ovel, orad = self._others(pos, vel)
         n = len(pos)
-        r = pos[:, None, :] - opos[None, :, :]  # (n, m, 2) from each other to each walker
-        s = (ovel * STEP_TIME)[None, :, :]
+        step = ovel * STEP_TIME
+        d = pos[:, None, :] - opos[None, :, :]
+        reach = np.hypot(step[:, 0], step[:, 1]) + SOCIAL_CUTOFF + orad
+        near = (d[..., 0] ** 2 + d[..., 1] ** 2) < reach[None, :] ** 2
+        near[np.arange(n), np.arange(n)] = False  # no force on oneself
+        a, b = np.nonzero(near)
+        force = np.zeros_like(pos)
+        if not len(a):
+            return force
+        r = d[a, b]  # from the other to the walker
+        s = step[b]
         q = r - s
-        rn = np.maximum(np.hypot(r[..., 0], r[..., 1]), 1e-9)
-        qn = np.maximum(np.hypot(q[..., 0], q[..., 1]), 1e-9)
-        sn2 = (s[..., 0] ** 2 + s[..., 1] ** 2)
-        two_b = np.sqrt(np.maximum((rn + qn) ** 2 - sn2, 1e-12))
-        b = 0.5 * two_b
-        grad_b = ((rn + qn) / (2.0 * two_b))[..., None] * (r / rn[..., None] + q / qn[..., None])
-        gap = np.maximum(b - (self.radius[:, None] + orad[None, :] - 2 * NOMINAL_RADIUS), 0.0)
-        magnitude = (self.v0 / self.sigma)[:, None] * np.exp(-gap / self.sigma[:, None])
-        seen = (-(r * e[:, None, :]).sum(axis=2) / rn) >= SIGHT_COS
-        weight = np.where(seen, 1.0, SIGHT_WEIGHT)
-        weight[np.arange(n), np.arange(n)] = 0.0  # no force on oneself
-        return ((magnitude * weight)[..., None] * grad_b).sum(axis=1)
+        rn = np.maximum(np.hypot(r[:, 0], r[:, 1]), 1e-9)
+        qn = np.maximum(np.hypot(q[:, 0], q[:, 1]), 1e-9)
+        two_b = np.sqrt(np.maximum((rn + qn) ** 2 - (s[:, 0] ** 2 + s[:, 1] ** 2), 1e-12))
+        grad_b = ((rn + qn) / (2.0 * two_b))[:, None] * (r / rn[:, None] + q / qn[:, None])
+        gap = np.maximum(0.5 * two_b - (self.radius[a] + orad[b] - 2 * NOMINAL_RADIUS), 0.0)
+        sigma = self.sigma[a]
+        magnitude = self.v0[a] / sigma * np.exp(-gap / sigma)
+        seen = (-(r * e[a]).sum(axis=1) / rn) >= SIGHT_COS
+        magnitude *= np.where(seen, 1.0, SIGHT_WEIGHT)
+        pair = magnitude[:, None] * grad_b
+        force[:, 0] = np.bincount(a, pair[:, 0], minlength=n)
+        force[:, 1] = np.bincount(a, pair[:, 1], minlength=n)
+        return force
 
     def _walls(self, pos: np.ndarray) -> np.ndarray:
         """Repulsion from the nearest surface of each wall, obstacle, robot and arena side."""
         force = np.zeros_like(pos)
         for i, (x, y) in enumerate(pos.tolist()):
             reach = WALL_REACH * self.wall_range[i] + self.radius[i]
-            hits = self.space.point_query((x, y), reach, pymunk.ShapeFilter())
-            for hit in hits:
-                if hit.shape in self._exclude:
-                    continue
+            for hit in self.space.point_query((x, y), reach, _NOT_WALKERS):
                 gap = max(hit.distance - (self.radius[i] - NOMINAL_RADIUS), 0.0)
                 push = self.u0[i] / self.wall_range[i] * math.exp(-gap / self.wall_range[i])
                 gx, gy = hit.gradient
