@@ -134,7 +134,7 @@ class RunLogger:
                 "drive": robot.config.drive,
                 "track_width": robot.spec.track_width,
                 "max_wheel_speed": robot.spec.max_wheel_speed,
-                "footprint": _outline_json(robot),
+                "footprint": outline_json(robot),
                 "lidar": None if lidar is None else {
                     "max_range": robot.config.lidar.max_range,
                     "rate": robot.config.lidar.rate},
@@ -280,7 +280,7 @@ def _geometry_from_json(d: dict, movable: bool) -> ShapeGeometry:
                          float(d["radius"]), movable, bool(d["wall"]), int(d["group"]))
 
 
-def _outline_json(robot) -> list | None:
+def outline_json(robot) -> list | None:
     """A robot's footprint outline (robot frame) for views; None for a disc about its pose."""
     from .footprint import drawn_outline
     outline = drawn_outline(getattr(robot.spec, "footprint", None))

@@ -173,7 +173,9 @@ class Publisher:
         entities, deletions = [], []
         if refresh:
             entities.append(scene.arena_entity(geometry.fixed, t))
-            entities.extend(scene.robot_entity(r.name, self._index.get(r.name, 0), r.radius, t)
+            outlines = {m["name"]: m.get("footprint") for m in geometry.meta["robots"]}
+            entities.extend(scene.robot_entity(r.name, self._index.get(r.name, 0), r.radius, t,
+                                               outlines.get(r.name))
                             for r in snap.robots)
         for k, ((index, shapes), pose) in enumerate(zip(geometry.movable, poses)):
             last = self._last_obstacles[k] if k < len(self._last_obstacles) else None
