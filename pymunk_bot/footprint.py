@@ -120,7 +120,8 @@ def of_robot(rc: Any) -> Footprint:
     if section is None:
         return Footprint("circle", (0.0, 0.0), float(rc.radius), None)
     if section.type == "circle":
-        return Footprint("circle", tuple(map(float, section.center)), float(section.radius), None)
+        cx, cy = section.center
+        return Footprint("circle", (float(cx), float(cy)), float(section.radius), None)
     if section.type == "box":
         points = geo.box_corners(section.center, section.size)
     else:

@@ -35,7 +35,7 @@ class RobotMetrics:
 
     def update(self, time: float) -> None:
         position = self._robot.body.position
-        if self.track_clearance and self._outline is not None:
+        if self.min_clearance is not None and self._outline is not None:
             body = self._robot.body
             for point in self._outline:
                 hit = self._space.point_query_nearest(body.local_to_world(point),
@@ -63,7 +63,7 @@ def outline_samples(footprint) -> list[tuple[float, float]] | None:
     if footprint.points is None and footprint.center == (0.0, 0.0):
         return None
     outline = footprint.outline()
-    out = []
+    out: list[tuple[float, float]] = []
     for a, b in zip(outline, np.roll(outline, -1, axis=0)):
         n = max(1, int(np.ceil(np.hypot(*(b - a)) / OUTLINE_SPACING)))
         out.extend((tuple(a + (b - a) * k / n) for k in range(n)))

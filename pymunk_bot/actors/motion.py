@@ -6,6 +6,8 @@ the way (a kinematic body has infinite mass).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..obstacles import Obstacle
@@ -46,7 +48,7 @@ class ScriptedMotion:
     """Moves one obstacle along its ``motion`` script (an actor: ``before_step`` each tick)."""
 
     def __init__(self, obstacle: Obstacle) -> None:
-        motion = obstacle.config.motion
+        motion: Any = getattr(obstacle.config, "motion")
         self.obstacle = obstacle
         self.script = PathScript(motion.path, motion.speed, motion.mode)
         # The script moves the obstacle's centre; its first point is where the centre starts.

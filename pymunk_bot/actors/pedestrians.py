@@ -20,7 +20,7 @@ it (and robots that bump it count a collision); its speed is capped at MAX_SPEED
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pymunk
@@ -67,7 +67,7 @@ class Crowd:
         self.robots = list(robots)
         self.space = space
         self.rng = rng
-        cfg = [w.config for w in self.walkers]
+        cfg: list[Any] = [w.config for w in self.walkers]
         n = len(cfg)
         self.radius = np.array([c.radius for c in cfg])  # [m]
         base = np.array([c.speed for c in cfg])
@@ -125,9 +125,10 @@ class Crowd:
     def _advance_goals(self, pos: np.ndarray) -> None:
         for i, walker in enumerate(self.walkers):
             goals, k = self.goals[i], self.target[i]
-            if self.done[i] or math.dist(pos[i], goals[k]) > walker.config.goal_tolerance:
+            config: Any = walker.config
+            if self.done[i] or math.dist(pos[i], goals[k]) > config.goal_tolerance:
                 continue
-            mode, last = walker.config.mode, len(goals) - 1
+            mode, last = config.mode, len(goals) - 1
             if mode == "loop":
                 self.target[i] = (k + 1) % len(goals)
             elif mode == "once":

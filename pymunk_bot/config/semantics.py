@@ -53,7 +53,8 @@ def footprint_hits(footprint, pose, obstacle) -> bool:
     outline = footprint.at(pose)
     if is_round(obstacle):
         return geo.distance_to_polygon(obstacle.center, outline) < obstacle.radius - 1e-9
-    return geo.polygons_overlap(outline, obstacle_outline(obstacle))
+    other = obstacle_outline(obstacle)
+    return other is not None and geo.polygons_overlap(outline, other)
 
 
 def footprints_overlap(a, pose_a, b, pose_b) -> bool:

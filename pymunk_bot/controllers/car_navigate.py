@@ -131,6 +131,8 @@ class CarNavigateController(Controller):
     # ------------------------------------------------------------------ planning
     def _plan(self, pose, goal, tolerance: float, now: float) -> bool:
         self.replans += 1
+        if self.checker is None:
+            return False
         smallest = float(self.discs[1].min())
         self.plan = hybrid_astar(self.checker, pose, goal, 0.5 * tolerance,
                                  self.robot.min_turn_radius, self.params, self.config.heading,
@@ -153,6 +155,8 @@ class CarNavigateController(Controller):
 
     def _blocked(self, obs: Observation, direction: int) -> bool:
         """A return the map does not explain right ahead (or behind, in reverse)."""
+        if obs.scan is None:
+            return False
         points = scan_points(obs.scan)
         if not len(points):
             return False

@@ -14,6 +14,7 @@ from __future__ import annotations
 import heapq
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -186,7 +187,8 @@ def hybrid_astar(checker: FootprintChecker, start, goal, goal_tolerance: float,
         return goal_heading is None or abs(
             (p[2] - goal_heading + math.pi) % (2 * math.pi) - math.pi) <= heading_tolerance
 
-    nodes = [(start, -1, 0, None)]  # (pose, parent, direction, samples to reach it)
+    # (pose, parent, direction, samples to reach it)
+    nodes: list[tuple[np.ndarray, int, int, Any]] = [(start, -1, 0, None)]
     best = {key(start): 0.0}
     heap = [(h(start), 0.0, 0)]
     expansions = 0

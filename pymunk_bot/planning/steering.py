@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 from ..command import Command
 from ..geometry import wrap_angle
@@ -18,7 +18,7 @@ K_FACE = 2.5  # [1/s] turn rate per radian of heading error for an omni robot
 MIN_CAR_SPEED_FRACTION = 0.3  # a car facing away from its target still creeps at this fraction
 
 
-def holonomic_toward(pose: Sequence[float], target: Sequence[float], speed: float,
+def holonomic_toward(pose: Sequence[float] | Any, target: Sequence[float] | Any, speed: float,
                      face: float | None, max_omega: float, period: float = 0.1) -> Command:
     """Move at ``speed`` [m/s] straight toward ``target`` [m], turning toward ``face`` [rad].
 
@@ -39,7 +39,7 @@ def holonomic_toward(pose: Sequence[float], target: Sequence[float], speed: floa
     return Command(vx, omega, vy)
 
 
-def car_pursue(pose: Sequence[float], carrot: Sequence[float], speed: float,
+def car_pursue(pose: Sequence[float] | Any, carrot: Sequence[float] | Any, speed: float,
                min_turn_radius: float, reverse: bool = False) -> Command:
     """Drive a car along the arc through ``carrot`` at ``speed`` [m/s] (backwards if
     ``reverse``), the arc no tighter than ``min_turn_radius`` [m]."""

@@ -240,16 +240,17 @@ def _robot(surface: pygame.Surface, camera: Camera, r: RobotView, selected: bool
     prim.line(surface, pal.HEADING, centre, tip, max(2.0, radius / 8))
     prim.circle(surface, pal.HEADING, pal.HEADING, centre, max(2.0, radius / 10))
     if r.steering is not None and r.wheelbase > 0:
-        _front_wheels(surface, camera, r, outline)
+        _front_wheels(surface, camera, r, r.steering, r.footprint)
 
 
-def _front_wheels(surface: pygame.Surface, camera: Camera, r: RobotView, outline: np.ndarray) -> None:
+def _front_wheels(surface: pygame.Surface, camera: Camera, r: RobotView, steering: float,
+                  footprint: np.ndarray) -> None:
     """A car's front wheels at the front axle, turned by the steering angle."""
     x, y, theta = (float(v) for v in r.pose)
-    half_width = 0.5 * float(np.ptp(r.footprint[:, 1])) * 0.8
+    half_width = 0.5 * float(np.ptp(footprint[:, 1])) * 0.8
     half_tyre = 0.12 * r.wheelbase + 0.01  # [m]
     c, s = math.cos(theta), math.sin(theta)
-    heading = theta + r.steering
+    heading = theta + steering
     dc, ds = math.cos(heading) * half_tyre, math.sin(heading) * half_tyre
     for side in (-1.0, 1.0):
         wx = x + c * r.wheelbase - s * side * half_width
