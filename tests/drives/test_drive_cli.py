@@ -45,3 +45,19 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, robot, obstacles, message):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("robot, message", [
+    ({"drive": "omni", "controller": {"type": "avoid"}, "goal": {"position": [5, 5]}},
+     "robots[0].controller: avoid drives diff robots only (this one is omni)"),
+    ({"drive": "ackermann", "controller": {"type": "wheels", "left": 1.0, "right": 1.0}},
+     "robots[0].controller: wheels drives diff robots only (this one is ackermann)"),
+])
+def test_diff_only_controllers_on_other_drives_are_bad_input(tmp_path, robot, message):
+    path = tmp_path / "s.yaml"
+    path.write_text(yaml.safe_dump(base(robot)))
+    proc = subprocess.run([sys.executable, "-m", "pymunk_bot", "run", str(path), "--headless",
+                           "--duration", "0.1"], capture_output=True, text=True, cwd=REPO,
+                          timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert message in proc.stderr and "Traceback" not in proc.stderr
