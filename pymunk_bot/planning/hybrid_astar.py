@@ -155,9 +155,10 @@ def hybrid_astar(checker: FootprintChecker, start, goal, goal_tolerance: float,
     """Plan from ``start`` (x, y, theta) until the pose point is within ``goal_tolerance`` [m]
     of ``goal`` (x, y), facing ``goal_heading`` within ``heading_tolerance`` if given.
 
-    With a goal heading, every few expansions the search also tries to finish with one Dubins
-    path to the exact goal pose, driven forward or entirely in reverse (an analytic expansion,
-    as in Dolgov et al.): that is what finds the last manoeuvre into a parking space."""
+    With a goal heading, every few expansions the search also tries to finish with one
+    Reeds-Shepp path to the exact goal pose (forward and reverse, with cusps; a Dubins path when
+    reversing is not allowed): the analytic expansion of Dolgov et al., which finds the last
+    manoeuvre into a parking space."""
     grid = checker.grid
     start = np.asarray(start, dtype=float)
     if not checker.free(start[None])[0]:
@@ -206,7 +207,8 @@ def hybrid_astar(checker: FootprintChecker, start, goal, goal_tolerance: float,
         if target is not None and (near or expansions % 10 == 1):
             finish = _analytic(checker, pose, target, min_turn_radius, spacing, params.reverse)
             if finish is not None:
-                nodes.append((finish[0][-1], index, finish[1], finish[0]))
+                poses, directions = finish
+                nodes.append((poses[-1], index, int(directions[-1]), (poses, directions)))
                 return _trace(nodes, len(nodes) - 1, expansions)
         world = _place(pose, local)  # (P, S, 3)
         free = checker.free(world).all(axis=1)
@@ -227,30 +229,25 @@ def hybrid_astar(checker: FootprintChecker, start, goal, goal_tolerance: float,
 
 
 def _analytic(checker: FootprintChecker, pose, target, radius: float, spacing: float,
-              reverse: bool) -> tuple[np.ndarray, int] | None:
-    """A collision-free Dubins path from ``pose`` to ``target``, forward or all in reverse."""
-    from . import dubins
-    options = []
-    segments = dubins.shortest(pose, target, radius)
-    if segments is not None:
-        options.append((sum(length for _, length in segments), 1, segments))
+              reverse: bool) -> tuple[np.ndarray, np.ndarray] | None:
+    """A collision-free finish from ``pose`` to ``target``: the Reeds-Shepp path when reversing
+    is allowed (else the Dubins path); (poses, direction per pose) or None."""
+    from . import dubins, reeds_shepp
     if reverse:
-        flipped = dubins.shortest((pose[0], pose[1], pose[2] + math.pi),
-                                  (target[0], target[1], target[2] + math.pi), radius)
-        if flipped is not None:
-            options.append((sum(length for _, length in flipped), -1, flipped))
-    for _, direction, segs in sorted(options, key=lambda o: o[0]):
-        turning = sum(length for kind, length in segs if kind != "S") / radius
-        if turning > MAX_ANALYTIC_TURN:
-            continue  # a loop: the search finds better than driving in circles
-        if direction > 0:
-            poses = dubins.sample(pose, segs, radius, spacing)
-        else:
-            poses = dubins.sample((pose[0], pose[1], pose[2] + math.pi), segs, radius, spacing)
-            poses[:, 2] -= math.pi
-        if checker.free(poses).all():
-            return poses, direction
-    return None
+        segments = reeds_shepp.shortest(pose, target, radius)
+        if segments is None:
+            return None
+        poses, directions = reeds_shepp.sample(pose, segments, radius, spacing)
+    else:
+        segments = dubins.shortest(pose, target, radius)
+        if segments is None:
+            return None
+        poses = dubins.sample(pose, segments, radius, spacing)
+        directions = np.ones(len(poses))
+    turning = sum(abs(length) for kind, length in segments if kind != "S") / radius
+    if turning > MAX_ANALYTIC_TURN or not checker.free(poses).all():
+        return None  # a loop (the search finds better than driving in circles), or a collision
+    return poses, directions
 
 
 def _trace(nodes, index: int, expansions: int) -> HybridResult:
@@ -260,8 +257,14 @@ def _trace(nodes, index: int, expansions: int) -> HybridResult:
         index = nodes[index][1]
     chain.reverse()
     poses = [chain[0][0][None]]
-    direction = [chain[1][2] if len(chain) > 1 else 1]
-    for pose, _, d, samples in chain[1:]:
-        poses.append(samples)
-        direction.extend([d] * len(samples))
+    direction = [float(chain[1][2]) if len(chain) > 1 else 1.0]
+    for _, _, d, samples in chain[1:]:
+        if isinstance(samples, tuple):  # an analytic finish: its own direction per pose
+            poses.append(samples[0])
+            direction.extend(samples[1].tolist())
+        else:
+            poses.append(samples)
+            direction.extend([float(d)] * len(samples))
+    if len(direction) > 1:
+        direction[0] = direction[1]
     return HybridResult(np.vstack(poses), np.array(direction, dtype=float), expansions=expansions)

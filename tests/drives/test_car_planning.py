@@ -106,3 +106,15 @@ def test_navigate_works_for_every_drive(make_sim, drive):
     r = sim.robots["r"]
     assert r.goal_reached, r.controller.message
     assert r.collisions == 0
+
+
+def test_parks_in_a_space_only_2_2_car_lengths_long():
+    cars = [box_corners((2.5, 0.3), (0.5, 0.3)), box_corners((4.1, 0.3), (0.5, 0.3))]
+    street = MapInfo((8.0, 3.0), tuple(MapPolygon(c) for c in cars))
+    checker = car_checker(street)
+    result = hybrid_astar(checker, (0.6, 1.4, 0.0), (3.135, 0.3), 0.06, 0.33 / math.tan(0.6),
+                          HybridParams(step=0.2, switch_cost=0.5), goal_heading=0.0,
+                          heading_tolerance=0.12, heuristic_clearance=0.16)
+    assert result.found, result.reason
+    assert checker.free(result.poses).all()
+    assert (result.direction < 0).any()
