@@ -4,8 +4,9 @@ The planner (:mod:`pymunk_bot.planning.hybrid_astar`) finds a path the car can d
 real footprint checked along every arc, that may back up. The path is cut where the direction
 changes; each segment is followed with pure pursuit (in reverse, with the rear as the front),
 braking to a stop at its end before the next begins. Off the path or without progress for
-``stuck_time`` it replans from where it is. With a LiDAR, the scan's returns that the map does
-not explain are added to the map of the next plan, and a return right ahead stops the car.
+``stuck_time`` it replans from where it is. With a LiDAR, scan returns the map does not explain
+are remembered for a while; when they lie on the next 0.6 m of the path (checked with the
+footprint, as the planner does) the car stops, and after a moment plans around them.
 """
 from __future__ import annotations
 
@@ -26,8 +27,13 @@ from .base import STOP, Command, Controller, Observation, RobotSpec
 
 OFF_PATH = 0.5  # [m] farther than this from the segment: replan
 SEGMENT_END = 0.08  # [m] a segment is done this close to its end
-STOP_DISTANCE = 0.25  # [m] a scan return this close ahead of the footprint stops the car
+BLOCK_LOOKAHEAD = 0.6  # [m] of path ahead checked against returns the map does not explain
 MIN_LOOKAHEAD = 0.3  # [m]
+UNMAPPED_RANGE = 4.0  # [m] scan returns the map does not explain are remembered this close
+UNMAPPED_MEMORY = 10.0  # [s] and forgotten this long after they were last seen
+MAX_UNMAPPED = 5000  # remembered cells at most (the oldest go first)
+BLOCKED_REPLAN = 1.5  # [s] stopped by something unmapped before planning around it
+RETRY_PERIOD = 1.0  # [s] between replans while unmapped things block every route
 
 
 class CarNavigateController(Controller):
@@ -58,6 +64,10 @@ class CarNavigateController(Controller):
         self._goal: tuple[float, float] | None = None
         self._progress = (0.0, 0.0)  # (progress along the segment [m], when [s])
         self._failed = False
+        self.unmapped: dict[tuple[int, int], tuple[float, float, float]] = {}  # cell -> x, y, t
+        self._blocked_since: float | None = None
+        self._waiting_since: float | None = None
+        self._next_retry = 0.0
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -82,13 +92,16 @@ class CarNavigateController(Controller):
             self._goal, self.segments, self._failed = goal, [], False
         if self._failed:
             return STOP
+        if obs.scan is not None:
+            self._remember(obs)
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         pose = np.asarray(obs.pose, dtype=float)
         if self._arrived(pose, goal, tolerance) and (not self.segments or len(self.segments) == 1
                                                      and self.segments[0][1].remaining() < 0.1):
             self.status, self.message = "arrived", ""
             return STOP
-        if not self.segments and not self._plan(pose, goal, tolerance, obs.time):
+        if not self.segments and (obs.time < self._next_retry or not self._plan(
+                pose, goal, tolerance, obs.time, around_unmapped=self._waiting_since is not None)):
             return STOP
         direction, tracker = self.segments[0]
         x, y = float(pose[0]), float(pose[1])
@@ -108,9 +121,17 @@ class CarNavigateController(Controller):
             if not self.segments:
                 return STOP
             return STOP  # stop for a tick before driving the other way
-        if obs.scan is not None and self._blocked(obs, direction):
-            self.message = "stopped: something not on the map is in the way"
+        if self._blocked(pose):
+            if self._blocked_since is None:
+                self._blocked_since = obs.time
+            if obs.time - self._blocked_since < BLOCKED_REPLAN:
+                self.message = "stopped: something not on the map is in the way"
+                return STOP
+            self._blocked_since = None
+            self.segments = []
+            self._plan(pose, goal, tolerance, obs.time, around_unmapped=True)
             return STOP
+        self._blocked_since = None
         self.status = "running"
         speed = max(tracker.speed_at(tracker.s), self.gains.min_speed)
         to_end = math.dist(end, (x, y))
@@ -129,17 +150,34 @@ class CarNavigateController(Controller):
         return heading is None or abs(wrap_angle(pose[2] - heading)) <= 1.5 * self.config.heading_tolerance
 
     # ------------------------------------------------------------------ planning
-    def _plan(self, pose, goal, tolerance: float, now: float) -> bool:
+    def _plan(self, pose, goal, tolerance: float, now: float, around_unmapped: bool = False) -> bool:
+        """Plan from ``pose``; ``around_unmapped``: with the remembered scan returns on the map.
+        No path on the map itself fails at once; no path only around unmapped things is
+        retried every RETRY_PERIOD until ``give_up_after``."""
         self.replans += 1
         if self.checker is None:
             return False
+        checker = self._unmapped_checker() if around_unmapped else self.checker
         smallest = float(self.discs[1].min())
-        self.plan = hybrid_astar(self.checker, pose, goal, 0.5 * tolerance,
+        self.plan = hybrid_astar(checker, pose, goal, 0.5 * tolerance,
                                  self.robot.min_turn_radius, self.params, self.config.heading,
                                  self.config.heading_tolerance, heuristic_clearance=smallest)
         if not self.plan.found:
-            self._fail(f"{self.plan.reason} (plan {self.replans})")
+            if checker is self.checker or checker is None:
+                self._fail(f"{self.plan.reason} on the map (plan {self.replans})")
+                return False
+            if self._waiting_since is None:
+                self._waiting_since = now
+            waited = now - self._waiting_since
+            if waited >= self.config.give_up_after:
+                self._fail(f"no drivable path: things that are not on the map have blocked every "
+                           f"route for {waited:.0f} s")
+                return False
+            self.segments = []
+            self._next_retry = now + RETRY_PERIOD
+            self.message = f"waiting: things not on the map block every route ({waited:.0f} s)"
             return False
+        self._waiting_since = None
         self.segments = [(d, PathTracker([tuple(p) for p in poses[:, :2]], False, self.gains))
                          for d, poses in self.plan.segments() if len(poses) >= 2]
         self._segment_poses = [poses for _, poses in self.plan.segments() if len(poses) >= 2]
@@ -153,28 +191,48 @@ class CarNavigateController(Controller):
         poses = self._segment_poses[len(self._segment_poses) - len(self.segments)]
         return float(poses[-1, 2])
 
-    def _blocked(self, obs: Observation, direction: int) -> bool:
-        """A return the map does not explain right ahead (or behind, in reverse)."""
-        if obs.scan is None:
-            return False
+    def _remember(self, obs: Observation) -> None:
+        """Keep the scan returns the map does not explain (world frame), for a while."""
         points = scan_points(obs.scan)
+        now = obs.time
+        for key in [k for k, (_, _, t) in self.unmapped.items() if now - t > UNMAPPED_MEMORY]:
+            del self.unmapped[key]
         if not len(points):
-            return False
+            return
+        points = points[np.hypot(points[:, 0], points[:, 1]) < UNMAPPED_RANGE]
         x, y, theta = (float(v) for v in obs.pose[:3])
         c, s = math.cos(theta), math.sin(theta)
         wx, wy = x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]
         g = self.grid
+        inside = (wx > 0) & (wy > 0) & (wx < g.size[0]) & (wy < g.size[1])
         cols = np.clip((wx / g.resolution).astype(int), 0, g.cols - 1)
         rows = np.clip((wy / g.resolution).astype(int), 0, g.rows - 1)
-        points = points[g.clearance[rows, cols] > 2.0 * g.resolution]
-        if not len(points):
+        new = inside & (g.clearance[rows, cols] > 2.0 * g.resolution)
+        for px, py, r, k in zip(wx[new].tolist(), wy[new].tolist(), rows[new].tolist(),
+                                cols[new].tolist()):
+            self.unmapped.pop((r, k), None)
+            self.unmapped[(r, k)] = (px, py, now)
+        while len(self.unmapped) > MAX_UNMAPPED:
+            del self.unmapped[next(iter(self.unmapped))]
+
+    def _unmapped_checker(self) -> FootprintChecker | None:
+        """The footprint checker of the map plus the remembered unmapped returns."""
+        if not self.unmapped or self.checker is None:
+            return self.checker
+        grid = self.grid.copy()
+        grid.add_points(np.array([(x, y) for x, y, _ in self.unmapped.values()]))
+        return FootprintChecker(grid, *self.discs, self.params.margin)
+
+    def _blocked(self, pose: np.ndarray) -> bool:
+        """The next BLOCK_LOOKAHEAD metres of the segment collide with unmapped returns."""
+        if not self.unmapped:
             return False
-        centres, radii = self.discs
-        reach = radii.max() + STOP_DISTANCE
-        lead = centres[np.argmax(direction * centres[:, 0])]
-        ahead = points - lead
-        near = np.hypot(ahead[:, 0], ahead[:, 1]) < reach
-        return bool((near & (direction * ahead[:, 0] > 0)).any())
+        poses = self._segment_poses[len(self._segment_poses) - len(self.segments)]
+        near = int(np.argmin(np.hypot(poses[:, 0] - pose[0], poses[:, 1] - pose[1])))
+        step = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+        ahead = near + int(np.searchsorted(np.cumsum(step[near:]), BLOCK_LOOKAHEAD)) + 1
+        checker = self._unmapped_checker()
+        return checker is not None and not bool(checker.free(poses[near:ahead + 1]).all())
 
     def _fail(self, message: str) -> Command:
         self.status, self.message = "failed", message

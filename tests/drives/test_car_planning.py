@@ -118,3 +118,17 @@ def test_parks_in_a_space_only_2_2_car_lengths_long():
     assert result.found, result.reason
     assert checker.free(result.poses).all()
     assert (result.direction < 0).any()
+
+
+def test_a_car_plans_around_a_crate_that_is_not_on_its_map(make_sim):
+    crate = {"type": "box", "center": [5.0, 2.0], "size": [0.6, 0.6], "movable": True,
+             "mass": 50.0}
+    sim = make_sim([robot([1.5, 2.0, 0], name="car", **CAR, goal={"position": [8.5, 2.0]},
+                          lidar={"beams": 120, "max_range": 5.0},
+                          controller={"type": "navigate", "max_speed": 0.6})],
+                   [crate], size=(10.0, 4.0))
+    sim.run(40.0)
+    car = sim.robots["car"]
+    assert car.goal_reached, car.controller.message
+    assert car.collisions == 0
+    assert sim.world.obstacles[0].body.position.x == pytest.approx(5.0, abs=0.01)
