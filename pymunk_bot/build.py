@@ -14,11 +14,14 @@ import numpy as np
 import pymunk
 
 from . import physics
+from .actors import make_actors
 from .config.schema import ScenarioConfig
 from .errors import ScenarioError
+from .footprint import of_robot
 from .localization.base import LocalizerContext
 from .maps.grid import OccupancyGrid
 from .metrics import RobotMetrics
+from .obstacles import footprint_shapes
 from .planning.map import MapInfo
 from .plugins import controllers, drives, localizers
 from .propulsion import Propulsion
@@ -74,6 +77,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
     rng = np.random.default_rng(seed)
     world_rng, sensor_rng = rng.spawn(2)
     (mind_rng,) = rng.spawn(1)  # controllers and localizers
+    (actor_rng,) = rng.spawn(1)  # pedestrians (spawned last: earlier streams stay as they were)
     world = World(config)
     fleet = Fleet(list(config.robots))
     n = len(config.robots)
@@ -101,6 +105,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
         for j, i in enumerate(idx):
             ordered[i].odometry = odometry.handle(j)
         odometry_groups.append((odometry, idx))
+    world.actors.extend(make_actors(world, ordered, actor_rng))
     for robot, child in zip(ordered, sensor_rng.spawn(n)):
         attach_sensors(robot, world, child)
     maps = MapSource(config)
@@ -134,17 +139,24 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     """The robot's dynamic body and shape, and the control body and joints that pull it."""
     robot.config = rc
     robot.spec = group.spec(j) if hasattr(group, "spec") else RobotSpec(
-        rc.name, rc.radius, getattr(rc, "track_width", 0.0), rc.top_speed(),
-        getattr(rc, "max_accel", 0.0), drive=rc.drive)
+        rc.name, of_robot(rc).bounding_radius, getattr(rc, "track_width", 0.0), rc.top_speed(),
+        getattr(rc, "max_accel", 0.0), drive=rc.drive,
+        footprint=of_robot(rc))
     x, y, theta = rc.pose
-    body = pymunk.Body(rc.mass, pymunk.moment_for_circle(rc.mass, 0, rc.radius))
+    if getattr(rc, "footprint", None) is None:
+        body = pymunk.Body(rc.mass, pymunk.moment_for_circle(rc.mass, 0, rc.radius))
+        shapes: list[pymunk.Shape] = [pymunk.Circle(body, rc.radius)]
+    else:  # mass spread over the footprint: the centre of gravity lands on its centroid
+        body = pymunk.Body()
+        shapes = footprint_shapes(body, of_robot(rc), rc.mass)
     body.position = (x, y)
     body.angle = theta
-    shape = pymunk.Circle(body, rc.radius)
-    shape.friction = rc.friction
-    shape.collision_type = physics.ROBOT
-    # The group keeps the robot's own LiDAR from seeing its own body.
-    shape.filter = pymunk.ShapeFilter(group=group_id)
+    for shape in shapes:
+        shape.friction = rc.friction
+        shape.collision_type = physics.ROBOT
+        # The group keeps the robot's own LiDAR from seeing its own body.
+        shape.filter = pymunk.ShapeFilter(group=group_id)
+    shape = shapes[0]
     control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     control.position = (x, y)
     control.angle = theta
@@ -155,14 +167,16 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     gear = pymunk.GearJoint(control, body, 0.0, 1.0)
     gear.max_bias = 0.0
     gear.max_force = torque
-    world.space.add(body, shape, control, pivot, gear)
+    world.space.add(body, *shapes, control, pivot, gear)
     robot.body, robot.shape, robot.control = body, shape, control
+    robot.shapes = shapes
     fleet, i = robot._fleet, robot._i
 
     def count() -> None:
         fleet.collisions[i] += 1
 
-    world.count_contacts(shape, count)
+    for piece in shapes:
+        world.count_contacts(piece, count)
 
 
 def _make_controller(robot: Robot, index: int, maps: MapSource, source: str) -> Any:

@@ -131,3 +131,26 @@ def thinness(points: np.ndarray) -> float:
         d = np.where(touching, np.inf, d)
         best = min(best, float(d.min()))
     return best
+
+
+def polygons_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """True when two simple polygons (either winding, concave allowed) share interior area:
+    an edge of one properly crosses an edge of the other, or one holds a vertex of the other."""
+    na, nb = len(a), len(b)
+    for i in range(na):
+        for j in range(nb):
+            if segments_cross(a[i], a[(i + 1) % na], b[j], b[(j + 1) % nb]):
+                return True
+    # Vertices and edge midpoints of one inside the other (midpoints catch equal outlines).
+    mid_a = (a + np.roll(a, -1, axis=0)) / 2.0
+    mid_b = (b + np.roll(b, -1, axis=0)) / 2.0
+    return (any(point_in_polygon(p, b) and distance_to_outline(p, b) > 1e-9 for p in np.vstack([a, mid_a]))
+            or any(point_in_polygon(p, a) and distance_to_outline(p, a) > 1e-9
+                   for p in np.vstack([b, mid_b])))
+
+
+def distance_to_outline(p: Point, points: np.ndarray) -> float:
+    """Distance from a point to the nearest edge of a closed outline (inside or out)."""
+    q = np.asarray(p, dtype=float)
+    n = len(points)
+    return min(point_segment_distance(q, points[i], points[(i + 1) % n]) for i in range(n))

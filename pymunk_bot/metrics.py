@@ -29,10 +29,20 @@ class RobotMetrics:
         self.min_clearance: float | None = CLEARANCE_HORIZON if track_clearance else None  # [m]
         self.entered: list[float | None] = [None] * len(self._regions)
         self.active = track_clearance or bool(self._regions)
+        # A footprint other than a disc about the pose point: clearance of its outline points.
+        footprint = getattr(robot.spec, "footprint", None)
+        self._outline = None if footprint is None else outline_samples(footprint)
 
     def update(self, time: float) -> None:
         position = self._robot.body.position
-        if self.track_clearance:
+        if self.min_clearance is not None and self._outline is not None:
+            body = self._robot.body
+            for point in self._outline:
+                hit = self._space.point_query_nearest(body.local_to_world(point),
+                                                      self.min_clearance, self._filter)
+                if hit is not None and hit.distance < self.min_clearance:
+                    self.min_clearance = max(0.0, hit.distance)
+        elif self.track_clearance:
             reach = self.min_clearance + self._radius
             hit = self._space.point_query_nearest(position, reach, self._filter)
             if hit is not None:
@@ -42,3 +52,19 @@ class RobotMetrics:
         for i, region in enumerate(self._regions):
             if self.entered[i] is None and point_in_polygon(position, region):
                 self.entered[i] = time
+
+
+OUTLINE_SPACING = 0.02  # [m] between the outline points a footprint's clearance is measured at
+
+
+def outline_samples(footprint) -> list[tuple[float, float]] | None:
+    """Points every OUTLINE_SPACING along a footprint's outline (robot frame), or None for a
+    disc about the pose point (measured exactly from its centre)."""
+    if footprint.points is None and footprint.center == (0.0, 0.0):
+        return None
+    outline = footprint.outline()
+    out: list[tuple[float, float]] = []
+    for a, b in zip(outline, np.roll(outline, -1, axis=0)):
+        n = max(1, int(np.ceil(np.hypot(*(b - a)) / OUTLINE_SPACING)))
+        out.extend((tuple(a + (b - a) * k / n) for k in range(n)))
+    return out

@@ -22,6 +22,12 @@ class Obstacle:
 
     @property
     def movable(self) -> bool:
+        """It moves: pushed (a dynamic body), scripted (kinematic) or walking (a pedestrian)."""
+        return self.body.body_type != pymunk.Body.STATIC
+
+    @property
+    def pushable(self) -> bool:
+        """A dynamic body that contacts push around (crates, pedestrians)."""
         return self.body.body_type == pymunk.Body.DYNAMIC
 
 
@@ -47,12 +53,17 @@ def _local_outlines(config) -> tuple[np.ndarray, float, list[np.ndarray]]:
 
 def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     """Add one obstacle to the space."""
-    movable = getattr(config, "movable", False)
+    scripted = getattr(config, "motion", None) is not None
+    movable = getattr(config, "movable", False) or scripted
     if isinstance(config, CircleObstacle):
         centre, angle, outlines = np.asarray(config.center), 0.0, []
     else:
         centre, angle, outlines = _local_outlines(config)
-    if movable:
+    if scripted:  # follows its path whatever is in the way (see actors/motion.py)
+        body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        body.position = tuple(centre)
+        body.angle = angle
+    elif movable:
         body = pymunk.Body()
         body.position = tuple(centre)
         body.angle = angle
@@ -72,7 +83,9 @@ def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     for shape in shapes:
         shape.friction = config.friction
         shape.collision_type = physics.MOVABLE if movable else physics.STATIC
-    if movable:
+    if scripted:
+        space.add(body, *shapes)
+    elif movable:
         total_area = sum(s.area for s in shapes)
         for shape in shapes:
             shape.mass = config.mass * shape.area / total_area
@@ -81,3 +94,17 @@ def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     else:
         space.add(*shapes)
     return Obstacle(config, body, shapes)
+
+
+def footprint_shapes(body: pymunk.Body, footprint, mass: float) -> list[pymunk.Shape]:
+    """A robot footprint's shapes on ``body`` (concave outlines as convex pieces), with
+    ``mass`` [kg] spread by area, so pymunk puts the centre of gravity at the centroid."""
+    if footprint.points is None:
+        shapes: list[pymunk.Shape] = [pymunk.Circle(body, footprint.radius, footprint.center)]
+    else:
+        shapes = [pymunk.Poly(body, [tuple(p) for p in piece])
+                  for piece in convex_pieces(footprint.points)]
+    total_area = sum(s.area for s in shapes)
+    for shape in shapes:
+        shape.mass = mass * shape.area / total_area
+    return shapes

@@ -64,14 +64,21 @@ _entry_points_loaded: set[str] = set()
 
 def _register_builtins() -> None:
     from .config import controllers as c
+    from .config import drives as d
+    from .config import motion as m
     from .config import localization as loc
     from .config import schema as s
 
     drives.add("diff", "pymunk_bot.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
+    drives.add("ackermann", "pymunk_bot.drives.ackermann:AckermannDriveGroup",
+               d.AckermannRobotConfig)
+    drives.add("omni", "pymunk_bot.drives.omni:OmniDriveGroup", d.OmniRobotConfig)
     obstacle_models: tuple[tuple[str, type], ...] = (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
                         ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle))
     for name, model in obstacle_models:
         obstacles.add(name, "pymunk_bot.obstacles:build_obstacle", model)
+    obstacles.add("pedestrian", "pymunk_bot.actors.pedestrians:build_pedestrian",
+                  m.PedestrianObstacle)
     # Registration order fixes each sensor's random stream: keep new sensors after these.
     sensors.add("lidar", "pymunk_bot.sensors.attach:make_lidar", s.LidarConfig)
     sensors.add("imu", "pymunk_bot.sensors.attach:make_imu", s.ImuConfig)
@@ -81,7 +88,7 @@ def _register_builtins() -> None:
             ("go_to_goal", "go_to_goal:GoToGoalController", c.GoToGoalControllerConfig),
             ("waypoints", "waypoints:WaypointsController", c.WaypointsControllerConfig),
             ("avoid", "avoid:AvoidController", c.AvoidControllerConfig),
-            ("navigate", "navigate:NavigateController", c.NavigateControllerConfig),
+            ("navigate", "navigate_any:make_navigate", c.NavigateControllerConfig),
             ("python", "python:PythonController", c.PythonControllerConfig))
     for name, cls, model in builtin_controllers:
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)

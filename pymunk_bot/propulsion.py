@@ -30,6 +30,17 @@ def _sinc_half(x: float) -> float:
     return 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
 
 
+def _origin_correction(cog: np.ndarray, angle: float, omega: float, h: float) -> tuple[float, float]:
+    """Velocity to add so a body origin ``cog`` away from the centre of gravity moves along the
+    exact chord: pymunk rotates the offset by the linear omega h x r, the body by R(omega h)."""
+    c, s = math.cos(angle), math.sin(angle)
+    rx, ry = -(c * cog[0] - s * cog[1]), -(s * cog[0] + c * cog[1])  # centre -> origin, world
+    turn = omega * h
+    ct, st = math.cos(turn), math.sin(turn)
+    exact_x, exact_y = (ct - 1.0) * rx - st * ry, st * rx + (ct - 1.0) * ry
+    return (-turn * ry - exact_x) / h, (turn * rx - exact_y) / h
+
+
 class Propulsion:
     """Steers every robot's control body; ``groups`` pairs each drive group with the indices
     (into ``bodies``) of its robots, in the group's order."""
@@ -41,6 +52,11 @@ class Propulsion:
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         self.n = len(self.bodies)
         self.batched = self.n >= SMALL_GROUP
+        # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
+        # moves the centre straight within a substep, so the origin's path needs a correction.
+        self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
+        self._offset = [k for k in range(self.n) if self.cog[k].any()]
+        self._offset_set = set(self._offset)
         if self.batched:
             self._read, self._write = batch.Buffer(), batch.Buffer()
             self._rows = -1  # bodies the last index was built for
@@ -71,6 +87,11 @@ class Propulsion:
         out[control, 0] = (ux * c - uy * s) * chord
         out[control, 1] = (ux * s + uy * c) * chord
         out[control, 2] = omega
+        for k in self._offset:
+            dvx, dvy = _origin_correction(self.cog[k], state[robot[k], 0] + state[robot[k], 3] * h,
+                                          omega[k], h)
+            out[control[k], 0] += dvx
+            out[control[k], 1] += dvy
         batch.set_space_bodies(self.space, _WRITE, self._write)
 
     def positions(self) -> Any:
@@ -95,6 +116,10 @@ class Propulsion:
             chord = _sinc_half(omega * h)
             c, s = math.cos(heading), math.sin(heading)
             vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
+            if k in self._offset_set:  # the pose point is not the centre of gravity
+                dvx, dvy = _origin_correction(self.cog[k], body.angle + body.angular_velocity * h,
+                                              omega, h)
+                vx, vy = vx + dvx, vy + dvy
             last = given[k]
             if vx != last[0] or vy != last[1]:
                 control.velocity = (vx, vy)

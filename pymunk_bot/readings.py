@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
@@ -22,6 +22,8 @@ class RobotSpec:
     max_omega: float = math.nan  # [rad/s]; NaN: a diff drive's spin rate 2 * max_wheel / track
     holonomic: bool = False  # moves sideways (omni)
     min_turn_radius: float = 0.0  # [m]; > 0 when it cannot turn on the spot (ackermann)
+    # The robot's outline (a pymunk_bot.footprint.Footprint); None: a disc of ``radius``.
+    footprint: Any = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if math.isnan(self.max_speed):

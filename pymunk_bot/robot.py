@@ -78,7 +78,8 @@ class Robot:
     name: str
     spec: RobotSpec
     body: pymunk.Body
-    shape: pymunk.Shape
+    shape: pymunk.Shape  # the first of ``shapes``
+    shapes: list[pymunk.Shape]  # the footprint's convex pieces
     control: pymunk.Body
     drive: Any
     odometry: Any

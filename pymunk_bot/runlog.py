@@ -142,8 +142,10 @@ class RunLogger:
             lidar = robot.lidar
             robots.append({
                 "name": robot.name, "radius": robot.radius,
-                "track_width": robot.config.track_width,
-                "max_wheel_speed": robot.config.max_wheel_speed,
+                "drive": robot.config.drive,
+                "track_width": robot.spec.track_width,
+                "max_wheel_speed": robot.spec.max_wheel_speed,
+                "footprint": outline_json(robot),
                 "lidar": None if lidar is None else {
                     "max_range": robot.config.lidar.max_range,
                     "rate": robot.config.lidar.rate},
@@ -296,3 +298,10 @@ def _geometry_to_json(g: ShapeGeometry) -> dict:
 def _geometry_from_json(d: dict, movable: bool) -> ShapeGeometry:
     return ShapeGeometry(d["kind"], np.asarray(d["points"], dtype=float).reshape(-1, 2),
                          float(d["radius"]), movable, bool(d["wall"]), int(d["group"]))
+
+
+def outline_json(robot) -> list | None:
+    """A robot's footprint outline (robot frame) for views; None for a disc about its pose."""
+    from .footprint import drawn_outline
+    outline = drawn_outline(getattr(robot.spec, "footprint", None))
+    return None if outline is None else outline.tolist()

@@ -28,6 +28,13 @@ def _lidar(quick: bool) -> list[Verdict]:
     return []
 
 
+def _movers(quick: bool) -> list[Verdict]:
+    from . import movers
+    print("pedestrians and scripted obstacles: microseconds per step (one LiDAR robot)")
+    movers.main(repeats=1 if quick else 3)
+    return []
+
+
 def _contacts(quick: bool) -> list[Verdict]:
     from . import contacts
     summary = contacts.main(100 if quick else 1000)
@@ -124,6 +131,7 @@ SECTIONS: dict[str, tuple[str, Callable[[bool], list[Verdict]]]] = {
     "fleet": ("Swarms", _fleet),
     "learning_loop": ("Learning loop against bare pymunk", _learning_loop),
     "irsim": ("Against IR-SIM", _irsim),
+    "movers": ("Pedestrians and scripted obstacles", _movers),
     "maps": ("Maps", _maps),
     "localization": ("Localization (quick)", _localization),
     "learning": ("Learning environments and sweeps", _learning),

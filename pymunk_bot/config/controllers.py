@@ -63,6 +63,9 @@ class PursuitConfig(Section):
     lateral_accel: Accel = 0.6  # [m/s^2] on bends: speed <= sqrt(lateral_accel * radius)
     decel: Accel = 1.0  # [m/s^2] planned braking before bends and the end
     rotate_threshold: Annotated[PositiveFloat, Field(le=3.1416)] = 1.2  # [rad] turn on the spot
+    # Omni robots only: "path" turns to face along the path, "keep" holds the heading it had
+    # when it started and slides (e.g. to keep facing a shelf).
+    heading: Literal["path", "keep"] = "path"
 
 
 class WaypointsControllerConfig(_DrivingConfig):
@@ -99,6 +102,18 @@ class AvoidControllerConfig(_GoalConfig):
     dwa: DwaConfig = DwaConfig()
 
 
+class HybridConfig(Section):
+    """Hybrid A* settings, used when a car-like (ackermann) robot navigates."""
+
+    step: Annotated[PositiveFloat, Field(ge=0.02, le=2.0)] = 0.2  # [m] arc length per expansion
+    heading_bins: Annotated[PositiveInt, Field(ge=8, le=360)] = 72  # heading cells per turn
+    reverse: bool = True  # may back up
+    reverse_cost: Annotated[PositiveFloat, Field(ge=1.0)] = 1.5  # per metre, relative to forward
+    switch_cost: NonNegativeFloat = 1.0  # [m] added at each change of direction
+    max_expansions: Annotated[PositiveInt, Field(le=1_000_000)] = 40000  # then it gives up
+    disc_spacing: Annotated[PositiveFloat, Field(ge=0.02)] = 0.15  # [m] between footprint discs
+
+
 class NavigateControllerConfig(_GoalConfig):
     """Global A* on the scenario's map plus a local controller that follows the path."""
 
@@ -111,8 +126,12 @@ class NavigateControllerConfig(_GoalConfig):
     lookahead: PositiveShort = 0.6  # [m] steering point ahead on the path
     stuck_time: Duration = 3.0  # [s] without progress along the path before a replan
     give_up_after: Duration = 10.0  # [s] of failed replans (blocked by unmapped things)
+    # Final heading [rad] a car must arrive with (parking); None: any. Ackermann only.
+    heading: Float | None = None
+    heading_tolerance: Annotated[PositiveFloat, Field(le=3.1416)] = 0.2  # [rad]
     pursuit: PursuitConfig = PursuitConfig()
     dwa: DwaConfig = DwaConfig()
+    hybrid: HybridConfig = HybridConfig()
 
 
 _CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")

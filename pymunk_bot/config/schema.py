@@ -10,6 +10,8 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, PrivateAttr
 
 from ..localization.config import MappingConfig
+from .footprint import FootprintConfig
+from .motion import MotionConfig
 from .types import (
     MAX_BEAMS, MAX_OBSTACLES, MAX_ROBOTS, Accel, Angle, Bias, Distance, Duration, Float,
     FieldOfView, Friction, Int, Length, Mass, Name, Noise, Pose, PositiveFloat,
@@ -69,6 +71,7 @@ class _Solid(Section):
     movable: bool = False  # a dynamic body the robots can push
     mass: Mass = 1.0  # [kg], movable only
     ground_friction: Friction = 0.5  # floor friction coefficient mu, movable only
+    motion: MotionConfig | None = None  # scripted path (a kinematic body); not with movable
 
 
 class BoxObstacle(_Solid):
@@ -145,7 +148,8 @@ class RobotConfig(Section):
     name: Name
     drive: str = "diff"  # a registered drive: diff (built in), or a plugin's
     pose: Pose  # x [m], y [m], theta [rad]
-    radius: Length = 0.2  # [m]
+    radius: Length = 0.2  # [m] of the default disc footprint
+    footprint: FootprintConfig | None = None  # robot frame; None: a disc of ``radius``
     mass: Mass = 5.0  # [kg]
     friction: Friction = 0.5  # contact friction of the robot's body
     # The pose estimate controllers see: a registered localizer's name or {type: name, ...}.

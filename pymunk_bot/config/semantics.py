@@ -6,8 +6,10 @@ import math
 import numpy as np
 
 from .. import geometry as geo
+from ..footprint import of_robot, transform
+from .movers import check_mover
 from .schema import (
-    BoxObstacle, CircleObstacle, PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle,
+    BoxObstacle, PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle,
 )
 
 
@@ -34,9 +36,14 @@ def obstacle_outline(obstacle) -> np.ndarray | None:
     return None
 
 
+def is_round(obstacle) -> bool:
+    """A disc: a circle obstacle or a pedestrian (``center``, ``radius``)."""
+    return getattr(obstacle, "type", "") in ("circle", "pedestrian")
+
+
 def distance_to_obstacle(point, obstacle) -> float:
     """Distance from a point to an obstacle's surface (0 inside)."""
-    if isinstance(obstacle, CircleObstacle):
+    if is_round(obstacle):
         return max(0.0, math.dist(point, obstacle.center) - obstacle.radius)
     return geo.distance_to_polygon(point, polygon_of(obstacle))
 
@@ -50,9 +57,39 @@ def polygon_of(obstacle) -> np.ndarray:
     return outline
 
 
+def footprint_hits(footprint, pose, obstacle) -> bool:
+    """True when a robot footprint at ``pose`` overlaps an obstacle (touching is fine)."""
+    if footprint.points is None:
+        centre = transform(np.array([footprint.center]), pose)[0]
+        return distance_to_obstacle(centre, obstacle) < footprint.radius - 1e-9
+    outline = footprint.at(pose)
+    if is_round(obstacle):
+        return geo.distance_to_polygon(obstacle.center, outline) < obstacle.radius - 1e-9
+    other = obstacle_outline(obstacle)
+    return other is not None and geo.polygons_overlap(outline, other)
+
+
+def footprints_overlap(a, pose_a, b, pose_b) -> bool:
+    """True when two robot footprints overlap at their poses."""
+    if a.points is None and b.points is None:
+        ca = transform(np.array([a.center]), pose_a)[0]
+        cb = transform(np.array([b.center]), pose_b)[0]
+        return math.dist(ca, cb) < a.radius + b.radius - 1e-9
+    if a.points is None:
+        a, pose_a, b, pose_b = b, pose_b, a, pose_a
+    if b.points is None:
+        cb = transform(np.array([b.center]), pose_b)[0]
+        return geo.distance_to_polygon(cb, a.at(pose_a)) < b.radius - 1e-9
+    return geo.polygons_overlap(a.at(pose_a), b.at(pose_b))
+
+
 def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
-    points = np.asarray(obstacle.points, dtype=float)
-    loc = ("obstacles", index, "points")
+    check_footprint_polygon(("obstacles", index, "points"), obstacle.points)
+
+
+def check_footprint_polygon(loc: tuple, points) -> None:
+    """A polygon outline must be simple, with no repeated points and non-zero area."""
+    points = np.asarray(points, dtype=float)
     for i in range(len(points)):
         if np.allclose(points[i], points[(i + 1) % len(points)]):
             raise SemanticError(loc, f"degenerate polygon: point {i} repeats its neighbour")
@@ -69,28 +106,50 @@ def _check_wall(index: int, wall: WallObstacle) -> None:
 
 def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
     x, y, _ = robot.pose
-    r = robot.radius
+    footprint = of_robot(robot)
     geometry = scenario.world.map_geometry()
-    if geometry is not None:
+    if geometry is not None:  # the disc that holds the footprint must start in free space
         from .world_map import disc_problem
-        problem = disc_problem(geometry, x, y, r)
+        cx, cy = transform(np.array([footprint.center]), robot.pose)[0]
+        problem = disc_problem(geometry, float(cx), float(cy), footprint.radius)
         if problem is not None:
-            raise SemanticError(("robots", index, "pose"), f"robot of radius {r:g} at {problem}")
+            raise SemanticError(("robots", index, "pose"),
+                                f"robot of radius {footprint.radius:g} at {problem}")
     else:
         width, height = scenario.world.arena
-        if not (r <= x <= width - r and r <= y <= height - r):
+        if footprint.points is None:
+            cx, cy = transform(np.array([footprint.center]), robot.pose)[0]
+            r = footprint.radius
+            lo, hi = np.array([cx - r, cy - r]), np.array([cx + r, cy + r])
+        else:
+            outline = footprint.at(robot.pose)
+            lo, hi = outline.min(axis=0), outline.max(axis=0)
+        if lo[0] < -1e-9 or lo[1] < -1e-9 or hi[0] > width + 1e-9 or hi[1] > height + 1e-9:
+            what = (f"robot of radius {footprint.radius:g}" if footprint.points is None
+                    else "robot's footprint")
             raise SemanticError(
                 ("robots", index, "pose"),
-                f"robot of radius {r:g} at ({x:g}, {y:g}) is not inside the arena "
+                f"{what} at ({x:g}, {y:g}) is not inside the arena "
                 f"[0, {width:g}] x [0, {height:g}]")
     for k, obstacle in enumerate(scenario.obstacles):
-        if distance_to_obstacle((x, y), obstacle) < r - 1e-9:
+        if footprint_hits(footprint, robot.pose, obstacle):
             raise SemanticError(
                 ("robots", index, "pose"),
                 f"robot starts inside obstacles[{k}] ({obstacle.type})")
     for k, other in enumerate(scenario.robots[:index]):
-        if math.dist((x, y), other.pose[:2]) < r + other.radius - 1e-9:
+        if footprints_overlap(footprint, robot.pose, of_robot(other), other.pose):
             raise SemanticError(("robots", index, "pose"), f"robot overlaps robots[{k}] ({other.name})")
+
+
+def _check_sideways(index: int, robot: RobotConfig) -> None:
+    """Only a holonomic drive takes a lateral speed."""
+    vy = getattr(robot.controller, "vy", 0.0)
+    if vy:
+        from .. import plugins
+        if not getattr(plugins.drives.get(robot.drive), "holonomic", False):
+            raise SemanticError(("robots", index, "controller", "vy"),
+                                f"the {robot.drive} drive cannot move sideways: vy must be 0 "
+                                f"(got {vy:g}); use drive: omni")
 
 
 def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
@@ -128,6 +187,7 @@ def check(scenario: ScenarioConfig) -> None:
             _check_polygon(i, obstacle)
         elif isinstance(obstacle, WallObstacle):
             _check_wall(i, obstacle)
+        check_mover(i, obstacle, scenario)
     names: dict[str, int] = {}
     for i, robot in enumerate(scenario.robots):
         if robot.name in names:
@@ -138,8 +198,12 @@ def check(scenario: ScenarioConfig) -> None:
         if lidar is not None and lidar.min_range >= lidar.max_range:
             raise SemanticError(("robots", i, "lidar", "min_range"),
                                 f"must be < max_range ({lidar.max_range:g}) (got {lidar.min_range:g})")
+        footprint = getattr(robot, "footprint", None)
+        if footprint is not None and footprint.type == "polygon":
+            check_footprint_polygon(("robots", i, "footprint", "points"), footprint.points)
         _check_robot_start(i, robot, scenario)
         _check_localization(i, robot, scenario)
+        _check_sideways(i, robot)
         if robot.goal is not None:
             _check_point_in_arena(("robots", i, "goal", "position"), robot.goal.position, scenario)
         controller_goal = getattr(robot.controller, "goal", None)
@@ -156,7 +220,8 @@ def check(scenario: ScenarioConfig) -> None:
             fastest = max(range(len(scenario.robots)),
                           key=lambda i: scenario.robots[i].top_speed())
             raise SemanticError(
-                ("robots", fastest, "max_wheel_speed"),
+                ("robots", fastest, "max_wheel_speed" if scenario.robots[fastest].drive == "diff"
+                 else "max_speed"),
                 f"too fast for world.dt = {scenario.world.dt:g} s: it would need {needed} "
                 f"substeps (at most {MAX_SUBSTEPS}) not to tunnel; lower world.dt or the speed")
     for name, expectation in scenario.expect.items():

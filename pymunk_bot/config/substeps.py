@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .. import geometry as geo
 from .schema import CircleObstacle, ScenarioConfig
 
@@ -22,7 +24,7 @@ def substeps_against_tunnelling(dt: float, max_speed: float, robot_radius: float
 
 def half_width(obstacle) -> float:
     """Half the thinnest extent of an obstacle: what a fast robot must not skip over."""
-    if isinstance(obstacle, CircleObstacle):
+    if isinstance(obstacle, CircleObstacle) or getattr(obstacle, "type", "") == "pedestrian":
         return obstacle.radius
     from .semantics import polygon_of
     return geo.thinness(polygon_of(obstacle)) / 2.0
@@ -52,22 +54,48 @@ def map_half_widths(scenario: ScenarioConfig) -> list[float]:
     return widths
 
 
+def mover_speed(obstacle) -> float:
+    """Fastest a scripted obstacle or a pedestrian moves [m/s] (0 for the others)."""
+    if getattr(obstacle, "type", "") == "pedestrian":
+        from ..actors.pedestrians import MAX_SPEED_FACTOR
+        return MAX_SPEED_FACTOR * (obstacle.speed + 3.0 * obstacle.speed_std)
+    motion = getattr(obstacle, "motion", None)
+    if motion is None:
+        return 0.0
+    reach = 0.0
+    if motion.angular_speed:
+        from .semantics import obstacle_outline
+        outline = obstacle_outline(obstacle)
+        if outline is not None:
+            reach = float(np.hypot(*(outline - outline.mean(axis=0)).T).max())
+    return motion.speed + abs(motion.angular_speed) * reach
+
+
 def required_substeps(scenario: ScenarioConfig) -> int:
     """Substeps so that nothing tunnels and no contact starts deeper than CONTACT_STEP.
 
-    Everything that moves counts: robots, and the bodies they push (a pushed body moves no
-    faster than its pusher, so the fastest robot bounds it; the smallest movable obstacle is
-    what must not skip through the thinnest wall)."""
+    Everything that moves counts: robots (by their footprint's thinnest extent), the bodies they
+    push (a pushed body moves no faster than its pusher, so the fastest robot bounds it; the
+    smallest movable obstacle is what must not skip through the thinnest wall), and scripted
+    movers and pedestrians closing on a robot."""
+    from ..footprint import of_robot
     dt = scenario.world.dt
     robots = scenario.robots
     fastest = max(r.top_speed() for r in robots)
-    movers = [r.radius for r in robots] + [half_width(o) for o in scenario.obstacles
-                                           if getattr(o, "movable", False)]
+    movers = [of_robot(r).half_thickness for r in robots] + [
+        half_width(o) for o in scenario.obstacles if getattr(o, "movable", False)]
     smallest = min(movers)
     thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles
                                                  if not getattr(o, "movable", False)]
                    + map_half_widths(scenario))
     closing = 2 * fastest if len(robots) > 1 else fastest  # two robots head-on
-    return max(substeps_against_tunnelling(dt, fastest, smallest, thinnest),
-               substeps_against_tunnelling(dt, closing, smallest, smallest),
-               substeps_against_overlap(dt, closing))
+    scripted = [mover_speed(o) for o in scenario.obstacles]
+    closing = max([closing] + [fastest + speed for speed in scripted])
+    substeps = max(substeps_against_tunnelling(dt, fastest, smallest, thinnest),
+                   substeps_against_tunnelling(dt, closing, smallest, smallest),
+                   substeps_against_overlap(dt, closing))
+    for obstacle, speed in zip(scenario.obstacles, scripted):
+        if speed > 0:
+            substeps = max(substeps, substeps_against_tunnelling(
+                dt, fastest + speed, smallest, half_width(obstacle)))
+    return substeps

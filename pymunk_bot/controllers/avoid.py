@@ -48,6 +48,10 @@ class AvoidController(Controller):
 
     def __init__(self, config: AvoidControllerConfig, robot: RobotSpec) -> None:
         super().__init__(config, robot)
+        if robot.drive != "diff":
+            # The window searches the arcs of a robot that turns on its wheels' difference.
+            raise ValueError(f"avoid drives diff robots only (this one is {robot.drive}); "
+                             f"use navigate, go_to_goal or waypoints")
         self.window = DynamicWindow(robot, dwa_params(config.dwa, self.max_speed), 1.0 / config.rate)
         self.command = (0.0, 0.0)  # last (v, omega): our velocity estimate
         self._best_distance = math.inf

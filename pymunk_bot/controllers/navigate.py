@@ -43,7 +43,9 @@ class NavigateController(Controller):
         super().__init__(config, robot)
         self.robot = robot
         self.gains = pursuit_gains(config.pursuit, robot, self.max_speed, config.lookahead)
-        self.window = DynamicWindow(robot, dwa_params(config.dwa, self.max_speed), 1.0 / config.rate)
+        # The window searches (v, omega) arcs of a diff drive; an omni robot follows the path.
+        self.window = None if robot.holonomic else DynamicWindow(
+            robot, dwa_params(config.dwa, self.max_speed), 1.0 / config.rate)
         self.hard = robot.radius + config.hard_margin  # [m] closer cells are blocked
         self.soft = robot.radius + config.margin  # [m] paths keep this much where they can
         self.map: MapInfo | None = None
@@ -97,6 +99,9 @@ class NavigateController(Controller):
             if not self._plan(obs, goal, tolerance):
                 return self._stop()
         self.status = "running"
+        if self.window is None:
+            command, _ = self.follower.drive(obs.pose)
+            return command
         v, omega, _ = self.follower.command(obs.pose)
         if points is not None:
             # Other robots move: predict them, and keep right when one comes at us head-on.
@@ -136,7 +141,8 @@ class NavigateController(Controller):
                        goal_radius=0.5 * tolerance)
         if result.found:
             self.path = shortcut(grid, result.path, self.soft)
-            self.follower = PathFollower(self.path, False, self.gains, PATH_CORNER_RADIUS)
+            self.follower = PathFollower(self.path, False, self.gains, PATH_CORNER_RADIUS,
+                                         1.0 / self.config.rate)
             self._progress = (0.0, obs.time)
             self._blocked_since = None
             self.message = f"following a {len(self.path)}-point path (plan {self.replans})"

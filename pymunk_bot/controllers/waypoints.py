@@ -7,6 +7,7 @@ import numpy as np
 
 from ..config.controllers import PursuitConfig, WaypointsControllerConfig
 from ..geometry import wrap_angle
+from ..planning.steering import car_pursue, holonomic_toward
 from ..planning.pursuit import PathTracker, PursuitGains, pursue, round_corners
 from .base import STOP, Command, Controller, Observation, RobotSpec
 
@@ -14,18 +15,28 @@ from .base import STOP, Command, Controller, Observation, RobotSpec
 def pursuit_gains(config: PursuitConfig, robot: RobotSpec, max_speed: float,
                   lookahead: float | None = None) -> PursuitGains:
     """The tracker gains a pursuit section describes, for this robot."""
+    car = robot.min_turn_radius > 0
     return PursuitGains(lookahead=lookahead or config.lookahead, max_speed=max_speed,
                         lookahead_time=config.lookahead_time,
-                        corner_radius=config.corner_radius, lateral_accel=config.lateral_accel,
-                        decel=config.decel, rotate_threshold=config.rotate_threshold,
-                        track_width=robot.track_width)
+                        # A car's corners are no tighter than its turning circle.
+                        corner_radius=max(config.corner_radius, robot.min_turn_radius),
+                        lateral_accel=config.lateral_accel,
+                        decel=config.decel,
+                        # Only a diff drive turns on the spot.
+                        rotate_threshold=config.rotate_threshold if robot.drive == "diff" else math.pi,
+                        track_width=robot.track_width if robot.drive == "diff" else 0.0,
+                        drive="ackermann" if car else ("omni" if robot.holonomic else "diff"),
+                        min_turn_radius=robot.min_turn_radius, max_omega=robot.max_omega)
 
 
 class PathFollower:
     """Drives along a polyline: rounded corners, a speed profile, pure pursuit, a clean stop."""
 
-    def __init__(self, points, loop: bool, gains: PursuitGains, corner_radius: float) -> None:
+    def __init__(self, points, loop: bool, gains: PursuitGains, corner_radius: float,
+                 period: float = 0.1) -> None:
         self.gains = gains
+        self.period = period  # [s] between commands
+        self.keep_heading: float | None = None  # omni "keep": the heading to hold [rad]
         self.tracker = PathTracker(round_corners(points, corner_radius, loop), loop, gains)
 
     def carrot(self, pose) -> tuple[np.ndarray, float, float]:
@@ -49,6 +60,22 @@ class PathFollower:
         if tracker.remaining() > lookahead:
             return tracker.point_at(tracker.s + lookahead), speed, to_end
         return np.asarray(end), speed, to_end
+
+    def drive(self, pose) -> tuple[Command, float]:
+        """(the command for this robot's drive, distance left to the end [m]; inf on a loop)."""
+        g = self.gains
+        if g.drive == "diff":
+            v, omega, to_end = self.command(pose)
+            return Command(v, omega), to_end
+        carrot, speed, to_end = self.carrot(pose)
+        if g.drive == "omni":
+            tracker = self.tracker
+            ahead = tracker.point_at(tracker.s + g.lookahead) - tracker.point_at(tracker.s)
+            face = math.atan2(ahead[1], ahead[0]) if np.hypot(*ahead) > 1e-6 else None
+            if self.keep_heading is not None:
+                face = self.keep_heading
+            return holonomic_toward(pose, carrot, speed, face, g.max_omega, self.period), to_end
+        return car_pursue(pose, carrot, speed, g.min_turn_radius), to_end
 
     def command(self, pose) -> tuple[float, float, float]:
         """(v, omega, distance left to the end [m]) for the pose; the distance is inf on a loop."""
@@ -84,11 +111,17 @@ class WaypointsController(Controller):
         if self.follower is None:
             start = (float(x), float(y))
             if self.config.loop:
-                self.lead_in = PathFollower([start, self.points[0]], False, self.gains, 0.0)
-                self.follower = PathFollower(self.points, True, self.gains, self.corner_radius)
+                self.lead_in = PathFollower([start, self.points[0]], False, self.gains, 0.0,
+                                            1.0 / self.rate)
+                self.follower = PathFollower(self.points, True, self.gains, self.corner_radius,
+                                             1.0 / self.rate)
             else:
                 self.follower = PathFollower([start] + self.points, False, self.gains,
-                                             self.corner_radius)
+                                             self.corner_radius, 1.0 / self.rate)
+            if self.config.pursuit.heading == "keep":
+                for each in (self.lead_in, self.follower):
+                    if each is not None:
+                        each.keep_heading = float(obs.pose[2])
         follower = self.follower
         if self.lead_in is not None:
             # Join the loop once its first point is within a lookahead.
@@ -96,7 +129,7 @@ class WaypointsController(Controller):
                 follower = self.lead_in
             else:
                 self.lead_in = None
-        v, omega, left = follower.command(obs.pose)
+        command, left = follower.drive(obs.pose)
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         if follower is self.follower and not self.config.loop and (
                 left <= 0.5 * tolerance or (left <= tolerance and follower.tracker.remaining() < 1e-6)):
@@ -105,4 +138,4 @@ class WaypointsController(Controller):
         self.status = "running"
         if self.config.loop and self.lead_in is None:
             self.message = f"patrolling, lap {self.follower.tracker.laps + 1}"
-        return Command(v, omega)
+        return command

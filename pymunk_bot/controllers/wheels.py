@@ -10,6 +10,9 @@ class WheelsController(Controller):
 
     def __init__(self, config: WheelsControllerConfig, robot: RobotSpec) -> None:
         super().__init__(config)
+        if robot.drive != "diff":
+            raise ValueError(f"wheels drives diff robots only (this one is {robot.drive}); "
+                             f"use velocity")
         self.speeds = (config.left, config.right)
 
     def compute(self, obs: Observation) -> tuple[float, float]:

@@ -35,6 +35,7 @@ class Publisher:
         """Begin (or begin again) with the run's static geometry and its first instant."""
         self.geometry = geometry
         self._index = {r["name"]: i for i, r in enumerate(geometry.meta["robots"])}
+        self._outlines = {r["name"]: r.get("footprint") for r in geometry.meta["robots"]}
         self._last_refresh = -np.inf
         self._last_scan: dict[str, float] = {}
         self._last_path: dict[str, np.ndarray | None] = {}
@@ -173,7 +174,8 @@ class Publisher:
         entities, deletions = [], []
         if refresh:
             entities.append(scene.arena_entity(geometry.fixed, t))
-            entities.extend(scene.robot_entity(r.name, self._index.get(r.name, 0), r.radius, t)
+            entities.extend(scene.robot_entity(r.name, self._index.get(r.name, 0), r.radius, t,
+                                               self._outlines.get(r.name))
                             for r in snap.robots)
         for k, ((index, shapes), pose) in enumerate(zip(geometry.movable, poses)):
             last = self._last_obstacles[k] if k < len(self._last_obstacles) else None

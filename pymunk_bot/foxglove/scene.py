@@ -115,20 +115,30 @@ def obstacle_entity(index: int, shapes: list[ShapeGeometry], pose: tuple[float, 
     return _entity(f"obstacle/{index}", t, _merge(parts))
 
 
-def robot_entity(name: str, index: int, radius: float, t: float) -> SceneEntity:
-    """A robot's body, heading mark and name, locked to its base_link frame."""
+def robot_entity(name: str, index: int, radius: float, t: float,
+                 outline: list | None = None) -> SceneEntity:
+    """A robot's body (a cylinder, or its footprint ``outline`` [m] in the robot frame as a
+    closed line), heading mark and name, locked to its base_link frame."""
     rgb = palette.robot_colour(index)
-    body = CylinderPrimitive(pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT / 2),
-                             size=Vector3(x=2 * radius, y=2 * radius, z=ROBOT_HEIGHT),
-                             bottom_scale=1.0, top_scale=1.0, color=_color(rgb))
+    reach = radius if outline is None else max(p[0] for p in outline)
     heading = LinePrimitive(type=LinePrimitiveLineType.LineStrip,
                             pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT + 1e-3), thickness=0.02,
-                            points=[Point3(x=0.0, y=0.0, z=0.0), Point3(x=radius, y=0.0, z=0.0)],
+                            points=[Point3(x=0.0, y=0.0, z=0.0), Point3(x=reach, y=0.0, z=0.0)],
                             color=_color(palette.HEADING))
     label = TextPrimitive(pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT + 0.15), billboard=True,
                           font_size=14.0, scale_invariant=True, color=_color(rgb), text=name)
-    return _entity(f"robot/{name}", t, {"cylinders": [body], "lines": [heading], "texts": [label]},
-                   frame=base_frame(name), frame_locked=True)
+    primitives: dict = {"lines": [heading], "texts": [label]}
+    if outline is None:
+        primitives["cylinders"] = [CylinderPrimitive(
+            pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT / 2),
+            size=Vector3(x=2 * radius, y=2 * radius, z=ROBOT_HEIGHT),
+            bottom_scale=1.0, top_scale=1.0, color=_color(rgb))]
+    else:
+        primitives["lines"].append(LinePrimitive(
+            type=LinePrimitiveLineType.LineLoop, pose=pose_msg(0.0, 0.0, 0.0, ROBOT_HEIGHT),
+            thickness=0.03, points=[Point3(x=float(x), y=float(y), z=0.0) for x, y in outline],
+            color=_color(rgb)))
+    return _entity(f"robot/{name}", t, primitives, frame=base_frame(name), frame_locked=True)
 
 
 def goal_entity(name: str, index: int, goal: tuple[float, float], tolerance: float,

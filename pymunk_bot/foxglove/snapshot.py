@@ -12,6 +12,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from ..readings import LaserScan
+from ..runlog import outline_json
 from ..viewer.scene import ShapeGeometry, body_pose, world_geometry
 
 
@@ -71,6 +72,7 @@ def geometry_of_sim(sim) -> RunGeometry:
         lidar = robot.lidar
         robots.append({
             "name": robot.name, "radius": float(robot.radius),
+            "footprint": outline_json(robot),
             "track_width": getattr(robot.config, "track_width", None),
             "max_wheel_speed": getattr(robot.config, "max_wheel_speed", None),
             "lidar": None if lidar is None else {

@@ -4,6 +4,7 @@ A controller never sees the simulation. What it may know in advance is what a re
 prebuilt map would hold: the arena walls and the fixed obstacles. Movable obstacles (crates) are
 kept apart, flagged ``movable``: they may have been pushed since the file was written, so the
 planner leaves them out unless a controller asks for them (``navigate``'s ``map_movable``).
+Obstacles with a scripted ``motion`` and pedestrians are never on the map.
 """
 from __future__ import annotations
 
@@ -61,6 +62,8 @@ class MapInfo:
             polygons += map_polygons(geometry)
         from_map = len(polygons)
         for obstacle in config.obstacles:
+            if getattr(obstacle, "motion", None) is not None or obstacle.type == "pedestrian":
+                continue  # things that move by themselves are never on a map
             movable = bool(getattr(obstacle, "movable", False))
             if isinstance(obstacle, CircleObstacle):
                 circles.append(MapCircle(tuple(obstacle.center), obstacle.radius, movable))

@@ -84,6 +84,9 @@ class PursuitGains:
     k_turn: float = 3.0  # [1/s] turn rate per radian of heading error when turning on the spot
     track_width: float = 0.3  # [m]; a turn takes wheel speed from driving
     min_speed: float = 0.05  # [m/s] the profile never asks for less (except at the end)
+    drive: str = "diff"  # how a target point becomes a command (see planning/steering.py)
+    min_turn_radius: float = 0.0  # [m]; a car's tightest circle
+    max_omega: float = math.inf  # [rad/s]
 
 
 class PathTracker:

@@ -276,6 +276,11 @@ class Viewer:
             self.say(f"teleop {self.selected}: c gives it back to its controller")
         forward = ("up" in self.held) - ("down" in self.held)
         turn = ("left" in self.held) - ("right" in self.held)
+        if robot.config.drive != "diff":
+            robot.set_velocity(*teleop_velocity(robot.spec, forward, turn,
+                                                ("slide_left" in self.held)
+                                                - ("slide_right" in self.held)))
+            return
         vmax = robot.config.max_wheel_speed
         if forward:
             left = vmax * (TELEOP_FORWARD * forward - TELEOP_TURN * turn)
@@ -289,7 +294,7 @@ class Viewer:
         if self.held and self.selected is not None and self.source.interactive:
             robot = self.source.robot(self.selected)
             if robot.overridden:
-                robot.set_wheel_speeds(0.0, 0.0)
+                robot.set_velocity(0.0, 0.0)
         self.held.clear()
 
     def release_teleop(self, quiet: bool = False) -> None:
@@ -323,3 +328,16 @@ class Viewer:
                          ended=self.ended, message=self.message, help=self.help,
                          replay=not self.source.interactive, hint=not self.recording)
         self.hud.draw(surface, scene, self.camera, state, selected)
+
+
+def teleop_velocity(spec, forward: int, turn: int, slide: int) -> tuple[float, float, float]:
+    """(v, omega, vy) for held keys on a drive other than diff: a car steers to full lock
+    (it cannot turn on the spot: standing, it only turns its wheels); an omni robot also
+    slides sideways."""
+    v = TELEOP_FORWARD * spec.max_speed * forward
+    if spec.min_turn_radius > 0:
+        omega = (abs(v) / spec.min_turn_radius * turn * (1 if v >= 0 else -1) if v
+                 else float(turn))
+        return v, omega, 0.0
+    vy = TELEOP_FORWARD * spec.max_speed * slide if spec.holonomic else 0.0
+    return v, TELEOP_SPIN * spec.max_omega * turn, vy

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pygame
 
+from ..footprint import transform
 from . import palette as pal
 from . import primitives as prim
 from .camera import Camera
@@ -274,9 +275,35 @@ def _robot(surface: pygame.Surface, camera: Camera, r: RobotView, selected: bool
     radius = max(camera.length(r.radius), 3.0)
     if selected:
         prim.ring(surface, pal.SELECTION, centre, radius + 3, 3)
-    prim.circle(surface, pal.robot_colour(r.index), pal.OUTLINE, centre, radius)
-    tip = (centre[0] + radius * math.cos(theta), centre[1] - radius * math.sin(theta))
-    prim.line(surface, pal.HEADING, centre, tip, max(2.0, radius / 6))
+    if r.footprint is None:
+        prim.circle(surface, pal.robot_colour(r.index), pal.OUTLINE, centre, radius)
+        tip = (centre[0] + radius * math.cos(theta), centre[1] - radius * math.sin(theta))
+        prim.line(surface, pal.HEADING, centre, tip, max(2.0, radius / 6))
+        return
+    outline = transform(r.footprint, r.pose)
+    prim.polygon(surface, pal.robot_colour(r.index), pal.OUTLINE, camera.points_to_screen(outline))
+    reach = float(np.max(r.footprint[:, 0]))  # heading line from the pose point to the nose
+    tip = camera.to_screen(x + reach * math.cos(theta), y + reach * math.sin(theta))
+    prim.line(surface, pal.HEADING, centre, tip, max(2.0, radius / 8))
+    prim.circle(surface, pal.HEADING, pal.HEADING, centre, max(2.0, radius / 10))
+    if r.steering is not None and r.wheelbase > 0:
+        _front_wheels(surface, camera, r, r.steering, r.footprint)
+
+
+def _front_wheels(surface: pygame.Surface, camera: Camera, r: RobotView, steering: float,
+                  footprint: np.ndarray) -> None:
+    """A car's front wheels at the front axle, turned by the steering angle."""
+    x, y, theta = (float(v) for v in r.pose)
+    half_width = 0.5 * float(np.ptp(footprint[:, 1])) * 0.8
+    half_tyre = 0.12 * r.wheelbase + 0.01  # [m]
+    c, s = math.cos(theta), math.sin(theta)
+    heading = theta + steering
+    dc, ds = math.cos(heading) * half_tyre, math.sin(heading) * half_tyre
+    for side in (-1.0, 1.0):
+        wx = x + c * r.wheelbase - s * side * half_width
+        wy = y + s * r.wheelbase + c * side * half_width
+        prim.line(surface, pal.OUTLINE, camera.to_screen(wx - dc, wy - ds),
+                  camera.to_screen(wx + dc, wy + ds), max(2.0, camera.length(0.03)))
 
 
 def _label(surface: pygame.Surface, camera: Camera, r: RobotView, font: pygame.font.Font) -> None:

@@ -13,6 +13,7 @@ HELP_LIVE = (
     ("left click", "set the selected robot's goal (click a robot: select it)"),
     ("drag, wheel", "pan, zoom"),
     ("arrows / WASD", "drive the selected robot by hand (teleop)"),
+    ("z / x", "slide left / right (omni robots)"),
     ("c", "give the robot back to its controller"),
     ("tab", "select the next robot"),
     ("space", "pause / resume"),

@@ -12,6 +12,7 @@ TELEOP_KEYS = {
     pygame.K_DOWN: "down", pygame.K_s: "down",
     pygame.K_LEFT: "left", pygame.K_a: "left",
     pygame.K_RIGHT: "right", pygame.K_d: "right",
+    pygame.K_z: "slide_left", pygame.K_x: "slide_right",  # omni robots only
 }
 LAYER_KEYS = {pygame.K_l: "rays", pygame.K_t: "trails", pygame.K_g: "grid",
               pygame.K_o: "ghost", pygame.K_p: "paths", pygame.K_m: "built_map",

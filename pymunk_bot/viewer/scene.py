@@ -78,6 +78,9 @@ class RobotView:
     covariance: np.ndarray | None = None  # (3, 3) the estimate's covariance
     particles: np.ndarray | None = None  # (N, 3) the particle cloud (MCL)
     built_map: Any = None  # OccupancyGrid the robot has built so far (mapping / slam)
+    footprint: np.ndarray | None = None  # (N, 2) outline in the robot frame; None: the disc
+    steering: float | None = None  # a car's steering angle [rad]
+    wheelbase: float = 0.0  # [m], with ``steering``
 
 
 @dataclass

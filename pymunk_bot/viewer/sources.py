@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from ..footprint import drawn_outline
 from .scene import RobotView, Scene, ShapeView, body_pose, scan_end_points, world_geometry
 
 TRAIL_SPACING = 0.01  # [m]; a trail point is added once the robot has moved this far
@@ -126,7 +127,10 @@ class LiveSource:
                 scan_origin=origin, scan_points=points, scan_hit=hit,
                 collisions=robot.collisions,
                 status=_status(controller),
-                teleop=robot.overridden, **_live_localization(robot)))
+                teleop=robot.overridden, footprint=drawn_outline(robot.spec.footprint),
+                steering=getattr(robot.drive, "steering_angle", None),
+                wheelbase=float(getattr(robot.drive, "wheelbase", 0.0)),
+                **_live_localization(robot)))
         return Scene(self.sim.world.width, self.sim.world.height, self.sim.time, shapes, robots,
                      self.sim.config.name, self.origin)
 
@@ -240,6 +244,7 @@ class ReplaySource:
                 trail=log.pose[: i + 1, j, :2], scan_origin=origin, scan_points=points,
                 scan_hit=hit, collisions=int(log.collisions[i, j]),
                 teleop=bool(log.teleop[i, j]),
+                footprint=None if not meta.get("footprint") else np.asarray(meta["footprint"]),
                 **_replay_localization(getattr(log, "localization", {}).get(name), i,
                                        float(log.time[i]))))
         width, height = log.size

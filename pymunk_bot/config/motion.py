@@ -1,0 +1,51 @@
+"""Sections of things that move by themselves: scripted ``motion`` of obstacles, and pedestrians.
+
+docs/scenario-format.md documents each key; keep the two in step.
+"""
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from .types import Float, Length, Mass, NonNegativeFloat, PositiveFloat, Section, Vec2
+
+MAX_PATH_POINTS = 256
+MAX_SCRIPTED_SPEED = 20.0  # [m/s]
+MAX_WALKING_SPEED = 5.0  # [m/s]
+
+Mode = Literal["loop", "pingpong", "once"]
+
+
+class MotionConfig(Section):
+    """A scripted path for an obstacle's centre: it starts at the first point (= ``center``)."""
+
+    path: list[Vec2] = Field(min_length=2, max_length=MAX_PATH_POINTS)  # [m]
+    speed: Annotated[PositiveFloat, Field(le=MAX_SCRIPTED_SPEED)]  # [m/s] along the path
+    # loop: back to the first point and around again; pingpong: back and forth; once: stop at
+    # the last point
+    mode: Mode = "loop"
+    angular_speed: Float = 0.0  # [rad/s] the obstacle spins at while it moves (0: keeps its angle)
+
+
+class PedestrianObstacle(Section):
+    """A person walking between ``goals`` with the social force model (Helbing & Molnar 1995)."""
+
+    type: Literal["pedestrian"]
+    center: Vec2  # start position [m]
+    goals: list[Vec2] = Field(min_length=1, max_length=MAX_PATH_POINTS)  # [m], in order
+    mode: Mode = "pingpong"  # after the last goal: loop, pingpong back, or once (stay)
+    radius: Annotated[Length, Field(le=1.0)] = 0.25  # [m] body disc (what LiDAR sees)
+    speed: Annotated[PositiveFloat, Field(le=MAX_WALKING_SPEED)] = 1.3  # desired speed [m/s]
+    speed_std: NonNegativeFloat = 0.0  # [m/s] each run draws the desired speed from N(speed, std)
+    mass: Mass = 70.0  # [kg]
+    goal_tolerance: PositiveFloat = 0.3  # [m] a goal counts as reached this close
+    relaxation_time: PositiveFloat = 0.5  # tau [s]: how fast the walker reaches its wish speed
+    # Repulsion of other walkers and robots: V0 exp(-b / sigma), b the semi-minor axis of the
+    # ellipse of the other's next step (b measured between body edges here)
+    social_strength: NonNegativeFloat = 2.1  # V0 [m^2/s^2]
+    social_range: PositiveFloat = 0.3  # sigma [m]
+    # Repulsion of walls and obstacles: U0 exp(-d / R), d the distance to the nearest surface
+    wall_strength: NonNegativeFloat = 10.0  # U0 [m^2/s^2]
+    wall_range: PositiveFloat = 0.2  # R [m]
+    fluctuation: NonNegativeFloat = 0.0  # std of a random force per unit mass [m/s^2]

@@ -1,0 +1,82 @@
+"""Wheel encoders with the errors real ones have, for any number of wheels per robot.
+
+Per wheel and tick: measured = true * (1 + scale_error) + noise, noise ~ N(0, var * |true|)
+(so the error is a random walk in distance, independent of the time step), then optionally
+quantised to whole ticks of ``resolution`` metres of cumulative measured travel. The diff
+drive's odometry applies the same model (sensors/odometry.py).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+
+class EncoderBank:
+    """Encoders of every robot of a group: ``scale`` (n, k), ``noise_var`` (n,) [m^2 per m],
+    ``resolution`` (n,) [m per tick]; one generator per robot, drawn in wheel order."""
+
+    def __init__(self, scale: np.ndarray, noise_var: np.ndarray, resolution: np.ndarray,
+                 rngs: Sequence[np.random.Generator]) -> None:
+        self.scale = np.asarray(scale, dtype=float)
+        self.noise_var = np.asarray(noise_var, dtype=float)
+        self.resolution = np.asarray(resolution, dtype=float)
+        self._rngs = list(rngs)
+        self.noisy = np.flatnonzero(self.noise_var > 0.0).tolist()
+        self._quantised = np.flatnonzero(self.resolution > 0.0)
+        self._cumulative = np.zeros_like(self.scale)  # measured travel before quantisation [m]
+        self._ticks = np.zeros_like(self.scale)  # whole ticks counted so far
+
+    def measure(self, travel: np.ndarray) -> np.ndarray:
+        """One tick's true wheel travel (n, k) [m] -> what the encoders report [m]."""
+        measured = travel * self.scale
+        for i in self.noisy:
+            rng, var = self._rngs[i], self.noise_var[i]
+            for wheel in range(travel.shape[1]):
+                if travel[i, wheel] != 0.0:
+                    measured[i, wheel] += np.sqrt(var * abs(travel[i, wheel])) * rng.standard_normal()
+        q = self._quantised
+        if q.shape[0]:
+            self._cumulative[q] += measured[q]
+            ticks = np.floor(self._cumulative[q] / self.resolution[q, None])
+            measured[q] = (ticks - self._ticks[q]) * self.resolution[q, None]
+            self._ticks[q] = ticks
+        return measured
+
+
+class OdometryHandle:
+    """One robot's odometry (``robot.odometry``): ``pose`` and ``covariance`` of its group."""
+
+    def __init__(self, group, index: int) -> None:
+        self._group = group
+        self._i = index
+        self.config = group.configs[index]
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The odometry estimate [x, y, theta] (theta unwrapped)."""
+        return self._group.pose[self._i].copy()
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """3x3 covariance of [x, y, theta] the random encoder noise predicts."""
+        return self._group.covariance[self._i].copy()
+
+    @property
+    def wheel_travel(self) -> tuple[float, ...]:
+        """Measured travel of each wheel since the start [m], as the encoders report it."""
+        return tuple(float(v) for v in self._group.wheel_travel[self._i])
+
+
+def integrate_twist(pose: np.ndarray, dx: np.ndarray, dy: np.ndarray,
+                    dtheta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move poses (n, 3) in place by body-frame increments along exact arcs; returns
+    (cos, sin) of the mid-step heading and the chord factor, for covariance propagation."""
+    from .odometry import sinc_half
+    chord = sinc_half(dtheta)
+    heading = pose[:, 2] + 0.5 * dtheta
+    c, s = np.cos(heading), np.sin(heading)
+    pose[:, 0] += chord * (dx * c - dy * s)
+    pose[:, 1] += chord * (dx * s + dy * c)
+    pose[:, 2] += dtheta
+    return c, s, chord
