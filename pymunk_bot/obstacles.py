@@ -48,6 +48,7 @@ def _local_outlines(config) -> tuple[np.ndarray, float, list[np.ndarray]]:
 def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     """Add one obstacle to the space."""
     movable = getattr(config, "movable", False)
+    outlines: list[np.ndarray]  # convex pieces in the body frame (none for a circle)
     if isinstance(config, CircleObstacle):
         centre, angle, outlines = np.asarray(config.center), 0.0, []
     else:
