@@ -52,6 +52,8 @@ def cmd_map(args: argparse.Namespace) -> int:
                                                 f"{MAX_RESOLUTION:g} m (got {resolution:g})")
     _check_out(args.out, (".yaml", ".yml"))
     config = load_scenario(args.scenario)
+    if config.world.size is None:  # load_scenario sizes a map world from its map
+        raise ScenarioError(args.scenario, "world", "the world needs a 'size' or a 'map'")
     width, height = config.world.size
     cells = (width / resolution + 4) * (height / resolution + 4)
     if cells > MAX_MAP_CELLS:

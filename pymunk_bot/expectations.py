@@ -147,7 +147,8 @@ def judge(expectations: dict, checks: list[Check], sim_time: float, planned: flo
     run stopped before the scenario's duration (or before a ``within`` deadline).
     """
     short = sim_time + 0.5 * dt < planned
-    decided, undecided = [], []
+    decided: list[Check] = []
+    undecided: list[Check] = []
     for check in checks:
         exp = expectations[check.robot]
         if check.key == "within":

@@ -6,7 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
-Point = Sequence[float]
+Point = Sequence[float] | np.ndarray  # (x, y): a tuple, list or array
 
 
 def box_corners(center: Point, size: Point, angle: float = 0.0) -> np.ndarray:

@@ -55,6 +55,7 @@ def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     """Add one obstacle to the space."""
     scripted = getattr(config, "motion", None) is not None
     movable = getattr(config, "movable", False) or scripted
+    outlines: list[np.ndarray]  # convex pieces in the body frame (none for a circle)
     if isinstance(config, CircleObstacle):
         centre, angle, outlines = np.asarray(config.center), 0.0, []
     else:

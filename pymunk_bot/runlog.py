@@ -12,12 +12,16 @@ import json
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import ScenarioError
 from .results import write_atomic
 from .viewer.scene import ShapeGeometry, body_pose, world_geometry
+
+if TYPE_CHECKING:
+    from .localization.recording import LocalizationRecorder
 
 FORMAT = "pymunk-bot run log"
 VERSION = 1
@@ -124,7 +128,7 @@ class RunLogger:
         self._last_scan: dict[str, object] = {}
         self._meta: dict = {}
         self._movable: list = []
-        self._localization = None
+        self._localization: LocalizationRecorder | None = None  # made by on_reset
 
     def attach(self, sim) -> "RunLogger":
         """Start logging ``sim`` from its present state and observe its every step."""
@@ -167,6 +171,8 @@ class RunLogger:
         self(sim)
 
     def __call__(self, sim) -> None:
+        if self._localization is None:
+            raise RuntimeError("the logger is not attached to a simulation: call attach(sim)")
         rows = self._rows
         robots = list(sim.robots.values())
         rows["time"].append(sim.time)
@@ -190,7 +196,7 @@ class RunLogger:
 
     def log(self) -> RunLog:
         """What has been recorded so far."""
-        if not self._rows:
+        if not self._rows or self._localization is None:
             raise RuntimeError("the logger is not attached to a simulation")
         n_robots, n_movable = len(self._meta["robots"]), len(self._meta["movable"])
         shapes = {"pose": (n_robots, 3), "odometry": (n_robots, 3), "command": (n_robots, 2),

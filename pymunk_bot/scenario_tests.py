@@ -12,6 +12,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Sequence
 
 import yaml
 
@@ -55,7 +56,7 @@ def has_expect_block(path: Path) -> bool:
     return isinstance(data, dict) and bool(data.get("expect"))
 
 
-def discover(paths: list[str | Path]) -> list[Path]:
+def discover(paths: Sequence[str | Path]) -> list[Path]:
     """Scenario files with expectations under ``paths`` (files or directories, recursively).
 
     A file named explicitly is always included if it has an ``expect`` block; so is every

@@ -38,11 +38,19 @@ def check_seed(seed: object) -> int | None:
 
 def check(scenario: ScenarioConfig) -> None:
     """Raise SemanticError for the first problem found."""
-    width, height = scenario.world.size
+    width, height = _arena_size(scenario)
     for i, obstacle in enumerate(scenario.obstacles):
         _check_obstacle_in_arena(i, obstacle, width, height)
     for i, robot in enumerate(scenario.robots):
         _check_controller(i, robot, scenario)
+
+
+def _arena_size(scenario: ScenarioConfig) -> tuple[float, float]:
+    """The arena's (width, height) [m]; parse_scenario fills it in from a map before the checks."""
+    if scenario.world.size is None:
+        raise SemanticError(("world",), "the world needs a 'size' or a 'map'")
+    width, height = scenario.world.size
+    return width, height
 
 
 def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) -> None:
@@ -51,6 +59,8 @@ def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) 
         low, high = np.array([cx - r, cy - r]), np.array([cx + r, cy + r])
     else:
         outline = obstacle_outline(obstacle)
+        if outline is None:  # every obstacle but a circle has an outline
+            raise SemanticError(("obstacles", index), f"unknown obstacle type {obstacle.type!r}")
         low, high = outline.min(axis=0), outline.max(axis=0)
     if high[0] <= 0 or high[1] <= 0 or low[0] >= width or low[1] >= height:
         raise SemanticError(
@@ -66,7 +76,7 @@ def _outside(point, width: float, height: float) -> bool:
 def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
     controller = robot.controller
     loc = ("robots", index, "controller")
-    width, height = scenario.world.size
+    width, height = _arena_size(scenario)
     if isinstance(controller, WaypointsControllerConfig):
         for k, point in enumerate(controller.points):
             if _outside(point, width, height):
@@ -86,7 +96,7 @@ def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) 
 def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControllerConfig,
                     scenario: ScenarioConfig) -> None:
     loc = ("robots", index, "controller")
-    width, height = scenario.world.size
+    width, height = _arena_size(scenario)
     cells = math.ceil(width / controller.resolution) * math.ceil(height / controller.resolution)
     if cells > MAX_GRID_CELLS:
         raise SemanticError(loc + ("resolution",),
@@ -99,9 +109,12 @@ def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControll
         what = "movable obstacles" if unmapped else "the other robots"
         raise SemanticError(loc, f"navigate needs a 'lidar' on the robot to avoid {what}, "
                                  "which are not on its map")
-    goal_loc = loc + ("goal",) if controller.goal is not None else ("robots", index, "goal",
-                                                                    "position")
-    goal = controller.goal if controller.goal is not None else robot.goal.position
+    if controller.goal is not None:
+        goal, goal_loc = controller.goal, loc + ("goal",)
+    elif robot.goal is not None:
+        goal, goal_loc = robot.goal.position, ("robots", index, "goal", "position")
+    else:  # _check_controller refused this already
+        raise SemanticError(loc, "navigate needs a goal: set controller.goal or the robot's goal")
     for k, obstacle in enumerate(scenario.obstacles):
         if getattr(obstacle, "movable", False):
             continue

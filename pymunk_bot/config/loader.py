@@ -70,7 +70,7 @@ def parse_scenario(data: Any, source: str, node=None,
         context = {"base_dir": None if base_dir is None else str(base_dir)}
         config = model.model_validate(data, context=context)
     except ValidationError as exc:
-        errors = exc.errors()
+        errors: list[dict[str, Any]] = [dict(e) for e in exc.errors()]
         first = most_helpful(errors)
         loc = first["loc"]
         if first["type"] == "missing" and loc and isinstance(loc[-1], int):

@@ -80,6 +80,8 @@ def map_geometry(world: WorldConfig) -> Any:
     """The loaded map of a world that ``attach_map`` resolved (from the cache when unchanged)."""
     path = world._map_path
     if path is None:  # a WorldConfig built by hand: resolve against the current directory
+        if world.map is None:
+            raise ValueError("the world has no map")
         path = str(Path(world.map).expanduser().resolve())
     return _load(path, _mtime(Path(path)), world.map_scale, "<world.map>")
 

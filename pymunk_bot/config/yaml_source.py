@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import stat
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
@@ -51,7 +51,11 @@ def read_text(path: Path, source: str) -> str:
 
 
 # libyaml's parser when PyYAML has it: ten times faster on a 1 MiB file, same nodes and marks.
-_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+# The checker sees one class (a runtime choice between two cannot be a base class to it).
+if TYPE_CHECKING:
+    from yaml import SafeLoader as _SafeLoader
+else:
+    _SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class _StrictLoader(_SafeLoader):

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..config import ScenarioConfig
 from ..sim import Simulation
-from .task import RewardWeights, RobotTask, load_config, prepare_scenario, robot_result, \
-    sample_goal
+from .task import RewardWeights, RobotTask, arena_size, load_config, prepare_scenario, \
+    robot_result, sample_goal
 
 MAX_CONTROL_PERIOD = 10.0  # [s]
 MAX_EPISODE_TIME = 24 * 3600.0  # [s] of simulated time
@@ -69,7 +69,7 @@ class NavigationEpisode:
         self.random_goal = bool(random_goal)
         self.terminate_on_collision = bool(terminate_on_collision)
         robot_config = next(r for r in self.config.robots if r.name == self.robot_name)
-        self.task = RobotTask(robot_config, self.config.world.size,
+        self.task = RobotTask(robot_config, arena_size(self.config),
                               RewardWeights.from_any(reward), pose_source)
         self.sim: Simulation | None = None
         self.done = True  # no episode under way until reset
@@ -86,7 +86,7 @@ class NavigationEpisode:
             robot.set_goal(sample_goal(self.sim, robot, rng))
         self.task.start(robot)
         self.done = False
-        return self.task.observe(), {"sim_seed": seed, "goal": tuple(robot.goal),
+        return self.task.observe(), {"sim_seed": seed, "goal": tuple(self.task.goal()),
                                      "distance_to_goal": self.task.goal_distance(),
                                      "collisions": robot.collisions}
 
@@ -96,6 +96,8 @@ class NavigationEpisode:
     def finish(self, out: np.ndarray | None = None
                ) -> tuple[np.ndarray, float, bool, bool, dict]:
         """(obs, reward, terminated, truncated, info) once the physics has advanced."""
+        if self.sim is None:
+            raise RuntimeError("call reset() before finish()")
         reward, terminated, info = self.task.outcome(self.control_period,
                                                      self.terminate_on_collision)
         time = self.sim.time

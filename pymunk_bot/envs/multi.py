@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
@@ -23,7 +23,11 @@ from ..config import ScenarioConfig
 from ..sim import Simulation
 from .episode import SEED_BOUND, advance, episode_timing
 from .navigation import RENDER_MODES, make_spaces
-from .task import RewardWeights, RobotTask, load_config, prepare_scenario, robot_result
+from .task import RewardWeights, RobotTask, arena_size, load_config, prepare_scenario, \
+    robot_result
+
+if TYPE_CHECKING:
+    from .render import FrameRenderer
 
 
 class MultiRobotEnv(ParallelEnv):
@@ -53,7 +57,8 @@ class MultiRobotEnv(ParallelEnv):
         names = [r.name for r in config.robots]
         self.config, _ = prepare_scenario(config, self.source, names, lidar, self.control_period)
         weights = RewardWeights.from_any(reward)
-        self.tasks = {r.name: RobotTask(r, self.config.world.size, weights, pose_source)
+        arena = arena_size(self.config)
+        self.tasks = {r.name: RobotTask(r, arena, weights, pose_source)
                       for r in self.config.robots}
         self.terminate_on_collision = bool(terminate_on_collision)
         self.possible_agents = names
@@ -62,7 +67,7 @@ class MultiRobotEnv(ParallelEnv):
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.control_period}
         self.sim: Simulation | None = None
         self._rng = seeding.np_random(None)[0]
-        self._renderer = None
+        self._renderer: FrameRenderer | None = None
 
     @functools.lru_cache(maxsize=None)
     def observation_space(self, agent: str):
@@ -85,7 +90,7 @@ class MultiRobotEnv(ParallelEnv):
         for name in self.agents:
             self.tasks[name].start(self.sim.robots[name])
         observations = {a: self.tasks[a].observe() for a in self.agents}
-        infos = {a: {"sim_seed": sim_seed, "goal": tuple(self.sim.robots[a].goal)}
+        infos = {a: {"sim_seed": sim_seed, "goal": tuple(self.tasks[a].goal())}
                  for a in self.agents}
         if self.render_mode == "human":
             self.render()
@@ -125,7 +130,7 @@ class MultiRobotEnv(ParallelEnv):
         if self._renderer is None:
             from .render import FrameRenderer
 
-            self._renderer = FrameRenderer(self.sim)
+            self._renderer = FrameRenderer(self._sim())
         if self.render_mode == "rgb_array":
             return self._renderer.rgb()
         self._renderer.show(f"pymunk-bot: {self.config.name}")
@@ -133,8 +138,14 @@ class MultiRobotEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """Ground-truth poses of every robot, (n_robots * 3,) float32."""
-        return np.concatenate([self.sim.robots[a].pose for a in self.possible_agents]
+        sim = self._sim()
+        return np.concatenate([sim.robots[a].pose for a in self.possible_agents]
                               ).astype(np.float32)
+
+    def _sim(self) -> Simulation:
+        if self.sim is None:
+            raise RuntimeError("call reset() first: there is no simulation yet")
+        return self.sim
 
     def close(self) -> None:
         if self._renderer is not None:

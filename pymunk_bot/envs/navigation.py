@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import gymnasium as gym
 import numpy as np
@@ -11,6 +11,10 @@ from gymnasium import spaces
 from ..config import ScenarioConfig
 from .episode import NavigationEpisode, advance
 from .task import RewardWeights
+
+if TYPE_CHECKING:
+    from ..sim import Simulation
+    from .render import FrameRenderer
 
 RENDER_MODES = ("human", "rgb_array")
 
@@ -60,10 +64,10 @@ class NavigationEnv(gym.Env):
         self.observation_space, self.action_space = make_spaces(self.episode.task)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.episode.control_period}
-        self._renderer = None
+        self._renderer: FrameRenderer | None = None
 
     @property
-    def sim(self):
+    def sim(self) -> Simulation | None:
         """The running :class:`~pymunk_bot.Simulation` (None before the first reset)."""
         return self.episode.sim
 

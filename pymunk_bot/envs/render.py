@@ -2,7 +2,12 @@
 and the "human" window. pygame is imported only here, and only when a frame is asked for."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    import pygame
 
 DEFAULT_LONG_SIDE = 640  # [px] of an rgb_array frame along the arena's long side
 MARGIN = 24  # [px]
@@ -29,7 +34,7 @@ class FrameRenderer:
         self.viewer = Viewer(self.source, size)
         self.viewer.recording = True  # no speed and key hints in the frame
         self.surface = self.pygame.Surface(size)
-        self._window = None
+        self._window: pygame.Surface | None = None  # the "human" window, once opened
         sim.observers.append(self)
 
     # observer protocol: trails and scans, after every step and reset

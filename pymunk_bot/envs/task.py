@@ -20,12 +20,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from ..config import ScenarioConfig, load_scenario, parse_scenario
 from ..errors import ScenarioError
+
+if TYPE_CHECKING:
+    from ..robot import Robot
 
 MAX_BEAMS = 4096  # an observation larger than this is a mistake, not a sensor
 GOAL_SAMPLE_TRIES = 2000  # random goals tried before giving up on a crowded arena
@@ -48,6 +51,8 @@ class RewardWeights:
             return cls()
         if isinstance(value, cls):
             return value
+        if not isinstance(value, Mapping):
+            raise TypeError(f"reward must be RewardWeights or a mapping of weights (got {value!r})")
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(value) - known)
         if unknown:
@@ -72,6 +77,14 @@ def drive_limits(robot_config) -> tuple[float, float, float | None]:
         return v, float(robot_config.max_angular_speed), v
     # ackermann: the tightest circle is wheelbase / tan(max_steer)
     return v, v * math.tan(float(robot_config.max_steer)) / float(robot_config.wheelbase), None
+
+
+def arena_size(config: ScenarioConfig) -> tuple[float, float]:
+    """(width, height) [m] of the arena (parse_scenario fills ``world.size`` in from a map)."""
+    if config.world.size is None:
+        raise ValueError(f"scenario '{config.name}': the world has neither a size nor a map")
+    width, height = config.world.size
+    return width, height
 
 
 def load_config(scenario: str | Path | dict | ScenarioConfig | None) -> tuple[ScenarioConfig, str]:
@@ -113,7 +126,10 @@ def prepare_scenario(config: ScenarioConfig, source: str, agents: list[str] | No
         robot["lidar"] = scan
     prepared = parse_scenario(data, source)
     for name in agents:
-        beams = prepared.robots[names.index(name)].lidar.beams
+        lidar_config = prepared.robots[names.index(name)].lidar
+        if lidar_config is None:  # given to every agent above
+            raise ScenarioError(source, f"robots[{names.index(name)}].lidar", "missing")
+        beams = lidar_config.beams
         if beams > MAX_BEAMS:
             raise ScenarioError(source, f"robots[{names.index(name)}].lidar.beams",
                                 f"at most {MAX_BEAMS} beams in an observation (got {beams})")
@@ -160,7 +176,7 @@ class RobotTask:
         self.diagonal = math.hypot(*arena)  # [m]
         self.action_size = 2 if self.vy_max is None else 3
         self.obs_size = self.beams + 5 + (self.vy_max is not None)
-        self.robot = None
+        self.robot: Robot | None = None  # bound by start()
         self._distance = 0.0  # [m] to the goal at the last observation
         self._collisions = 0
 
@@ -172,7 +188,20 @@ class RobotTask:
         return low, high
 
     # ------------------------------------------------------------------ episode
-    def start(self, robot) -> None:
+    def bound(self) -> Robot:
+        """The robot :meth:`start` bound the task to."""
+        if self.robot is None:
+            raise RuntimeError(f"the task of robot '{self.name}' has not started: call start()")
+        return self.robot
+
+    def goal(self) -> tuple[float, float]:
+        """The robot's goal [m]."""
+        goal = self.bound().goal
+        if goal is None:
+            raise RuntimeError(f"robot '{self.name}' has no goal: the navigation task needs one")
+        return goal
+
+    def start(self, robot: Robot) -> None:
         """Bind to the (re)built robot and remember where the episode starts."""
         self.robot = robot
         self._distance = self.goal_distance()
@@ -183,34 +212,37 @@ class RobotTask:
         a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
         if a.shape[0] != self.action_size or not np.all(np.isfinite(a)):
             raise ValueError(f"action must be {self.action_size} finite numbers (got {action!r})")
+        robot = self.bound()
         if self.vy_max is None:
-            self.robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max)
+            robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max)
         else:
-            self.robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max, a[2] * self.vy_max)
+            robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max, a[2] * self.vy_max)
 
     def stop(self) -> None:
         """Hold still (an agent whose episode is over stays in the world as an obstacle)."""
+        robot = self.bound()
         if self.vy_max is None:
-            self.robot.set_velocity(0.0, 0.0)
+            robot.set_velocity(0.0, 0.0)
         else:
-            self.robot.set_velocity(0.0, 0.0, 0.0)
+            robot.set_velocity(0.0, 0.0, 0.0)
 
     def pose(self) -> np.ndarray:
-        return self.robot.pose if self.pose_source == "ground_truth" else self.robot.odometry.pose
+        robot = self.bound()
+        return robot.pose if self.pose_source == "ground_truth" else robot.odometry.pose
 
     def goal_distance(self) -> float:
-        goal = self.robot.goal
+        goal = self.goal()
         x, y, _ = self.pose()
         return math.hypot(goal[0] - x, goal[1] - y)
 
     def observe(self, out: np.ndarray | None = None) -> np.ndarray:
         """The observation vector (see the module docstring), written into ``out`` if given."""
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
-        robot, b = self.robot, self.beams
+        robot, b = self.bound(), self.beams
         obs[:b] = robot.lidar.latest.ranges
         obs[:b] /= self.max_range
         x, y, theta = self.pose()
-        gx, gy = robot.goal
+        gx, gy = self.goal()
         bearing = math.atan2(gy - y, gx - x) - theta
         obs[b] = math.hypot(gx - x, gy - y) / self.diagonal
         obs[b + 1] = math.cos(bearing)
@@ -230,7 +262,7 @@ class RobotTask:
     def outcome(self, elapsed: float, terminate_on_collision: bool = False
                 ) -> tuple[float, bool, dict]:
         """(reward, terminated, info) for the control step just taken (``elapsed`` seconds)."""
-        robot, w = self.robot, self.weights
+        robot, w = self.bound(), self.weights
         distance = self.goal_distance()
         new_collisions = robot.collisions - self._collisions
         reached = robot.goal_reached

@@ -9,7 +9,7 @@ resets that slot, ignores its action and returns reward 0; SAME_STEP and DISABLE
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
@@ -19,6 +19,10 @@ from gymnasium.vector.utils import batch_space
 
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
+
+if TYPE_CHECKING:
+    from ..sim import Simulation
+    from .render import FrameRenderer
 
 MAX_ENVS = 4096
 
@@ -50,12 +54,13 @@ class NavigationVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self._rngs = [seeding.np_random(None)[0] for _ in range(num_envs)]
-        self._obs = np.zeros(self.observation_space.shape, dtype=np.float32)
+        self._obs = np.zeros((num_envs, first.task.obs_size), dtype=np.float32)
         self._autoreset = np.zeros(num_envs, dtype=np.bool_)
-        self._renderers: list | None = None
+        self._renderers: list[FrameRenderer] | None = None
 
-    @property
-    def np_random(self) -> tuple[np.random.Generator, ...]:
+    # One generator per sub-env, as gymnasium's own SyncVectorEnv returns; VectorEnv declares one.
+    @property  # type: ignore[misc]
+    def np_random(self) -> tuple[np.random.Generator, ...]:  # type: ignore[override]
         return tuple(self._rngs)
 
     def reset(self, *, seed: int | list[int | None] | None = None,
@@ -70,9 +75,10 @@ class NavigationVectorEnv(VectorEnv):
             if mask.shape != (n,) or not mask.any():
                 raise ValueError(f"options['reset_mask'] must be {n} booleans, some True")
         infos: dict = {}
-        for i in np.flatnonzero(mask):
-            if seeds is not None and seeds[i] is not None:
-                self._rngs[i] = seeding.np_random(int(seeds[i]))[0]
+        for i in map(int, np.flatnonzero(mask)):
+            env_seed = None if seeds is None else seeds[i]
+            if env_seed is not None:
+                self._rngs[i] = seeding.np_random(int(env_seed))[0]
             self._obs[i], info = self.episodes[i].reset(self._rngs[i])
             infos = self._add_info(infos, info, i)
         self._autoreset[mask] = False
@@ -82,15 +88,18 @@ class NavigationVectorEnv(VectorEnv):
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         n = self.num_envs
         actions = np.asarray(actions, dtype=np.float32).reshape(n, -1)
-        if any(e.sim is None for e in self.episodes):
-            raise gym.error.ResetNeeded("call reset() before step()")
+        sims: list[Simulation] = []
+        for episode in self.episodes:
+            if episode.sim is None:
+                raise gym.error.ResetNeeded("call reset() before step()")
+            sims.append(episode.sim)
         rewards = np.zeros(n, dtype=np.float64)
         terminated = np.zeros(n, dtype=np.bool_)
         truncated = np.zeros(n, dtype=np.bool_)
         stepping = [i for i in range(n) if not self._autoreset[i]]
         for i in stepping:
             self.episodes[i].act(actions[i])
-        advance([self.episodes[i].sim for i in stepping],
+        advance([sims[i] for i in stepping],
                 self.episodes[0].steps_per_action)
         infos: dict = {}
         for i in range(n):
@@ -110,8 +119,8 @@ class NavigationVectorEnv(VectorEnv):
             self._autoreset = terminated | truncated
         elif self.autoreset_mode == AutoresetMode.DISABLED:
             self._autoreset[:] = False
-            for i in np.flatnonzero(terminated | truncated):
-                self.episodes[i].done = True
+            for k in np.flatnonzero(terminated | truncated):
+                self.episodes[k].done = True
         self._attach_renderers()
         return self._obs.copy(), rewards, terminated, truncated, infos
 

@@ -47,6 +47,9 @@ class Publisher:
 
     def publish(self, snap: Snapshot) -> None:
         """Send what changed at this instant (see the module docstring)."""
+        geometry = self.geometry
+        if geometry is None:
+            raise RuntimeError("Publisher.publish: call start() with the run's geometry first")
         t, log_time = snap.time, nanoseconds(snap.time)
         refresh = t - self._last_refresh >= REFRESH_PERIOD - 1e-9
         if refresh:
@@ -55,7 +58,7 @@ class Publisher:
         for robot in snap.robots:
             self._robot(robot, t, log_time, refresh)
             self._events(robot, t, log_time)
-        self._scene(snap, t, log_time, refresh)
+        self._scene(snap, geometry, t, log_time, refresh)
         self._previous = {r.name: r for r in snap.robots}
 
     def log_event(self, t: float, name: str, message: str, level=LogLevel.Info) -> None:
@@ -109,8 +112,10 @@ class Publisher:
     def _path(self, robot: RobotSnapshot, t: float, log_time: int, refresh: bool) -> None:
         last = self._last_path.get(robot.name)
         path = robot.path
-        changed = (path is None) != (last is None) or (
-            path is not None and (path.shape != last.shape or not np.array_equal(path, last)))
+        if path is None or last is None:
+            changed = (path is None) != (last is None)
+        else:
+            changed = path.shape != last.shape or not np.array_equal(path, last)
         if not (changed or (refresh and path is not None)):
             return
         self._last_path[robot.name] = path
@@ -160,8 +165,8 @@ class Publisher:
             self.log_event(t, name, f"{name}: controller {before.status or 'none'} -> "
                                     f"{robot.status or 'none'}{why}", level)
 
-    def _scene(self, snap: Snapshot, t: float, log_time: int, refresh: bool) -> None:
-        geometry = self.geometry
+    def _scene(self, snap: Snapshot, geometry: RunGeometry, t: float, log_time: int,
+               refresh: bool) -> None:
         poses = snap.obstacle_poses
         if poses:
             channel = self.channels.wanted(OBSTACLES_TOPIC, OBSTACLE_POSES_SCHEMA)

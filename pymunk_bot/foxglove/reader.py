@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 
@@ -18,6 +19,8 @@ from . import require
 from .frames import METADATA_NAME, OBSTACLES_TOPIC, robot_topic
 
 MAX_STEPS = 10_000_000  # refuse absurd files rather than exhaust memory
+
+Row = TypeVar("Row")
 
 
 def load_mcap(path: str | Path) -> RunLog:
@@ -55,7 +58,7 @@ def _meta(reader, source: str) -> dict:
                                     "metadata); write one with `pymunk-bot run --log run.mcap`")
 
 
-def _last_run(rows: list[tuple[float, object]]) -> list[tuple[float, object]]:
+def _last_run(rows: list[tuple[float, Row]]) -> list[tuple[float, Row]]:
     """The rows after the last time the clock went back (a reset), in the order written."""
     start = 0
     for i in range(1, len(rows)):
@@ -68,11 +71,11 @@ def _read(reader, meta: dict, source: str, factory) -> RunLog:
     robots = [r["name"] for r in meta["robots"]]
     state_topics = {robot_topic(name, "state"): name for name in robots}
     scan_topics = {robot_topic(name, "scan"): name for name in robots}
-    states: dict[str, list] = {name: [] for name in robots}
-    scans: dict[str, list] = {name: [] for name in robots}
-    obstacles: list = []
+    states: dict[str, list[tuple[float, dict]]] = {name: [] for name in robots}
+    scans: dict[str, list[tuple[float, Any]]] = {name: [] for name in robots}  # protobuf scans
+    obstacles: list[tuple[float, list]] = []
     topics = [*state_topics, *scan_topics, OBSTACLES_TOPIC]
-    decoders: dict[int, object] = {}
+    decoders: dict[int, Callable[[bytes], Any]] = {}  # channel id -> protobuf decoder
     for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
         topic = channel.topic
         if topic in scan_topics:

@@ -85,10 +85,18 @@ def _prism(points: np.ndarray, height: float) -> list[Point3]:
     return out
 
 
+_PRIMITIVE_KINDS = ("cubes", "cylinders", "lines", "triangles", "texts")  # the ones we draw
+
+
 def _entity(entity_id: str, t: float, primitives: dict[str, list], frame: str = WORLD_FRAME,
             frame_locked: bool = False) -> SceneEntity:
+    unknown = set(primitives) - set(_PRIMITIVE_KINDS)
+    if unknown:
+        raise ValueError(f"not a scene primitive kind: {sorted(unknown)}")
     return SceneEntity(timestamp=timestamp(t), frame_id=frame, id=entity_id,
-                       frame_locked=frame_locked, **primitives)
+                       frame_locked=frame_locked, cubes=primitives.get("cubes"),
+                       cylinders=primitives.get("cylinders"), lines=primitives.get("lines"),
+                       triangles=primitives.get("triangles"), texts=primitives.get("texts"))
 
 
 def _merge(parts: list[dict[str, list]]) -> dict[str, list]:

@@ -116,7 +116,7 @@ def _robot_of_sim(robot) -> RobotSnapshot:
         status="" if controller is None else str(controller.status),
         status_message="" if controller is None else str(getattr(controller, "message", "") or ""),
         localizer=None if localizer is None else np.array(localizer.pose, dtype=float),
-        lidar_offset=None if lidar is None else tuple(float(v) for v in lidar.config.offset),
+        lidar_offset=None if lidar is None else _triple(lidar.config.offset),
         scan=None if lidar is None else lidar.latest,
         path=None if not path else np.asarray(path, dtype=float).reshape(-1, 2),
         grid=None if mapper is None else getattr(mapper, "grid", None))
@@ -127,6 +127,11 @@ def _pair(value) -> tuple[float, float] | None:
         return None
     a, b = value
     return float(a), float(b)
+
+
+def _triple(value) -> tuple[float, float, float]:
+    a, b, c = value
+    return float(a), float(b), float(c)
 
 
 # ---------------------------------------------------------------------------- .npz run log
@@ -163,7 +168,7 @@ def snapshots_of_log(log) -> Iterator[Snapshot]:
                 teleop=bool(log.teleop[i, j]),
                 lidar_offset=None if lidar is None else _log_offset(log, meta["name"]),
                 scan=_log_scan(log, meta["name"], float(t))))
-        poses = [tuple(float(v) for v in p) for p in log.obstacle_pose[i]]
+        poses = [_triple(p) for p in log.obstacle_pose[i]]
         yield Snapshot(float(t), states, poses)
 
 
@@ -171,7 +176,7 @@ def _log_offset(log, name: str) -> tuple[float, float, float]:
     scans = log.scans.get(name)
     if scans is None or len(scans.offset) != 3:
         return 0.0, 0.0, 0.0
-    return tuple(float(v) for v in scans.offset)
+    return _triple(scans.offset)
 
 
 def _log_scan(log, name: str, t: float) -> LaserScan | None:
@@ -182,7 +187,7 @@ def _log_scan(log, name: str, t: float) -> LaserScan | None:
     if k < 0:
         return None
     return LaserScan(ranges=scans.ranges[k], angles=scans.angles, min_range=0.0,
-                     max_range=scans.max_range, offset=tuple(float(v) for v in scans.offset),
+                     max_range=scans.max_range, offset=_triple(scans.offset),
                      time=float(scans.time[k]))
 
 

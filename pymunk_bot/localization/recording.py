@@ -123,7 +123,8 @@ class LocalizationRecorder:
                 map_time=np.array(map_time, dtype=float),
                 maps=(np.stack(maps) if maps else np.empty((0, 0, 0))).astype(np.int8),
                 map_resolution=float(last.resolution) if last is not None else 0.0,
-                map_origin=tuple(float(v) for v in last.origin) if last is not None else (0.0, 0.0))
+                map_origin=(float(last.origin[0]), float(last.origin[1])) if last is not None
+                else (0.0, 0.0))
         return out
 
 

@@ -19,7 +19,7 @@ class GroundTruthLocalizer(Localizer):
         super().__init__(config, context)
         self._truth = truth  # () -> the true pose; the build hands it in
 
-    @property  # type: ignore[override]
+    @property
     def pose(self) -> np.ndarray:
         return self._truth() if self._truth is not None else self._pose
 
@@ -40,7 +40,7 @@ class OdometryLocalizer(Localizer):
         super().__init__(config, context)
         self._odometry = odometry
 
-    @property  # type: ignore[override]
+    @property
     def pose(self) -> np.ndarray:
         return self._odometry.pose if self._odometry is not None else self._pose
 
@@ -48,7 +48,7 @@ class OdometryLocalizer(Localizer):
     def pose(self, value: np.ndarray) -> None:
         self._pose = np.asarray(value, dtype=float)
 
-    @property  # type: ignore[override]
+    @property
     def covariance(self) -> np.ndarray:
         return self._odometry.covariance if self._odometry is not None else self._covariance
 

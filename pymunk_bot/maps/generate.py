@@ -69,7 +69,7 @@ def solution_length(config) -> float | None:
     hard = robot.radius + CHECK_MARGIN
     grid = ClearanceGrid.from_map(MapInfo.from_scenario(config), GRID_RESOLUTION, cap=hard + 0.3)
     plan = astar(grid, robot.pose[:2], robot.goal.position, hard=hard, soft=hard + 0.25)
-    return path_length(plan.path) if plan.found else None
+    return path_length(plan.path) if plan.path is not None else None  # None: no path found
 
 
 def _scenario(kind: str, seed: int, size, obstacles: list[dict], start, goal) -> dict:

@@ -50,8 +50,8 @@ def _resumed_rows(out: Path, runs: list[Run], source: str) -> dict[int, dict]:
     by_index = {run.index: run for run in runs}
     done: dict[int, dict] = {}
     for row in read_table(out) + read_journal(journal_path(out)):
-        run = by_index.get(row.get("run"))
-        expected = None if run is None else {"seed": run.seed, **dict(run.values)}
+        run = by_index.get(row["run"]) if "run" in row else None
+        expected = {} if run is None else {"seed": run.seed, **dict(run.values)}
         if run is None or any(row.get(k) != v and row.get(k) != repr(v)
                               for k, v in expected.items()):
             raise ScenarioError(str(out), "", "holds rows of a different sweep (other --set, "
@@ -75,7 +75,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     Bad keys or values raise ScenarioError before anything runs.
     """
     config, source = _load(scenario)
-    grid = {str(k): list(v) for k, v in (grid or {}).items()}
+    values = {str(k): list(v) for k, v in (grid or {}).items()}  # key path -> its values
     if isinstance(seeds, str):
         seeds = parse_seeds(seeds)
     seeds = [config.seed] if seeds is None else [int(s) for s in seeds]
@@ -89,7 +89,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
         raise ValueError(f"--chunk-size must be >= 1 (got {chunk_size})")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be > 0 (got {duration})")
-    runs = build_grid(config, source, grid, seeds)  # every combination validated here
+    runs = build_grid(config, source, values, seeds)  # every combination validated here
     out = None if out is None else Path(out)
     done: dict[int, dict] = {}
     if out is not None:

@@ -14,7 +14,7 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, TextIO
 
 from ..results import write_atomic
 
@@ -43,7 +43,7 @@ class Journal:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self._file = None
+        self._file: TextIO | None = None  # opened by the first write
 
     def write(self, rows: Iterable[dict]) -> None:
         if self._file is None:

@@ -40,13 +40,13 @@ def metric_columns(rows: list[dict], swept: list[str]) -> list[str]:
     return list(columns)
 
 
-def _stat(values: list[float]) -> Stat | None:
-    values = [float(v) for v in values if v is not None and not
-              (isinstance(v, float) and math.isnan(v))]
-    if not values:
+def _stat(values: list[float | None]) -> Stat | None:
+    known = [float(v) for v in values if v is not None and not
+             (isinstance(v, float) and math.isnan(v))]  # a run without the metric is skipped
+    if not known:
         return None
-    std = statistics.stdev(values) if len(values) > 1 else 0.0
-    return Stat(len(values), statistics.fmean(values), std)
+    std = statistics.stdev(known) if len(known) > 1 else 0.0
+    return Stat(len(known), statistics.fmean(known), std)
 
 
 def summarize(rows: list[dict], swept: list[str]) -> list[Group]:
