@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from .. import geometry as geo
-from .schema import CircleObstacle, ScenarioConfig
+from .schema import ScenarioConfig
 
 ARENA_WALL_THICKNESS = 1.0  # [m]; thick so that nothing can tunnel out of the arena
 
@@ -24,9 +24,9 @@ def substeps_against_tunnelling(dt: float, max_speed: float, robot_radius: float
 
 def half_width(obstacle) -> float:
     """Half the thinnest extent of an obstacle: what a fast robot must not skip over."""
-    if isinstance(obstacle, CircleObstacle) or getattr(obstacle, "type", "") == "pedestrian":
+    from .semantics import is_round, polygon_of
+    if is_round(obstacle):
         return obstacle.radius
-    from .semantics import polygon_of
     return geo.thinness(polygon_of(obstacle)) / 2.0
 
 

@@ -68,5 +68,4 @@ FieldOfView = Annotated[Float, AfterValidator(_angle_within_full_circle)]
 class Section(BaseModel):
     """Base of every scenario section: frozen, unknown keys are errors."""
 
-    # defer_build: schemas are built on first use, so `import pymunk_bot` stays light
-    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
+    model_config = ConfigDict(extra="forbid", frozen=True)
