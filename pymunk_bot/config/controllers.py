@@ -10,8 +10,8 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
 
 from .types import (
-    MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, PositiveFloat, PositiveInt,
-    PositiveShort, Rate, Section, Short, Speed, Vec2,
+    MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, NonNegativeFloat, PositiveFloat,
+    PositiveInt, PositiveShort, Rate, Section, Short, Speed, Vec2,
 )
 
 

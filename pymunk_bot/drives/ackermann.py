@@ -94,7 +94,7 @@ class AckermannDriveGroup(DriveGroup):
     def min_turn_radius(self, i: int) -> float:
         return float(self.wheelbase[i] / math.tan(self.max_steer[i]))
 
-    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
+    def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         # Tangential acceleration plus the centripetal v^2 / R_min, with margin.
         force = mass * (2.0 * self.max_accel[i] + self.max_v[i] ** 2 / self.min_turn_radius(i))
         reach = max(of_robot(self.configs[i]).bounding_radius, 0.5 * float(self.wheelbase[i]))

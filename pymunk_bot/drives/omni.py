@@ -80,7 +80,7 @@ class OmniDriveGroup(DriveGroup):
         travel, self._travel = self._travel, np.zeros((self.n, 4))
         return travel
 
-    def joint_limits(self, i: int, mass: float) -> tuple[float, float]:
+    def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         reach = of_robot(self.configs[i]).bounding_radius
         force = mass * (2.0 * self.max_accel[i] + self.max_v[i] * self.max_w[i])
         return force, mass * reach * reach * 2.0 * self.max_alpha[i] + force * reach
