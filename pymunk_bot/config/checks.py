@@ -16,7 +16,7 @@ from .controllers import (
     WaypointsControllerConfig,
 )
 from .schema import CircleObstacle, RobotConfig, ScenarioConfig
-from .semantics import SemanticError, distance_to_obstacle, obstacle_outline
+from .semantics import SemanticError, distance_to_obstacle, is_round, obstacle_outline
 
 MAX_GRID_CELLS = 4_000_000  # planning grid cells (a 200 m x 200 m arena at 0.1 m): ~100 MB
 MAX_SEED = 2**63 - 1
@@ -54,7 +54,7 @@ def _arena_size(scenario: ScenarioConfig) -> tuple[float, float]:
 
 
 def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) -> None:
-    if isinstance(obstacle, CircleObstacle):
+    if isinstance(obstacle, CircleObstacle) or is_round(obstacle):  # a circle or a pedestrian
         (cx, cy), r = obstacle.center, obstacle.radius
         low, high = np.array([cx - r, cy - r]), np.array([cx + r, cy + r])
     else:
