@@ -21,6 +21,7 @@ import tempfile
 import time
 from collections import Counter
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 import yaml
@@ -67,16 +68,20 @@ class Worker:
         self.proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot.benchmarks.fuzz",
                                       "--worker"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      text=True, env=env)
+        if self.proc.stdin is None or self.proc.stdout is None:
+            raise RuntimeError("the fuzz worker process was started without its stdin/stdout pipes")
+        self.stdin: IO[str] = self.proc.stdin
+        self.stdout: IO[str] = self.proc.stdout
 
     def ask(self, argv: list[str], timeout: float) -> tuple[int | None, str]:
         """(exit status, stderr); (None, "") when it hangs; status 3 when the worker dies."""
-        self.proc.stdin.write(json.dumps(argv) + "\n")
-        self.proc.stdin.flush()
-        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        self.stdin.write(json.dumps(argv) + "\n")
+        self.stdin.flush()
+        ready, _, _ = select.select([self.stdout], [], [], timeout)
         if not ready:
             self.close()
             return None, ""
-        line = self.proc.stdout.readline()
+        line = self.stdout.readline()
         if not line:
             self.close()
             return 3, "Traceback: the worker process died"
@@ -117,9 +122,9 @@ def worker_loop() -> None:
 
 
 def fuzz(files: int = 1000, seed: int = 0, timeout: float = 20.0,
-         verbose: bool = False) -> dict[str, Counter]:
+         verbose: bool = False) -> dict[str, Counter[str]]:
     """Counts of outcomes per command ("validate", "run"), plus examples of the bad ones."""
-    counts = {"validate": Counter(), "run": Counter()}
+    counts: dict[str, Counter[str]] = {"validate": Counter(), "run": Counter()}
     worker = Worker()
     with tempfile.TemporaryDirectory(prefix="pymunk-bot-fuzz-") as tmp:
         cases = write_cases(Path(tmp), files, seed)

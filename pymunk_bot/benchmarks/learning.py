@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 import statistics
 import time
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +44,8 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     env = NavigationEnv(**_env_kwargs(beams))
     env.reset(seed=0)  # only to build the identical world; the loop below never calls it
     sim, task = env.sim, env.episode.task
+    if sim is None:
+        raise RuntimeError("NavigationEnv.reset() did not build a simulation")
     robot = sim.robots[task.name]
     space, body = sim.world.space, robot.body
     control = robot.control  # the kinematic body the pivot and gear joints pull on
@@ -51,6 +55,8 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     max_range = robot.lidar.config.max_range
     shape_filter = robot.shape.filter
     goal = robot.goal
+    if goal is None:
+        raise RuntimeError(f"robot '{task.name}' has no goal: the observation needs one")
     diagonal = math.hypot(sim.world.width, sim.world.height)
     v, omega = ACTION[0] * task.v_max, ACTION[1] * task.omega_max
     obs = np.empty(beams + 5, np.float32)
@@ -112,8 +118,8 @@ def sweep_scenario() -> dict:
                         "goal": {"position": [5.5, 1.5]}}]}
 
 
-def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
-                   workers: int = 2) -> list[dict]:
+def sweep_backends(runs: int = 200, backends: Sequence[str] = ("serial", "process", "dask"),
+                   workers: int = 2) -> list[dict[str, Any]]:
     """Wall time of the same sweep per backend, chunked automatically and one run per task;
     the difference between the two gives the backend's overhead per task."""
     from pymunk_bot.sweep import chunk_runs, run_sweep
@@ -121,11 +127,12 @@ def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
 
     grid = {"robots[0].max_wheel_speed": [0.5, 1.0]}
     seeds = range(runs // 2)
-    rows, serial_wall = [], None
+    rows: list[dict[str, Any]] = []
+    serial_wall: float | None = None
     for backend in backends:
         n = 1 if backend == "serial" else workers
         auto_tasks = len(chunk_runs([Run(i, (), 0) for i in range(runs)], n))
-        walls = {}
+        walls: dict[int | None, float] = {}
         for chunk_size in (None, 1) if backend != "serial" else (None,):
             started = time.perf_counter()
             try:
@@ -138,6 +145,9 @@ def sweep_backends(runs: int = 200, backends=("serial", "process", "dask"),
         if None not in walls:
             continue
         serial_wall = walls[None] if backend == "serial" else serial_wall
+        if serial_wall is None:
+            raise RuntimeError("the serial backend must be measured first: speedups are "
+                               "relative to it")
         per_task = ((walls[1] - walls[None]) / (runs - auto_tasks) if 1 in walls else 0.0)
         rows.append({"backend": backend, "runs": runs, "tasks": auto_tasks,
                      "wall_s": walls[None], "speedup": serial_wall / walls[None],
@@ -154,7 +164,8 @@ def run(quick: bool = False) -> dict:
     print("Navigation-v0, 180-beam LiDAR, 10 Hz control (env steps per second)")
     print(f"  env {env:8.0f}   bare pymunk + segment_query_first {bare:8.0f}   "
           f"ratio {env / bare:.2f}x")
-    results = {"env_steps_per_s": env, "bare_pymunk_steps_per_s": bare}
+    results: dict[str, float | tuple[float, float] | list[dict[str, Any]]] = {
+        "env_steps_per_s": env, "bare_pymunk_steps_per_s": bare}
     for n in (16, 64):
         vector, separate = vector_vs_separate(n, steps=30 if quick else 100)
         print(f"  {n} envs: vector env {vector:8.0f}   {n} separate envs {separate:8.0f}   "

@@ -55,7 +55,9 @@ def build_world(size: float, n_boxes: int, n_robots: int,
               _box(sb, -t / 2, size / 2, t, size, 0.0),
               _box(sb, size + t / 2, size / 2, t, size, 0.0))
     for _ in range(n_boxes):
-        space.add(_box(sb, *rng.uniform(0.0, size, 2), *rng.uniform(0.2, 1.0, 2), rng.uniform(0.0, math.pi)))
+        x, y = rng.uniform(0.0, size, 2)
+        w, h = rng.uniform(0.2, 1.0, 2)
+        space.add(_box(sb, x, y, w, h, rng.uniform(0.0, math.pi)))
     robots = []
     for group in range(1, n_robots + 1):
         body = pymunk.Body(1.0, pymunk.moment_for_circle(1.0, 0.0, ROBOT_RADIUS))
@@ -79,7 +81,8 @@ def _poses(space: pymunk.Space, robots: list[pymunk.Body], size: float,
            rng: np.random.Generator) -> list[tuple[tuple[float, float], float, pymunk.ShapeFilter]]:
     """(origin, heading, filter) per scan: robots scan with their own group, else free spots."""
     if robots:
-        return [(tuple(b.position), float(rng.uniform(-math.pi, math.pi)), pymunk.ShapeFilter(group=i + 1))
+        return [((b.position.x, b.position.y), float(rng.uniform(-math.pi, math.pi)),
+                 pymunk.ShapeFilter(group=i + 1))
                 for i, b in enumerate(robots[:POSES])]
     return [(_free_spot(space, size, rng), float(rng.uniform(-math.pi, math.pi)), pymunk.ShapeFilter())
             for _ in range(POSES)]

@@ -93,7 +93,7 @@ def lidar_ratio(n_boxes: int = 100, size: float = 20.0, poses: int = 30, repeats
     sim = Simulation(parse_scenario(data, "bench"))
     boxes = pymunk.Space()  # the arena walls and boxes; robots (dynamic bodies) left out
     for shape in sim.world.space.shapes:
-        if shape.body.body_type == pymunk.Body.STATIC:
+        if _body_of(shape).body_type == pymunk.Body.STATIC:
             boxes.add(_static_copy(shape, boxes))
     with tempfile.TemporaryDirectory() as tmp:
         import yaml
@@ -105,7 +105,7 @@ def lidar_ratio(n_boxes: int = 100, size: float = 20.0, poses: int = 30, repeats
         geometry = load_world_map(Path(tmp) / "boxes_map.yaml")
     mapped = pymunk.Space()
     add_to_space(mapped, geometry)
-    origins = []
+    origins: list[tuple[float, float]] = []
     while len(origins) < poses:
         x, y = rng.uniform(0.5, size - 0.5, 2)
         if free_disc(geometry, x, y, 0.3):
@@ -130,13 +130,21 @@ def lidar_ratio(n_boxes: int = 100, size: float = 20.0, poses: int = 30, repeats
 def _static_copy(shape: pymunk.Shape, space: pymunk.Space) -> pymunk.Shape:
     """The same static shape on ``space``'s static body, in world coordinates."""
     body = space.static_body
+    own = _body_of(shape)
     if isinstance(shape, pymunk.Poly):
-        return pymunk.Poly(body, [shape.body.local_to_world(v) for v in shape.get_vertices()],
+        return pymunk.Poly(body, [own.local_to_world(v) for v in shape.get_vertices()],
                            radius=shape.radius)
     if isinstance(shape, pymunk.Circle):
-        return pymunk.Circle(body, shape.radius, shape.body.local_to_world(shape.offset))
-    return pymunk.Segment(body, shape.body.local_to_world(shape.a),
-                          shape.body.local_to_world(shape.b), shape.radius)
+        return pymunk.Circle(body, shape.radius, own.local_to_world(shape.offset))
+    return pymunk.Segment(body, own.local_to_world(shape.a), own.local_to_world(shape.b),
+                          shape.radius)
+
+
+def _body_of(shape: pymunk.Shape) -> pymunk.Body:
+    """The body a shape in a space is attached to (only a detached shape has none)."""
+    if shape.body is None:
+        raise ValueError(f"{shape!r} is not attached to a body")
+    return shape.body
 
 
 class _quiet:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from typing import Any
 
 import numpy as np
 
@@ -14,10 +15,11 @@ from ..sim import Simulation
 
 
 def benchmark_scenario(n_obstacles: int = 20, n_robots: int = 1, lidar: bool = False,
-                       seed: int = 0) -> dict:
+                       seed: int = 0) -> dict[str, Any]:
     """A 20x20 m arena with random boxes and robots circling (so they meet obstacles)."""
     rng = np.random.default_rng(seed)
-    obstacles, robots = [], []
+    obstacles: list[dict[str, Any]] = []
+    robots: list[dict[str, Any]] = []
     while len(obstacles) < n_obstacles:
         x, y = rng.uniform(1.0, 19.0, size=2)
         obstacles.append({"type": "box", "center": [float(x), float(y)],

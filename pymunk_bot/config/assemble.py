@@ -22,7 +22,7 @@ def _tagged_union(models: list[type], field: str) -> Any:
     """A union of models told apart by their ``field`` (a Literal) value."""
     if len(models) == 1:
         return models[0]
-    return Annotated[Union[tuple(models)], Field(discriminator=field)]  # type: ignore[return-value]
+    return Annotated[Union[tuple(models)], Field(discriminator=field)]
 
 
 def _as_section(value: Any) -> Any:

@@ -11,8 +11,7 @@ from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_v
 
 from .types import (
     MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, NonNegativeFloat, PositiveFloat,
-    PositiveInt,
-    PositiveShort, Rate, Section, Short, Speed, Vec2,
+    PositiveInt, PositiveShort, Rate, Section, Short, Speed, Vec2,
 )
 
 

@@ -212,7 +212,7 @@ class ScenarioConfig(Section):
     expect: dict[str, RobotExpectation] = {}
 
     @classmethod
-    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> "ScenarioConfig":  # type: ignore[override]
+    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> "ScenarioConfig":
         """On this base class: the full validation a file gets (a ScenarioError on bad data)."""
         if cls is ScenarioConfig:
             from .loader import parse_scenario

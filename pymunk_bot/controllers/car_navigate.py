@@ -158,6 +158,8 @@ class CarNavigateController(Controller):
         if self.checker is None:
             return False
         checker = self._unmapped_checker() if around_unmapped else self.checker
+        if checker is None:  # only without a map checker, handled above
+            return False
         smallest = float(self.discs[1].min())
         self.plan = hybrid_astar(checker, pose, goal, 0.5 * tolerance,
                                  self.robot.min_turn_radius, self.params, self.config.heading,
@@ -193,6 +195,8 @@ class CarNavigateController(Controller):
 
     def _remember(self, obs: Observation) -> None:
         """Keep the scan returns the map does not explain (world frame), for a while."""
+        if obs.scan is None:
+            raise ValueError("_remember needs an observation with a LiDAR scan")
         points = scan_points(obs.scan)
         now = obs.time
         for key in [k for k, (_, _, t) in self.unmapped.items() if now - t > UNMAPPED_MEMORY]:

@@ -71,6 +71,12 @@ class NavigateController(Controller):
     def debug_path(self):
         return self.path
 
+    def _static_grid(self) -> ClearanceGrid:
+        """The map's clearance grid (built by set_map)."""
+        if self.static is None:
+            raise RuntimeError("navigate: no map (the simulation did not call set_map)")
+        return self.static
+
     # ------------------------------------------------------------------ the control step
     def compute(self, obs: Observation) -> Command:
         goal = obs.goal  # the controller's own goal, or the robot's (see Observation)
@@ -88,28 +94,32 @@ class NavigateController(Controller):
             return self._stop()
         if self._permanent:
             return self._stop()
-        points = None
-        if obs.scan is not None:
-            points = scan_points(obs.scan)
-            self._remember(obs.pose, points, obs.scan)
+        scan = obs.scan
+        points: np.ndarray | None = None
+        if scan is not None:
+            points = scan_points(scan)
+            self._remember(obs.pose, points, scan)
         if self.follower is None:
             if obs.time < self._next_retry or not self._plan(obs, goal, tolerance):
                 return self._stop()
         elif self._needs_replan(obs):
             if not self._plan(obs, goal, tolerance):
                 return self._stop()
+        follower = self.follower
+        if follower is None:  # a successful _plan always makes one
+            raise RuntimeError("navigate: a plan succeeded without a path to follow")
         self.status = "running"
         if self.window is None:
-            command, _ = self.follower.drive(obs.pose)
+            command, _ = follower.drive(obs.pose)
             return command
-        v, omega, _ = self.follower.command(obs.pose)
-        if points is not None:
+        v, omega, _ = follower.command(obs.pose)
+        if scan is not None and points is not None:
             # Other robots move: predict them, and keep right when one comes at us head-on.
             velocities, oncoming = self.tracker.update(
-                obs.scan.time, obs.pose, points, float(self.command[0]),
+                scan.time, obs.pose, points, float(self.command[0]),
                 self.robot.radius + self.window.params.safety)
             if oncoming is not None:
-                carrot, speed, _ = self.follower.carrot(obs.pose)
+                carrot, speed, _ = follower.carrot(obs.pose)
                 ahead = to_robot_frame(obs.pose, carrot)
                 target = self.passing.target(obs.time, oncoming, ahead, self.robot.radius)
                 v, omega = self.window.choose(*self.command, points, target, speed, velocities)
@@ -132,14 +142,15 @@ class NavigateController(Controller):
     def _plan(self, obs: Observation, goal, tolerance: float) -> bool:
         """Plan from the pose estimate; on failure set status and the retry time."""
         self.replans += 1
-        grid = self.static
+        static = self._static_grid()
+        grid = static
         if self.unmapped:
-            grid = self.static.copy()
+            grid = static.copy()
             grid.add_points(np.array(list(self.unmapped.values())))
         start = (float(obs.pose[0]), float(obs.pose[1]))
         result = astar(grid, start, goal, self.hard, self.soft, self.config.clearance_cost,
                        goal_radius=0.5 * tolerance)
-        if result.found:
+        if result.path is not None:  # result.found
             self.path = shortcut(grid, result.path, self.soft)
             self.follower = PathFollower(self.path, False, self.gains, PATH_CORNER_RADIUS,
                                          1.0 / self.config.rate)
@@ -148,11 +159,11 @@ class NavigateController(Controller):
             self.message = f"following a {len(self.path)}-point path (plan {self.replans})"
             return True
         self.path = self.follower = None
-        if grid is self.static:
+        if grid is static:
             self._fail(f"{result.reason} on the map", permanent=True)
             return False
         # Maybe only the unmapped obstacles block it: does the map alone have a route?
-        on_map = astar(self.static, start, goal, self.hard, self.soft,
+        on_map = astar(static, start, goal, self.hard, self.soft,
                        self.config.clearance_cost, goal_radius=0.5 * tolerance)
         if not on_map.found:
             self._fail(f"{on_map.reason} on the map", permanent=True)
@@ -170,6 +181,8 @@ class NavigateController(Controller):
         return False
 
     def _needs_replan(self, obs: Observation) -> bool:
+        if self.follower is None:
+            raise RuntimeError("navigate: replanning checks need a path being followed")
         tracker = self.follower.tracker
         x, y = float(obs.pose[0]), float(obs.pose[1])
         near = tracker.point_at(tracker.s)
@@ -198,7 +211,7 @@ class NavigateController(Controller):
         if len(points):
             world = np.column_stack([x + c * points[:, 0] - s * points[:, 1],
                                      y + s * points[:, 0] + c * points[:, 1]])
-            grid = self.static
+            grid = self._static_grid()
             rows, cols = grid.cells_of(world[:, 0], world[:, 1])
             inside = grid.inside(world[:, 0], world[:, 1])
             unexplained = inside & (grid.clearance[rows, cols] > 2.0 * res)

@@ -76,21 +76,23 @@ def astar(grid: ClearanceGrid, start, goal, hard: float, soft: float, weight: fl
     result = PlanResult(None)
     start_cell = grid.cell_of(sx, sy)
     if not free[start_cell]:
-        start_cell = nearest_free_cell(free, grid, sx, sy, start_escape)
-        if start_cell is None:
+        escape_cell = nearest_free_cell(free, grid, sx, sy, start_escape)
+        if escape_cell is None:
             result.reason = f"the robot at ({sx:.2f}, {sy:.2f}) is boxed in: no free cell nearby"
             return result
+        start_cell = escape_cell
         result.notes.append("start was too close to an obstacle; path leaves it first")
     goal_cell = grid.cell_of(gx, gy)
     if not grid.inside(gx, gy):
         result.reason = f"goal ({gx:.2f}, {gy:.2f}) is outside the arena"
         return result
     if not free[goal_cell]:
-        goal_cell = nearest_free_cell(free, grid, gx, gy, goal_radius)
-        if goal_cell is None:
+        near_goal_cell = nearest_free_cell(free, grid, gx, gy, goal_radius)
+        if near_goal_cell is None:
             result.reason = (f"goal ({gx:.2f}, {gy:.2f}) is inside an obstacle or too close to "
                              "one for the robot to reach")
             return result
+        goal_cell = near_goal_cell
     cells = _search(multiplier, start_cell, goal_cell, result)
     if cells is None:
         result.reason = f"no path from ({sx:.2f}, {sy:.2f}) to goal ({gx:.2f}, {gy:.2f})"

@@ -74,8 +74,9 @@ class DynamicWindow:
         dv = self.accel * self.period
         dw = self.alpha * self.period
         v_low = -0.25 * self.max_speed if p.allow_reverse else 0.0
-        v = np.linspace(max(v_low, v0 - dv), min(self.max_speed, v0 + dv), p.v_samples)
-        w = np.linspace(max(-self.max_omega, w0 - dw), min(self.max_omega, w0 + dw), p.w_samples)
+        v: np.ndarray = np.linspace(max(v_low, v0 - dv), min(self.max_speed, v0 + dv), p.v_samples)
+        w: np.ndarray = np.linspace(max(-self.max_omega, w0 - dw), min(self.max_omega, w0 + dw),
+                                    p.w_samples)
         v = np.unique(np.concatenate([v, [0.0] if v[0] <= 0.0 <= v[-1] else []]))
         w = np.unique(np.concatenate([w, [0.0] if w[0] <= 0.0 <= w[-1] else []]))
         vv, ww = np.meshgrid(v, w, indexing="ij")

@@ -9,6 +9,7 @@ radius r fits wherever the clearance is at least r.
 from __future__ import annotations
 
 import math
+from typing import overload
 
 import numpy as np
 
@@ -138,7 +139,12 @@ class ClearanceGrid:
         return (self.origin[0] + (col + 0.5) * self.resolution,
                 self.origin[1] + (row + 0.5) * self.resolution)
 
-    def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    @overload
+    def inside(self, x: float, y: float) -> bool: ...
+    @overload
+    def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray: ...
+
+    def inside(self, x: float | np.ndarray, y: float | np.ndarray) -> bool | np.ndarray:
         """Which points lie within the arena (boundary included)."""
         ox, oy = self.origin
         return (x >= ox) & (x <= ox + self.size[0]) & (y >= oy) & (y <= oy + self.size[1])

@@ -66,7 +66,8 @@ class MapInfo:
                 continue  # things that move by themselves are never on a map
             movable = bool(getattr(obstacle, "movable", False))
             if isinstance(obstacle, CircleObstacle):
-                circles.append(MapCircle(tuple(obstacle.center), obstacle.radius, movable))
+                cx, cy = obstacle.center
+                circles.append(MapCircle((cx, cy), obstacle.radius, movable))
             else:
                 outline = np.asarray(obstacle_outline(obstacle), dtype=float)
                 outline.setflags(write=False)

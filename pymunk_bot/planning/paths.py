@@ -35,7 +35,7 @@ def shortcut(grid: ClearanceGrid, path: Sequence[Point], wanted: float) -> list[
     shorter and straighter, yet never passes closer to an obstacle than ``wanted`` unless the
     grid path itself had to (in a doorway).
     """
-    points = [tuple(p) for p in path]
+    points: list[Point] = [(p[0], p[1]) for p in path]
     if len(points) <= 2:
         return points
     xy = np.asarray(points)
@@ -64,7 +64,7 @@ def densify(path: Sequence[Point], spacing: float) -> list[Point]:
     """The same polyline with extra points so no segment is longer than ``spacing`` [m]."""
     if len(path) < 2:
         return list(path)
-    out = [tuple(path[0])]
+    out: list[Point] = [(path[0][0], path[0][1])]
     for a, b in zip(path, path[1:]):
         n = max(1, math.ceil(math.dist(a, b) / spacing))
         for k in range(1, n + 1):

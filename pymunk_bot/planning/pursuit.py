@@ -31,7 +31,7 @@ def round_corners(points: Sequence[Point], radius: float, loop: bool = False,
     An arc is tangent to both legs and starts at most 45 % of each leg from the corner, so
     neighbouring fillets never overlap; arcs are sampled every ``spacing`` metres.
     """
-    pts = [tuple(map(float, p)) for p in points]
+    pts: list[Point] = [(float(p[0]), float(p[1])) for p in points]
     pts = [p for k, p in enumerate(pts) if k == 0 or math.dist(p, pts[k - 1]) > 1e-9]
     if loop and len(pts) > 1 and math.dist(pts[0], pts[-1]) < 1e-9:
         pts.pop()
@@ -49,7 +49,7 @@ def round_corners(points: Sequence[Point], radius: float, loop: bool = False,
         u, w = u / lu, w / lw
         turn = math.atan2(u[0] * w[1] - u[1] * w[0], float(u @ w))
         if abs(turn) < 1e-6 or abs(turn) > math.pi - 1e-3:
-            out.append(tuple(b))  # straight on, or a full reversal: keep the vertex
+            out.append((b[0], b[1]))  # straight on, or a full reversal: keep the vertex
             continue
         tangent = min(radius * math.tan(abs(turn) / 2.0), 0.45 * lu, 0.45 * lw)
         r = tangent / math.tan(abs(turn) / 2.0)
@@ -98,7 +98,7 @@ class PathTracker:
     """
 
     def __init__(self, points: Sequence[Point], loop: bool, gains: PursuitGains) -> None:
-        pts = [tuple(map(float, p)) for p in points]
+        pts: list[Point] = [(float(p[0]), float(p[1])) for p in points]
         if not pts:
             raise ValueError("a path needs at least one point")
         self.loop = loop and len(pts) >= 3
@@ -192,8 +192,8 @@ class PathTracker:
         return limit
 
 
-def pursue(pose: Sequence[float], carrot: Sequence[float], gains: PursuitGains,
-           speed: float) -> tuple[float, float]:
+def pursue(pose: Sequence[float] | np.ndarray, carrot: Sequence[float] | np.ndarray,
+           gains: PursuitGains, speed: float) -> tuple[float, float]:
     """(v [m/s], omega [rad/s]) that drive at ``speed`` along the arc through ``carrot``."""
     x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
     dx, dy = float(carrot[0]) - x, float(carrot[1]) - y

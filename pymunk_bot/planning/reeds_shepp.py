@@ -101,7 +101,7 @@ def _candidates(x: float, y: float, phi: float) -> list[Word]:
         if reflect:
             kinds = kinds.translate(_SWAP)
         if backwards:
-            lengths, kinds = lengths[::-1], kinds[::-1]  # type: ignore[assignment]
+            lengths, kinds = lengths[::-1], kinds[::-1]
         out.append((lengths, kinds))
 
     for fn, backwards_too in [(f, False) for f in _CSC] + [(f, True) for f in _CCC]:

@@ -34,11 +34,12 @@ def replay_window(log) -> None:
     replay(log)
 
 
-def record_video(source, path: str | Path, duration: float, fps: float | None = None,
+def record_video(source, path: str | Path, duration: float | None, fps: float | None = None,
                  size: tuple[int, int] | None = None, progress: bool = True) -> int:
     """Render ``duration`` simulated seconds of a live simulation or run log to .mp4 or .gif.
 
-    ``source`` is a Simulation or a RunLog; returns the number of frames written.
+    ``source`` is a Simulation or a RunLog; returns the number of frames written. ``duration``
+    None records a whole RunLog; a Simulation needs a duration.
     """
     from .recorder import record
 

@@ -10,9 +10,15 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import ScenarioError
 from ..results import writable_problem
+
+if TYPE_CHECKING:
+    from ..cli_foxglove import FoxgloveOutputs
+    from ..cli_localization import MapOutput
+    from ..runlog import RunLogger
 
 VIDEO_FORMATS = (".mp4", ".gif")
 LOG_FORMATS = (".npz", ".mcap")
@@ -71,9 +77,9 @@ class RunOutputs:
     fps: float | None = None
     size: tuple[int, int] | None = None
     log_path: Path | None = None
-    logger: object = None
-    foxglove: object = None  # cli_foxglove.FoxgloveOutputs: an MCAP log and/or a live server
-    map_out: object = None  # cli_localization.MapOutput: the map a robot built (--map-out)
+    logger: RunLogger | None = None
+    foxglove: FoxgloveOutputs | None = None  # an MCAP log and/or a live server
+    map_out: MapOutput | None = None  # the map a robot built (--map-out)
 
     def run_headless(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` (paced at real time while serving Foxglove live)."""
@@ -91,6 +97,8 @@ class RunOutputs:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
         from . import ViewerUnavailable, record_video
 
+        if self.record is None:
+            raise RuntimeError("record_run needs the video path (--record)")
         started = time.perf_counter()
         try:
             frames = record_video(sim, self.record, duration, fps=self.fps, size=self.size,
@@ -106,6 +114,8 @@ class RunOutputs:
         if self.map_out is not None and sim is not None:
             self.map_out.save(sim)
         if self.logger is not None:
+            if self.log_path is None:
+                raise RuntimeError("a run logger needs its log path (--log)")
             self.logger.save(self.log_path)
             steps = len(self.logger.log().time) - 1
             print(f"wrote {self.log_path} ({steps} steps)")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ pygame = require_pygame()
 from .app import Viewer  # noqa: E402
 from .camera import FIT_MARGIN  # noqa: E402
 from .sources import LiveSource, ReplaySource  # noqa: E402
+
+if TYPE_CHECKING:
+    from pygame import Surface
 
 FORMATS = (".mp4", ".gif")
 DEFAULT_FPS = {".mp4": 30.0, ".gif": 10.0}  # [Hz]; GIF delays are whole 1/100 s: 10 fps is exact
@@ -48,6 +52,7 @@ def record(source, path: str | Path, duration: float | None = None, fps: float |
     ext = path.suffix.lower()
     if ext not in FORMATS:
         raise ValueError(f"cannot record to '{path.suffix}': use .mp4 or .gif")
+    frames_source: LiveSource | ReplaySource
     if hasattr(source, "step"):
         frames_source = LiveSource(source)
         if duration is None:
@@ -86,12 +91,12 @@ def record(source, path: str | Path, duration: float | None = None, fps: float |
     return n_frames
 
 
-def _advance_to(source, steps: int) -> None:
+def _advance_to(source: LiveSource | ReplaySource, steps: int) -> None:
     while source.steps < steps and not source.at_end:
         source.step()
 
 
-def _pixels(surface: "pygame.Surface") -> np.ndarray:
+def _pixels(surface: Surface) -> np.ndarray:
     """(H, W, 3) uint8 RGB (tobytes is ten times faster than surfarray here)."""
     w, h = surface.get_size()
     return np.frombuffer(pygame.image.tobytes(surface, "RGB"), np.uint8).reshape(h, w, 3)

@@ -235,9 +235,10 @@ class ReplaySource:
                 k = int(np.searchsorted(scans.time, log.time[i] + 1e-9, side="right")) - 1
                 if k >= 0:
                     origin, points, hit = scan_end_points(scans.pose[k], _Scan(scans, k))
+            v, omega = log.velocity[i, j]
             robots.append(RobotView(
                 name=name, index=j, pose=log.pose[i, j], radius=float(meta["radius"]),
-                odometry=log.odometry[i, j], velocity=tuple(float(v) for v in log.velocity[i, j]),
+                odometry=log.odometry[i, j], velocity=(float(v), float(omega)),
                 goal=None if np.isnan(goal).any() else (float(goal[0]), float(goal[1])),
                 goal_tolerance=float(log.goal_tolerance[i, j]),
                 goal_reached=bool(log.goal_reached[i, j]),

@@ -48,7 +48,8 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, robot, obstacles, message):
 
 
 @pytest.mark.parametrize("robot, message", [
-    ({"drive": "omni", "controller": {"type": "avoid"}, "goal": {"position": [5, 5]}},
+    # A LiDAR, or the check that avoid needs one would answer first.
+    ({"drive": "omni", "lidar": {}, "controller": {"type": "avoid"}, "goal": {"position": [5, 5]}},
      "robots[0].controller: avoid drives diff robots only (this one is omni)"),
     ({"drive": "ackermann", "controller": {"type": "wheels", "left": 1.0, "right": 1.0}},
      "robots[0].controller: wheels drives diff robots only (this one is ackermann)"),
