@@ -2,8 +2,8 @@
 
 Per wheel and tick: measured = true * (1 + scale_error) + noise, noise ~ N(0, var * |true|)
 (so the error is a random walk in distance, independent of the time step), then optionally
-quantised to whole ticks of ``resolution`` metres of cumulative measured travel. The diff
-drive's odometry applies the same model (sensors/odometry.py).
+quantised to whole ticks of ``resolution`` metres of cumulative measured travel. Every drive's
+odometry reads its wheels through an :class:`EncoderBank`.
 """
 from __future__ import annotations
 
@@ -26,6 +26,11 @@ class EncoderBank:
         self._quantised = np.flatnonzero(self.resolution > 0.0)
         self._cumulative = np.zeros_like(self.scale)  # measured travel before quantisation [m]
         self._ticks = np.zeros_like(self.scale)  # whole ticks counted so far
+
+    @property
+    def quantised(self) -> bool:
+        """Whether any robot's encoders count whole ticks."""
+        return self._quantised.shape[0] > 0
 
     def measure(self, travel: np.ndarray) -> np.ndarray:
         """One tick's true wheel travel (n, k) [m] -> what the encoders report [m]."""

@@ -23,6 +23,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..drives.base import SMALL_GROUP
+from .encoders import EncoderBank
 
 
 def sinc_half(x: np.ndarray) -> np.ndarray:
@@ -49,36 +50,19 @@ class DiffOdometryGroup:
         self.scale = np.array([(1.0 + c.left_scale_error, 1.0 + c.right_scale_error)
                                for c in configs]).reshape(n, 2)
         self.noise_var = np.array([c.wheel_noise_std ** 2 for c in configs])  # [m^2 per m]
-        self.resolution = np.array([c.encoder_resolution for c in configs])  # [m per tick]
-        self._noisy = np.flatnonzero(self.noise_var > 0.0).tolist()
-        self._quantised = np.flatnonzero(self.resolution > 0.0)
-        self._cumulative = np.zeros((n, 2))  # measured travel before quantisation [m]
-        self._ticks = np.zeros((n, 2))  # whole encoder ticks counted so far
+        self.encoders = EncoderBank(self.scale, self.noise_var,
+                                    np.array([c.encoder_resolution for c in configs]), self._rngs)
+        self._noisy = self.encoders.noisy
         self.wheel_travel: Any = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
         # A few noise-free robots are integrated one by one on lists of floats (numpy's per-call
         # cost dominates there); otherwise as arrays. Both index as pose[i] -> (x, y, theta).
-        self.scalar = n < SMALL_GROUP and not self._noisy and self._quantised.shape[0] == 0
+        self.scalar = n < SMALL_GROUP and not self._noisy and not self.encoders.quantised
         if self.scalar:
             self.pose = self.pose.tolist()
             self.wheel_travel = self.wheel_travel.tolist()
             self._scale_list = self.scale.tolist()
             self._track_list = self.believed_track.tolist()
-
-    def _measure(self, travel: np.ndarray) -> np.ndarray:
-        measured = travel * self.scale
-        for i in self._noisy:
-            rng, var = self._rngs[i], self.noise_var[i]
-            for wheel in (0, 1):
-                if travel[i, wheel] != 0.0:
-                    measured[i, wheel] += np.sqrt(var * abs(travel[i, wheel])) * rng.standard_normal()
-        q = self._quantised
-        if q.shape[0]:
-            self._cumulative[q] += measured[q]
-            ticks = np.floor(self._cumulative[q] / self.resolution[q, None])
-            measured[q] = (ticks - self._ticks[q]) * self.resolution[q, None]
-            self._ticks[q] = ticks
-        return measured
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
@@ -86,7 +70,7 @@ class DiffOdometryGroup:
             self._update_each(travel)
             return
         travel = np.asarray(travel, dtype=float)
-        wheels = self._measure(travel)
+        wheels = self.encoders.measure(travel)
         self.wheel_travel += wheels
         left, right = wheels[:, 0], wheels[:, 1]
         ds = 0.5 * (left + right)
