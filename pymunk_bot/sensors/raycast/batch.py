@@ -10,6 +10,7 @@ static box's side line, on an edge's plane, rounded polygons) is handed to the s
 
 from __future__ import annotations
 
+import bisect
 import math
 from typing import TYPE_CHECKING
 
@@ -66,7 +67,7 @@ def _near_side_lines(caster: "RayCaster", ox: float, oy: float, scale: float) ->
     """Within EDGE_NEAR * scale of a static bounding box's side line (see caster._side_flags)."""
     near = EDGE_NEAR * scale
     for sides, v in ((caster._cache.side_x, ox), (caster._cache.side_y, oy)):
-        i = np.searchsorted(sides, v - near)
+        i = bisect.bisect_left(sides, v - near)
         if i < len(sides) and sides[i] <= v + near:
             return True
     return False
@@ -93,7 +94,8 @@ def _trace(caster: "RayCaster", table: World, bounds: np.ndarray,
         theta = np.arctan2(sin, cos)
         order = np.argsort(theta, kind="stable")
         theta_list.append(((theta[order] + _TURNS[:, None]).ravel()) + k * _SPACING)
-        ray3_list.append(np.tile(order, 3) + ray_start[k])
+        order += ray_start[k]
+        ray3_list.append(np.concatenate((order, order, order)))
     ends = np.concatenate(ends_list, axis=1)
     theta_all = np.concatenate(theta_list)
     ray3_all = np.concatenate(ray3_list)
