@@ -112,13 +112,17 @@ def build(config: ScenarioConfig, seed: int, source: str,
     schedules: list[Schedule | None] = []
     mind_rngs = mind_rng.spawn(n)
     for index, (robot, child) in enumerate(zip(ordered, mind_rngs)):
-        controller_rng, localizer_rng = child.spawn(2)
+        # The first child is kept for controllers (none draws yet), so the localizers'
+        # streams stay where they are when one starts to.
+        _, localizer_rng = child.spawn(2)
         robot.controller = _make_controller(robot, index, maps, source)
         schedules.append(None if robot.controller is None else Schedule(robot.controller.rate))
         robot.localizer = _make_localizer(robot, index, maps, source, localizer_rng, config)
         if robot.config.mapping is not None:
             from .localization.mapping import OccupancyMapper
-            robot.mapper = OccupancyMapper.for_arena(robot.config.mapping, config.world.arena)
+            x0, y0, x1, y1 = config.world.extent  # the arena, or a map's extent in its frame
+            m = robot.config.mapping.margin
+            robot.mapper = OccupancyMapper(robot.config.mapping, ((x0 - m, y0 - m), (x1 + m, y1 + m)))
         elif hasattr(robot.localizer, "grid"):  # slam builds its own map
             robot.mapper = robot.localizer
     built = Built(world, robots, fleet, drive_groups, odometry_groups,
