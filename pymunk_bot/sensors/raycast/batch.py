@@ -180,19 +180,18 @@ def _trace(caster: "RayCaster", table: World, bounds: np.ndarray,
     tp = pp[owner]
     tox, toy = ox[tk], oy[tk]
     bxy = ends[:, ray]
-    is_edge = owner < n_e
-    if is_edge.any():
-        w = owner[is_edge]
-        q = tp[is_edge]
-        kk = np.stack((d[w], an[w], rows[NX, q], rows[NY, q], rows[DTMIN, q], rows[DTMAX, q]))
-        edge_pairs(kk, ray[is_edge], bxy[:, is_edge], best, tox[is_edge], toy[is_edge], False)
+    m = int(pair_end[n_e - 1]) if n_e else 0  # edge pairs come first: their triples lead
+    if m:
+        # The per-pair edge terms, gathered once per pair and then taken per triple.
+        edge_terms = np.stack((d, an, rows[NX, ep], rows[NY, ep], rows[DTMIN, ep], rows[DTMAX, ep]))
+        edge_pairs(edge_terms.take(owner[:m], axis=1), ray[:m], bxy[:, :m], best, tox[:m],
+                   toy[:m], False)
     tkind = pkind[owner]
     flagged = ray[tkind == 1]
     circ = tkind == 2
     if circ.any():
-        q = tp[circ]
-        circle_pairs(rows[AX, q], rows[AY, q], rows[RAD, q], ray[circ], bxy[:, circ], best,
-                     tox[circ], toy[circ])
+        cx, cy, r = rows[[AX, AY, RAD]].take(pp, axis=1).take(owner[circ], axis=1)
+        circle_pairs(cx, cy, r, ray[circ], bxy[:, circ], best, tox[circ], toy[circ])
     segs = tkind == 3
     if segs.any():
         q = tp[segs]
