@@ -17,7 +17,8 @@ from ..errors import ScenarioError
 from .backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
 from .grid import Run, build_grid, parse_assignment, parse_seeds
 from .output import Journal, check_output, journal_path, read_journal, read_table, write_table
-from .summary import Group, format_table, plot_summary, summarize
+from .summary import Group, format_table, summarize
+from .summary_plot import plot_summary
 
 class SweepInterrupted(RuntimeError):
     """A run or a worker failed mid-sweep; the finished rows are kept for ``resume``."""
