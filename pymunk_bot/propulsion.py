@@ -19,15 +19,10 @@ import pymunk
 import pymunk.batch as batch
 
 from .drives.base import SMALL_GROUP
-from .sensors.odometry import sinc_half
+from .sensors.odometry import sinc_half, sinc_half_scalar
 
 _READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
-
-
-def _sinc_half(x: float) -> float:
-    half = 0.5 * x
-    return 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
 
 
 def _origin_correction(cog: np.ndarray, angle: float, omega: float, h: float) -> tuple[float, float]:
@@ -113,7 +108,7 @@ class Propulsion:
         given = self._given
         for k, (body, control, (ux, uy, omega)) in enumerate(zip(self.bodies, self.controls, twists)):
             heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
-            chord = _sinc_half(omega * h)
+            chord = sinc_half_scalar(omega * h)
             c, s = math.cos(heading), math.sin(heading)
             vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
             if k in self._offset_set:  # the pose point is not the centre of gravity

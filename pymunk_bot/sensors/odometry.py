@@ -26,6 +26,12 @@ from ..drives.base import SMALL_GROUP
 from .encoders import EncoderBank
 
 
+def sinc_half_scalar(x: float) -> float:
+    """sin(x/2) / (x/2) for one float: the chord of an arc over its length."""
+    half = 0.5 * x
+    return 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+
+
 def sinc_half(x: np.ndarray) -> np.ndarray:
     """sin(x/2) / (x/2), elementwise: the chord of an arc over its length."""
     half = 0.5 * np.asarray(x, dtype=float)
@@ -94,10 +100,9 @@ class DiffOdometryGroup:
             wheels[1] += right
             ds = 0.5 * (left + right)
             dtheta = (right - left) / self._track_list[i]
-            half = 0.5 * dtheta
-            chord = ds * (1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half)
+            chord = ds * sinc_half_scalar(dtheta)
             pose = self.pose[i]
-            heading = pose[2] + half
+            heading = pose[2] + 0.5 * dtheta
             pose[0] += chord * math.cos(heading)
             pose[1] += chord * math.sin(heading)
             pose[2] += dtheta
