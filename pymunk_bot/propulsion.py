@@ -8,6 +8,14 @@ keeps a robot in free space exactly on its commanded arc.
 
 With many robots the bodies are read and written in one call each through ``pymunk.batch``;
 with few, property access per robot is cheaper. Both paths use the same formulas.
+
+With few robots, a drive group whose motors have settled on their commands is *held* for the
+whole step instead: a turning robot's control body spins at omega about its own centre and the
+pivot joint's anchor on it sits where that spin gives the same chord velocity (the anchor is
+fixed in the control body's frame, because the wanted velocity turns with the robot), so the
+substeps run without Python in between. The control body's heading is matched to the robot's
+at the start of each step, as the per-substep aim does every substep; only a robot knocked off
+its heading by a contact within a step follows the held heading for the rest of that step.
 """
 from __future__ import annotations
 
@@ -20,6 +28,10 @@ import pymunk.batch as batch
 
 from .drives.base import SMALL_GROUP
 from .sensors.odometry import sinc_half, sinc_half_scalar
+
+# A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
+# [m] (an almost straight path) it is aimed substep by substep instead.
+_MAX_ANCHOR = 1e6
 
 _READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
@@ -58,6 +70,37 @@ class Propulsion:
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
+        self.pivots = [next(c for c in control.constraints if isinstance(c, pymunk.PivotJoint))
+                       for control in self.controls]
+        self._held: list[tuple[float, float, float] | None] = [None] * self.n  # twist held
+        self._anchored = [False] * self.n  # the pivot's anchor is off the control body's centre
+
+    def step(self, h: float, substeps: int) -> None:
+        """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s]."""
+        space = self.space
+        if self.batched:
+            for _ in range(substeps):
+                self.substep(h)
+                space.step(h)
+            return
+        # Groups settled before the step keep their twists through it: held, and coasted.
+        held: list[tuple[Any, np.ndarray]] = []
+        loose: list[tuple[Any, np.ndarray]] = []
+        for group, idx in self.groups:
+            (held if substeps > 1 and group.settled() else loose).append((group, idx))
+        steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed
+        for group, idx in held:
+            for k, twist in zip(idx.tolist(), zip(*group.coast(h, substeps))):
+                if not self._hold(k, twist, h):
+                    steady.append((k, twist))
+        for sub in range(substeps):
+            if sub:
+                for k, twist in steady:
+                    self._aim(k, twist, h)
+            if loose:
+                for k, twist in self._twists(h, loose):
+                    self._aim(k, twist, h)
+            space.step(h)
 
     def substep(self, h: float) -> None:
         """Advance every drive by one substep of ``h`` [s] and set the control velocities."""
@@ -101,26 +144,79 @@ class Propulsion:
         return xy[self._robot_rows]
 
     def _each(self, h: float) -> None:
-        twists: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * self.n
-        for group, idx in self.groups:
-            for k, twist in zip(idx.tolist(), zip(*group.advance(h))):
-                twists[k] = twist
-        given = self._given
-        for k, (body, control, (ux, uy, omega)) in enumerate(zip(self.bodies, self.controls, twists)):
-            heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
+        for k, twist in self._twists(h, self.groups):
+            self._aim(k, twist, h)
+
+    @staticmethod
+    def _twists(h: float, groups: Sequence[tuple[Any, np.ndarray]]
+                ) -> list[tuple[int, tuple[float, float, float]]]:
+        """(robot, twist) of every robot of these groups, their motors advanced by ``h`` [s]."""
+        out: list[tuple[int, tuple[float, float, float]]] = []
+        for group, idx in groups:
+            out.extend(zip(idx.tolist(), zip(*group.advance(h))))
+        return out
+
+    def _aim(self, k: int, twist: tuple[float, float, float], h: float) -> None:
+        """Robot k's control body velocity for the next substep (see the module docstring)."""
+        ux, uy, omega = twist
+        body, control = self.bodies[k], self.controls[k]
+        if self._anchored[k]:  # from holding: the anchor back to the centre
+            self.pivots[k].anchor_a = (0.0, 0.0)
+            self._anchored[k] = False
+        self._held[k] = None
+        heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
+        chord = sinc_half_scalar(omega * h)
+        c, s = math.cos(heading), math.sin(heading)
+        vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
+        if k in self._offset_set:  # the pose point is not the centre of gravity
+            dvx, dvy = _origin_correction(self.cog[k], body.angle + body.angular_velocity * h,
+                                          omega, h)
+            vx, vy = vx + dvx, vy + dvy
+        last = self._given[k]
+        if vx != last[0] or vy != last[1]:
+            control.velocity = (vx, vy)
+        if omega != last[2]:
+            control.angular_velocity = omega
+        self._given[k] = (vx, vy, omega)
+
+    def _hold(self, k: int, twist: tuple[float, float, float], h: float) -> bool:
+        """Set robot k's control body to give ``twist`` for a whole step (see the module
+        docstring); False if it must be aimed every substep instead (it was aimed for this
+        one). A robot driving straight needs one aim for the step: True."""
+        ux, uy, omega = twist
+        if omega == 0.0:
+            self._aim(k, twist, h)  # a constant velocity: one aim lasts the step
+            return True
+        if self._held[k] != twist:
+            # The chord velocity in the robot frame at the start of a substep's solve ...
             chord = sinc_half_scalar(omega * h)
-            c, s = math.cos(heading), math.sin(heading)
-            vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
-            if k in self._offset_set:  # the pose point is not the centre of gravity
-                dvx, dvy = _origin_correction(self.cog[k], body.angle + body.angular_velocity * h,
-                                              omega, h)
-                vx, vy = vx + dvx, vy + dvy
-            last = given[k]
-            if vx != last[0] or vy != last[1]:
-                control.velocity = (vx, vy)
+            c, s = math.cos(0.5 * omega * h), math.sin(0.5 * omega * h)
+            wx, wy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
+            if k in self._offset_set:
+                dvx, dvy = _origin_correction(self.cog[k], 0.0, omega, h)
+                wx, wy = wx + dvx, wy + dvy
+            # ... is omega x anchor, so the anchor is w turned back a quarter turn, / omega.
+            ax, ay = wy / omega, -wx / omega
+            if not (abs(ax) <= _MAX_ANCHOR and abs(ay) <= _MAX_ANCHOR):
+                self._aim(k, twist, h)
+                return False
+            control = self.controls[k]
+            last = self._given[k]
+            if last[0] != 0.0 or last[1] != 0.0:
+                control.velocity = (0.0, 0.0)
             if omega != last[2]:
                 control.angular_velocity = omega
-            given[k] = (vx, vy, omega)
+            self._given[k] = (0.0, 0.0, omega)
+            self.pivots[k].anchor_a = (ax, ay)
+            self._anchored[k] = True
+            self._held[k] = twist
+        body, control = self.bodies[k], self.controls[k]
+        # At each solve the control body's heading equals the robot's (both turn at omega);
+        # in free space they already do, to the last bit, and the write is skipped.
+        heading = body.angle + (body.angular_velocity - omega) * h
+        if heading != control.angle:
+            control.angle = heading
+        return True
 
     def _index(self, rows: int) -> None:
         """Where each robot's body and control body sit in pymunk's body order."""

@@ -130,11 +130,8 @@ class Simulation:
         self._run_controllers(now)
         for actor in world.actors:
             actor.before_step(now, self.dt)
-        h = self.dt / self.substeps
-        space, propulsion = world.space, built.propulsion
-        for _ in range(self.substeps):
-            propulsion.substep(h)
-            space.step(h)
+        propulsion = built.propulsion
+        propulsion.step(self.dt / self.substeps, self.substeps)
         self.steps += 1
         now = world.time = self.time
         built.fleet.advance(propulsion.positions(), now)

@@ -48,6 +48,18 @@ class DriveGroup:
         """
         raise NotImplementedError
 
+    def settled(self) -> bool:
+        """True if every robot's motors have reached their commands, so that further substeps
+        return the same twists until a command changes (then :meth:`coast` may stand in for
+        :meth:`advance`). A drive that cannot tell says False (the default)."""
+        return False
+
+    def coast(self, h: float, substeps: int) -> tuple[Any, Any, Any]:
+        """What ``substeps`` calls of :meth:`advance` would do to a settled group (one whose
+        motors had settled before the first): the encoders' travel is added, and the twists,
+        the same for every substep, are returned as :meth:`advance` returns them."""
+        raise NotImplementedError
+
     def take_travel(self) -> Any:
         """Encoder input accumulated since the last call (rows per robot, drive-specific columns:
         an array, or lists for a small group), then reset."""

@@ -98,6 +98,29 @@ class DiffDriveGroup(DriveGroup):
             omega.append((right - left) / self._track[i])
         return ux, uy, omega
 
+    def settled(self) -> bool:
+        if self.small:
+            return all(c == t for c, t in zip(self.commanded, self.target))
+        return bool(np.array_equal(self.commanded, self.target))
+
+    def coast(self, h: float, substeps: int) -> tuple[Any, Any, Any]:
+        span = h * substeps  # [s] the wheels turn at their commanded speeds throughout
+        if self.small:
+            ux, uy, omega = [], [], []
+            for i, (left, right) in enumerate(self.commanded):
+                self.turning[i] = [left, right]
+                travel = self._travel[i]
+                travel[0] += left * span
+                travel[1] += right * span
+                ux.append(0.5 * (left + right))
+                uy.append(0.0)
+                omega.append((right - left) / self._track[i])
+            return ux, uy, omega
+        self.turning[:] = self.commanded
+        self._travel += self.commanded * span
+        left, right = self.commanded[:, 0], self.commanded[:, 1]
+        return 0.5 * (left + right), np.zeros(self.n), (right - left) / self.track
+
     def take_travel(self) -> Any:
         travel = self._travel
         if self.small:

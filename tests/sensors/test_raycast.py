@@ -413,3 +413,10 @@ def test_static_world_with_alternating_filters_is_bit_identical():
                 want = reference_cast(space, origin, angles, 8.0, shape_filter)
                 got = caster.cast(origin, angles, 8.0, shape_filter)
                 assert np.array_equal(got, want), (origin, shape_filter)
+
+
+def test_the_tracer_is_compiled_unless_switched_off(tracer):
+    space = arena(4.0, 4.0)
+    kernel = RayCaster(space)._kernel
+    assert (kernel is not None) == (tracer == "numba")
+    assert RayCaster(space, compiled=False)._kernel is None

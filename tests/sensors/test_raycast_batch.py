@@ -85,3 +85,25 @@ def test_a_frame_sees_moved_bodies_only_after_the_next_begin_frame():
     caster.begin_frame()
     after = caster.cast((2.0, 5.0), ahead, 9.0)
     assert before[0] == pytest.approx(2.8) and after[0] == pytest.approx(4.8)
+
+
+def test_robots_at_rest_among_moving_ones_match_pymunk_every_frame():
+    """Tables are reused for a filter whose visible bodies rested; each frame still equals
+    pymunk, for the batch and the single cast, while robots stop and start in turn."""
+    space, robots = sharp_world(3)
+    caster = RayCaster(space)
+    rng = np.random.default_rng(7)
+    for frame in range(12):
+        movers = frame % 3  # none, then one (it alone sees a world at rest), then two
+        resting = set(rng.choice(len(robots), size=len(robots) - movers, replace=False).tolist())
+        for k, body in enumerate(robots):
+            body.velocity = (0.0, 0.0) if k in resting else tuple(rng.uniform(-1, 1, 2))
+            body.angular_velocity = 0.0
+        space.step(0.05)
+        caster.begin_frame()
+        origins, angles, ranges, filters = cast_all(space, robots, 90, 8.0, rng, extra_origins=2)
+        batched = caster.cast_many(origins, angles, ranges, filters)
+        for o, a, r, f, got in zip(origins, angles, ranges, filters, batched):
+            want = reference_cast(space, o, a, r, f)
+            assert np.array_equal(got, want), f"frame {frame}"
+            assert np.array_equal(caster.cast(o, a, r, f), want), f"frame {frame}"

@@ -35,31 +35,31 @@ def cast_many(caster: "RayCaster", origins: list[tuple[float, float]], angles: l
               max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
     """Distances along every ray of every cast, as ``caster.cast`` gives them one by one."""
     out: list[np.ndarray | None] = [None] * len(origins)
-    batch: list[tuple] = []  # (index, ox, oy, angles, max range, keep mask, filter)
-    table: World | None = None
-    bounds = None
+    # Casts grouped by the table they see (filters whose bodies rested may keep an older
+    # one): per table, its bounding circles and (index, ox, oy, angles, max range, keep, filter).
+    groups: dict[int, tuple[World, np.ndarray, list[tuple]]] = {}
     for i, (origin, ang, rng, f) in enumerate(zip(origins, angles, max_ranges, filters)):
         ox, oy, ang, rng = check_args(origin, ang, rng)
         parts, bound, keep, _ = caster._cache.world(f)
         scale = 1.0 + abs(ox) + abs(oy) + rng
-        usable = (len(parts) == 1 and not parts[0].rounded and (table is None or parts[0] is table)
-                  and ang.shape[0] > 0 and not _near_side_lines(caster, ox, oy, scale)
+        usable = (len(parts) == 1 and not parts[0].rounded and ang.shape[0] > 0
+                  and not _near_side_lines(caster, ox, oy, scale)
                   and caster.space.point_query_nearest((ox, oy), 1e-9 * scale, f) is None)
         if not usable:
             out[i] = caster.cast((ox, oy), ang, rng, f)
             continue
-        table, bounds = parts[0], bound
-        batch.append((i, ox, oy, ang, rng, keep, f))
-    while batch:
-        assert table is not None and bounds is not None
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # as the kernels expect
-            traced, careful = _trace(caster, table, bounds, batch)
-        for i, ranges in traced.items():
-            out[i] = ranges
-        for k in careful:  # on an edge's plane, or crowded: the single cast's path
-            i, ox, oy, ang, rng, _, f = batch[k]
-            out[i] = caster.cast((ox, oy), ang, rng, f)
-        batch = [b for k, b in enumerate(batch) if k not in careful] if careful else []
+        groups.setdefault(id(parts[0]), (parts[0], bound, []))[2].append(
+            (i, ox, oy, ang, rng, keep, f))
+    for table, bounds, batch in groups.values():
+        while batch:
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # as the kernels expect
+                traced, careful = _trace(caster, table, bounds, batch)
+            for i, ranges in traced.items():
+                out[i] = ranges
+            for k in careful:  # on an edge's plane, or crowded: the single cast's path
+                i, ox, oy, ang, rng, _, f = batch[k]
+                out[i] = caster.cast((ox, oy), ang, rng, f)
+            batch = [b for k, b in enumerate(batch) if k not in careful] if careful else []
     return [r if r is not None else np.empty(0) for r in out]
 
 

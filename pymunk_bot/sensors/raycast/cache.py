@@ -68,6 +68,15 @@ def _body(shape: pymunk.Shape) -> pymunk.Body:
     return body
 
 
+class _Frame:
+    """What one frame (one tick's casts) has computed so far."""
+
+    def __init__(self) -> None:
+        self.tf: np.ndarray | None = None  # (4, n) transforms of the moving bodies
+        self.moved = 0  # how many of them moved since the previous frame that read them
+        self.table: tuple[World, np.ndarray] | None = None  # merged table, bounding circles
+
+
 class SceneCache:
     """Static geometry kept in world coordinates; dynamic geometry moved on every cast.
 
@@ -78,7 +87,8 @@ class SceneCache:
         self.space = space
         self._key: tuple[pymunk.Shape, ...] | None = None
         self._framed = False  # True once frames are used: the scene is frozen between them
-        self._frame: tuple | None = None  # this frame's (merged table, bounds), built on demand
+        self._frame: _Frame | None = None  # this frame's scene, built on demand
+        self._last_tf: np.ndarray | None = None  # moving bodies' transforms when last read
 
     def invalidate(self) -> None:
         self._key = None
@@ -96,27 +106,60 @@ class SceneCache:
 
         Moving shapes the filter rejects are not moved: a robot's LiDAR never sees its own
         body, so in a world where only robots move that skips the per-cast transform."""
-        if not (self._framed and self._frame is not None):
+        if not self._framed or self._frame is None:
             key = tuple(self.space.shapes)
             if key != self._key or any(body_transform(b) != tf
                                        for b, tf in self._static_tf.items()):
                 self._build(key)
+            self._frame = _Frame()
         keep, n_keep, static_keep, n_static_keep = self._admitted_for(f)
-        if not self._bodies or static_keep is not None:
-            if self._framed and self._frame is None:
-                self._frame = (None, None)  # checked this frame; moving shapes not needed yet
-            if static_keep is None:  # nothing moves: the static table is all there is
-                return [self._static], self._static.bound, keep, n_keep
+        if static_keep is not None:  # the filter admits nothing that moves
             return [self._static], self._static.bound, static_keep, n_static_keep
-        if self._frame is None or self._frame[0] is None or not self._framed:
-            tf = transforms(self._bodies)
-            rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body,
+        if not self._bodies:  # nothing moves: the static table is all there is
+            return [self._static], self._static.bound, keep, n_keep
+        merged, bounds = self._moving_table(keep)
+        return [merged], bounds, keep, n_keep
+
+    def _moving_table(self, keep: np.ndarray) -> tuple[World, np.ndarray]:
+        """The static and moving primitives in one table, with every shape's bounding circle.
+
+        A filter whose admitted bodies have not moved since its last cast (a crate at rest,
+        parked robots) gets that cast's table again, and with it the per-filter selections
+        cached on the table; the shapes it rejects may be stale there, which it never sees."""
+        frame = self._frame
+        assert frame is not None
+        if frame.tf is None:
+            frame.tf = tf = transforms(self._bodies)
+            before, self._last_tf = self._last_tf, tf
+            frame.moved = (len(self._bodies) if before is None
+                           else int(np.count_nonzero((tf != before).any(axis=0))))
+        seen, unseen = self._body_admitted(keep)
+        # More bodies moved since the last frame that read them than this filter ignores:
+        # one it sees has moved (the usual case in a fleet), so skip the exact comparison.
+        now = None if frame.moved > unseen else frame.tf[:, seen]
+        last = self._resting.get(id(keep))
+        if now is not None and last is not None and last[0] is keep and np.array_equal(last[1], now):
+            return last[2]
+        if frame.table is None:
+            rows, bound = moved(self._local.rows, self._local.bound, frame.tf, self._prim_body,
                                 self._shape_body)
             moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
-            self._frame = (merge([self._static, moving]),
+            frame.table = (merge([self._static, moving]),
                            np.concatenate((self._static.bound, bound), axis=1))
-        merged, bounds = self._frame
-        return [merged], bounds, keep, n_keep
+        if now is not None:
+            self._resting[id(keep)] = (keep, now, frame.table)
+        return frame.table
+
+    def _body_admitted(self, keep: np.ndarray) -> tuple[np.ndarray, int]:
+        """Which moving bodies have a shape the filter admits (bool per body), and how many
+        have none."""
+        found = self._seen.get(id(keep))
+        if found is None or found[0] is not keep:
+            seen = np.zeros(len(self._bodies), dtype=bool)
+            n_static = len(self.shapes) - len(self._shape_body)
+            seen[self._shape_body[keep[n_static:]]] = True
+            found = self._seen[id(keep)] = (keep, seen, len(self._bodies) - int(seen.sum()))
+        return found[1], found[2]
 
     def _build(self, key: tuple[pymunk.Shape, ...]) -> None:
         static = [s for s in key if _body(s).body_type == pymunk.Body.STATIC]
@@ -153,6 +196,11 @@ class SceneCache:
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]
+        # Per filter (keyed by its admitted array, kept alive here): the table of its last
+        # cast with the transforms of the bodies it sees then; and which bodies it sees.
+        self._resting: dict[int, tuple[np.ndarray, np.ndarray, tuple[World, np.ndarray]]] = {}
+        self._seen: dict[int, tuple[np.ndarray, np.ndarray, int]] = {}
+        self._last_tf = None  # moving bodies' transforms when last read
         self._key = key
 
     def _admitted_for(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int, np.ndarray | None, int]:

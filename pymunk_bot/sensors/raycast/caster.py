@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import bisect
 import math
+import os
+from typing import Callable
 
 import numpy as np
 import pymunk
 
 from .cache import SceneCache
 from .fan import Fan
+from .geometry import World
 from .reference import check_args, endpoints, reference_cast
 from .scene import EDGE_NEAR, Scene, trace_rings
 
@@ -23,6 +26,8 @@ _SIDE_ANGLE = 1e-4
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
 REFERENCE_RAYS = 40
+_NO_SIDES = np.empty((2, 0))
+_NO_ORDER = np.empty(0, dtype=np.intp)
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
@@ -31,14 +36,19 @@ _DENSE_SHAPES = 160
 class RayCaster:
     """Casts batches of rays against every shape in a pymunk Space."""
 
-    def __init__(self, space: pymunk.Space) -> None:
+    def __init__(self, space: pymunk.Space, compiled: bool | None = None) -> None:
+        """``compiled``: trace with numba (True), with numpy (False), or numba when it can be
+        imported and PYMUNK_BOT_NUMBA is not 0 (None). Both give pymunk's answers."""
         self.space = space
         self._cache = SceneCache(space)
+        self._kernel = _load_kernel(compiled)
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
                   max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
-        """Many casts at once (see :mod:`.batch`): what :meth:`cast` gives for each, cheaper
-        when many sparse casts are due together."""
+        """Many casts at once: what :meth:`cast` gives for each. Compiled, one cast after
+        another is cheapest; with numpy, one pass for them all (see :mod:`.batch`)."""
+        if self._kernel is not None:
+            return [self.cast(*args) for args in zip(origins, angles, max_ranges, filters)]
         from .batch import cast_many
         return cast_many(self, origins, angles, max_ranges, filters)
 
@@ -88,28 +98,64 @@ class RayCaster:
             # outside): Chipmunk's plane test may then pass at t = 0 or graze a vertex, and
             # the box test decides ray by ray whether it counts. Let pymunk answer.
             return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
+        directions = self._side_directions(ox, oy, scale)
+        if directions is None:
+            # Next to a box corner that may be a flag: its direction is too uncertain.
+            return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
         best = np.ones(n_rays)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            fan = Fan(np.arctan2(sin, cos), ends)
-            if not self._side_flags(fan, ox, oy, scale):
-                # Next to a box corner that may be a flag: its direction is too uncertain.
+        if self._kernel is not None and n_keep <= _DENSE_SHAPES and len(parts) == 1:
+            flagged = self._trace_compiled(parts[0], keep, not dense, ox, oy, scale, rng, sin,
+                                           cos, ends, directions, best)
+            if flagged is None:
                 return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-            if n_keep <= _DENSE_SHAPES:
-                Scene(parts, keep, ox, oy, scale, rng, subset=dense).trace(fan, fan.every, best)
-            else:
-                trace_rings(parts, bound, keep, n_keep, rings, fan, best, (ox, oy, rng, scale))
-        if fan.flagged:
+        else:
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                fan = Fan(np.arctan2(sin, cos), ends)
+                if directions:
+                    fan.flagged.append(fan.every.expand(*fan.every.ranges(_side_lohi(directions), None))[0])
+                if n_keep <= _DENSE_SHAPES:
+                    Scene(parts, keep, ox, oy, scale, rng, subset=dense).trace(fan, fan.every, best)
+                else:
+                    trace_rings(parts, bound, keep, n_keep, rings, fan, best, (ox, oy, rng, scale))
+            flagged = np.concatenate(fan.flagged) if fan.flagged else None
+        if flagged is not None and flagged.shape[0]:
             # Rays near a box corner or along a box side (see cache.corner_flags): ask pymunk.
             query, start = self.space.segment_query_first, (ox, oy)
-            for i in np.unique(np.concatenate(fan.flagged)).tolist():
+            for i in np.unique(flagged).tolist():
                 hit = query(start, (ends[0, i], ends[1, i]), 0.0, shape_filter)
                 best[i] = 1.0 if hit is None else hit.alpha
         return best * rng
 
-    def _side_flags(self, fan: Fan, ox: float, oy: float, scale: float) -> bool:
-        """Flag the rays that may run along a side line of a static bounding box; False if
-        the origin is within EDGE_NEAR * scale of both a vertical and a horizontal side
-        line (so perhaps of a flag), where no ray can be trusted to the fast path.
+    def _trace_compiled(self, world: World, keep: np.ndarray, cached: bool, ox: float,
+                        oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
+                        ends: np.ndarray, directions: list[float],
+                        best: np.ndarray) -> np.ndarray | None:
+        """The compiled tracer on one table: the flagged rays, or None if they overflowed
+        its buffer (then pymunk answers the whole cast). ``cached``: keep is a filter's own
+        mask (not one culled for this cast), so its columns are kept on the table."""
+        found = world.admitted.get(id(keep)) if cached else None
+        if found is None or found[0] is not keep:
+            found = (keep, keep[world.owner], np.array(world.counts, dtype=np.intp))
+            if cached:
+                world.admitted[id(keep)] = found
+        _, columns, counts = found
+        assert self._kernel is not None
+        n = best.shape[0]
+        flagged = np.empty(4 * n + 64, dtype=np.intp)
+        side = _side_lohi(directions) if directions else _NO_SIDES
+        args = (world.rows, counts, columns, world.rounded, ox, oy, scale, rng, sin, cos, ends,
+                side)
+        got = self._kernel(*args, _NO_ORDER, best, flagged)
+        if got == -2:  # rays in no simple order: sort them here
+            order = np.argsort(np.arctan2(sin, cos), kind="stable")
+            got = self._kernel(*args, order, best, flagged)
+        return None if got < 0 else flagged[:got]
+
+    def _side_directions(self, ox: float, oy: float, scale: float) -> list[float] | None:
+        """Directions [rad] of the rays that may run along a side line of a static bounding
+        box (flagged: pymunk answers them); None if the origin is within EDGE_NEAR * scale
+        of both a vertical and a horizontal side line (so perhaps of a flag), where no ray
+        can be trusted to the fast path.
 
         A ray along a side line starts (within rounding) on the line and points along it;
         pymunk's box test is then decided by rounding (see cache.corner_flags). The tolerances
@@ -125,9 +171,23 @@ class RayCaster:
                 i = bisect.bisect_left(sides, v - near)
                 if i < len(sides) and sides[i] <= v + near:
                     directions.extend(along)
-        if close == 2:
-            return False
-        if directions:
-            lohi: np.ndarray = np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
-            fan.flagged.append(fan.every.expand(*fan.every.ranges(lohi, None))[0])
-        return True
+        return None if close == 2 else directions
+
+
+def _side_lohi(directions: list[float]) -> np.ndarray:
+    """(2, k) angle intervals [rad] around side-line directions."""
+    return np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
+
+
+def _load_kernel(compiled: bool | None) -> Callable[..., int] | None:
+    """The compiled tracer, unless ``compiled`` is False (or None and the environment sets
+    PYMUNK_BOT_NUMBA=0) or numba cannot be imported: then None (the numpy path)."""
+    if compiled is False or (compiled is None and os.environ.get("PYMUNK_BOT_NUMBA") == "0"):
+        return None
+    try:
+        from .compiled import trace
+    except ImportError:
+        if compiled:
+            raise
+        return None
+    return trace

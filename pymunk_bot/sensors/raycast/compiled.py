@@ -1,0 +1,245 @@
+"""One cast's culling and exact tests compiled with numba: what ``Fan``, ``Scene`` and
+``kernels`` do with arrays, done primitive by primitive with no temporary arrays.
+
+The pair tests are the kernels' Chipmunk expressions, operand for operand; numba compiles
+them without fused multiply-adds or reordering (no fastmath), so each alpha is the float
+numpy and Chipmunk compute. Angles (atan2, asin, hypot) only choose which pairs are tested,
+with the same margins as the numpy path, far above any difference in their last bits.
+Imported lazily by the caster: ``import pymunk_bot`` never loads numba.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .geometry import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN
+
+_TWO_PI = 2.0 * math.pi
+_PARALLEL_EPS = 10e-6  # as kernels._PARALLEL_EPS (Chipmunk's 10e-6)
+_EDGE_MARGIN = 1e-7  # as scene._EDGE_MARGIN
+_EDGE_NEAR = 1e-5  # as scene.EDGE_NEAR
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _circle_alpha(dax: float, day: float, dbx: float, dby: float, r: float) -> float:
+    """CircleSegmentQuery's alpha for da = a - c, db = b - c; 2.0 where it misses."""
+    aa = dax * dax + day * day
+    ab = dax * dbx + day * dby
+    bb = dbx * dbx + dby * dby
+    qa = aa - 2.0 * ab + bb
+    qb = ab - aa
+    rsum = r + 0.0
+    det = qb * qb - qa * (aa - rsum * rsum)
+    if not det >= 0.0:
+        return 2.0
+    t = (-qb - math.sqrt(det)) / qa
+    if t >= 0.0 and t <= 1.0:
+        return t
+    return 2.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _sorted_rays(sin: np.ndarray, cos: np.ndarray, given: np.ndarray) -> tuple:
+    """The rays' direction angles in sorted order, the ray of each, and an evenly spaced
+    grid's (t0, 1 / step, err) when they form one (as fan.Rays decides; else err < 0).
+    ``given`` is the order for rays that are not one turn rotated (else empty); without it
+    such rays give an empty order."""
+    n = sin.shape[0]
+    theta = np.empty(n)
+    for i in range(n):
+        theta[i] = math.atan2(sin[i], cos[i])
+    drops, k = 0, 0
+    for i in range(n - 1):
+        if theta[i + 1] < theta[i]:
+            drops += 1
+            k = i + 1
+    rotated = drops == 0 or (drops == 1 and theta[n - 1] <= theta[0])
+    if not rotated and given.shape[0] != n:
+        return theta, given, 0.0, 0.0, -1.0
+    order = np.empty(n, dtype=np.intp)
+    st = np.empty(n)
+    for i in range(n):
+        order[i] = (k + i) % n if rotated else given[i]
+        st[i] = theta[order[i]]
+        if i and st[i] < st[i - 1]:  # a given order made from angles a bit apart from these
+            st[i] = st[i - 1]
+    t0, inv, err = 0.0, 0.0, -1.0
+    if n >= 8:
+        step = (st[n - 1] - st[0]) / (n - 1)
+        if step > 0.0:
+            inv = 1.0 / step
+            off = 0.0
+            for i in range(n):
+                off = max(off, abs((st[i] - st[0]) * inv - i))
+            e = off + 2.0 * abs(n * step - _TWO_PI) / step + 1e-6
+            if e < 0.25:
+                t0, err = st[0] - _TWO_PI, e
+    return st, order, t0, inv, err
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
+               err: float) -> tuple:
+    """First and end (exclusive) entry, over three turns of the sorted rays, of the rays
+    whose angle lies in [lo, hi]; on a grid the range may take in a neighbour (harmless)."""
+    n = st.shape[0]
+    if err >= 0.0:
+        x0 = min(max((lo - t0) * inv - err, 0.0), 3.0 * n)
+        x1 = min(max((hi - t0) * inv + (err + 1.0), 0.0), 3.0 * n)
+        return int(math.ceil(x0)), int(x1)
+    # Binary searches over the sorted angles tiled at -2 pi, 0, +2 pi.
+    a, b = 0, 3 * n
+    while a < b:
+        mid = (a + b) // 2
+        if st[mid % n] + (mid // n - 1) * _TWO_PI < lo:
+            a = mid + 1
+        else:
+            b = mid
+    first = a
+    a, b = first, 3 * n
+    while a < b:
+        mid = (a + b) // 2
+        if st[mid % n] + (mid // n - 1) * _TWO_PI <= hi:
+            a = mid + 1
+        else:
+            b = mid
+    return first, a
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, rounded: bool,
+          ox: float, oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
+          ends: np.ndarray, side: np.ndarray, order_given: np.ndarray, best: np.ndarray,
+          flagged: np.ndarray) -> int:
+    """Lower ``best`` (alpha per ray, starting at 1) by every hit of an admitted primitive
+    of the table ``rows`` (columns: ``counts`` edges, flags, circles, segments); write the
+    rays that pass near a flag, or inside a ``side`` interval (2, k) [rad], to ``flagged``
+    and return how many there are (a ray may appear more than once); -1 if they do not
+    fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
+    with their angle order)."""
+    n = best.shape[0]
+    st, order, t0, inv, err = _sorted_rays(sin, cos, order_given)
+    if order.shape[0] != n:
+        return -2
+    slack = 1e-9 * scale
+    margin = _EDGE_MARGIN + 1e-15 * scale / rng
+    near_plane = _EDGE_NEAR * scale
+    ne, nf, nc = counts[0], counts[1], counts[2]
+    m = rows.shape[1]
+    n_flagged = 0
+    # Chipmunk's plane test for edges: d = a.n - v0.n - r; back faces (d < 0) are skipped.
+    d_edge = np.empty(ne)
+    an_edge = np.empty(ne)
+    on_plane = False
+    for j in range(ne):
+        an = rows[NX, j] * ox + oy * rows[NY, j]
+        d = an - rows[VN, j]
+        if rounded:
+            d -= rows[RAD, j]
+        an_edge[j], d_edge[j] = an, d
+        if admitted[j] and d >= 0.0 and d <= near_plane:
+            on_plane = True
+    for j in range(m):
+        if not admitted[j] or (j < ne and not d_edge[j] >= 0.0):
+            continue
+        kind = 0 if j < ne else (1 if j < ne + nf else (2 if j < ne + nf + nc else 3))
+        ax, ay = rows[AX, j] - ox, rows[AY, j] - oy
+        bx, by = rows[BX, j] - ox, rows[BY, j] - oy
+        if kind == 2:  # out of range (a far robot): no ray reaches the disc
+            reach = rng + rows[RAD, j] + slack
+            if ax * ax + ay * ay > reach * reach:
+                continue
+        elif kind == 3 and ax * by - ay * bx < 0.0:  # segments: A to B counter-clockwise
+            ax, ay, bx, by = bx, by, ax, ay
+        phi = math.atan2(ay, ax)
+        span = math.atan2(by, bx) - phi
+        if span < 0.0:
+            span += _TWO_PI
+        half = margin
+        full = kind == 0 and on_plane and d_edge[j] <= near_plane
+        if kind >= 2 or rounded:  # widen by the end discs (flags: radius 0)
+            reach = rows[RAD, j] + slack
+            near = min(math.hypot(ax, ay), math.hypot(bx, by))
+            half += math.asin(min(reach / near, 1.0))
+            full = full or near <= reach
+            if kind == 3:
+                ex, ey = bx - ax, by - ay
+                u = min(max(-(ax * ex + ay * ey) / ((ex * ex + ey * ey) + 1e-300), 0.0), 1.0)
+                full = full or math.hypot(ax + u * ex, ay + u * ey) - rows[RAD, j] <= slack
+        if full:
+            first, stop = n, 2 * n
+        else:
+            lo = phi - half
+            first, stop = _ray_range(lo, lo + (span + 2.0 * half), st, t0, inv, err)
+        for e in range(first, stop):
+            ray = order[e % n]
+            bx_, by_ = ends[0, ray], ends[1, ray]
+            if kind == 0:  # cpPolyShapeSegmentQuery's plane
+                nx, ny = rows[NX, j], rows[NY, j]
+                den = an_edge[j] - (bx_ * nx + by_ * ny)
+                t = d_edge[j] / den
+                if on_plane:
+                    if not (abs(den) >= _PARALLEL_EPS and t >= 0.0):
+                        continue
+                elif not den >= _PARALLEL_EPS:
+                    continue
+                one_t = 1.0 - t
+                dt = nx * (oy * one_t + by_ * t) - ny * (ox * one_t + bx_ * t)
+                if rows[DTMIN, j] <= dt and dt <= rows[DTMAX, j] and t < best[ray]:
+                    best[ray] = t
+            elif kind == 1:  # near a box corner lying on its shape: pymunk decides
+                flagged[n_flagged] = ray
+                n_flagged += 1
+            elif kind == 2:
+                cx, cy = rows[AX, j], rows[AY, j]
+                t = _circle_alpha(ox - cx, oy - cy, bx_ - cx, by_ - cy, rows[RAD, j])
+                if t < best[ray]:
+                    best[ray] = t
+            else:
+                t = _segment_alpha(rows, j, ox, oy, bx_, by_)
+                if t < best[ray]:
+                    best[ray] = t
+        if n_flagged > flagged.shape[0] - 3 * n:
+            return -1  # no room for another primitive's rays: the caller asks pymunk
+    for s in range(side.shape[1]):
+        first, stop = _ray_range(side[0, s], side[1, s], st, t0, inv, err)
+        for e in range(first, stop):
+            if n_flagged == flagged.shape[0]:
+                return -1
+            flagged[n_flagged] = order[e % n]
+            n_flagged += 1
+    return n_flagged
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _segment_alpha(rows: np.ndarray, j: int, ox: float, oy: float, bx: float,
+                   by: float) -> float:
+    """cpSegmentShapeSegmentQuery with query radius 0, end caps included; 2.0 on a miss."""
+    tax, tay, tbx, tby = rows[AX, j], rows[AY, j], rows[BX, j], rows[BY, j]
+    r, nx, ny = rows[RAD, j], rows[NX, j], rows[NY, j]
+    d = (tax - ox) * nx + (tay - oy) * ny
+    pos = d > 0.0
+    offx = (-nx if pos else nx) * r - ox
+    offy = (-ny if pos else ny) * r - oy
+    dx, dy = bx - ox, by - oy
+    straddle = (dx * (tay + offy) - dy * (tax + offx)) * (dx * (tby + offy) - dy * (tbx + offx)) <= 0.0
+    if straddle:
+        d_off = d + (-r if pos else r)
+        ad = -d_off
+        bd = (dx * nx + dy * ny) - d_off
+        if ad * bd < 0.0:
+            return ad / (ad - bd)
+        return 2.0
+    if r == 0.0:
+        return 2.0
+    # Chipmunk keeps cap 1 only if its alpha (1.0 when missed) is strictly smaller.
+    a1 = _circle_alpha(ox - tax, oy - tay, bx - tax, by - tay, r)
+    a2 = _circle_alpha(ox - tbx, oy - tby, bx - tbx, by - tby, r)
+    hit1, hit2 = a1 <= 1.0, a2 <= 1.0
+    a1, a2 = a1 if hit1 else 1.0, a2 if hit2 else 1.0
+    if a1 < a2:
+        return a1 if hit1 else 2.0
+    return a2 if hit2 else 2.0
