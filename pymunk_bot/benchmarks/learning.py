@@ -5,6 +5,9 @@
    the same 180 beams cast with ``segment_query_first``, the same observation;
 2. the native vector env against N single envs (``gym.make``) stepped one after another;
 3. a sweep of 200 runs on the serial, process and Dask (local cluster) backends.
+
+Environment figures are CPU time of this process (``time.process_time``); sweep figures are
+wall time, since their work runs in other processes.
 """
 from __future__ import annotations
 
@@ -29,10 +32,10 @@ def env_steps_per_second(steps: int = 600, beams: int = 180) -> float:
 
     env = NavigationEnv(**_env_kwargs(beams))
     env.reset(seed=0)
-    started = time.perf_counter()
+    started = time.process_time()
     for _ in range(steps):
         env.step(ACTION)
-    return steps / (time.perf_counter() - started)
+    return steps / (time.process_time() - started)
 
 
 def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
@@ -60,7 +63,7 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     diagonal = math.hypot(sim.world.width, sim.world.height)
     v, omega = ACTION[0] * task.v_max, ACTION[1] * task.omega_max
     obs = np.empty(beams + 5, np.float32)
-    started = time.perf_counter()
+    started = time.process_time()
     for _ in range(steps):
         for _ in range(substeps):
             heading = body.angle + 0.5 * omega * h
@@ -79,7 +82,7 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
         vx, vy = body.velocity
         obs[beams + 3] = (math.cos(theta) * vx + math.sin(theta) * vy) / task.v_max
         obs[beams + 4] = body.angular_velocity / task.omega_max
-    return steps / (time.perf_counter() - started)
+    return steps / (time.process_time() - started)
 
 
 def vector_vs_separate(num_envs: int = 16, steps: int = 100) -> tuple[float, float]:
@@ -93,18 +96,18 @@ def vector_vs_separate(num_envs: int = 16, steps: int = 100) -> tuple[float, flo
                        vectorization_mode="vector_entry_point", **kwargs)
     vec.reset(seed=0)
     actions = np.tile(ACTION, (num_envs, 1))
-    started = time.perf_counter()
+    started = time.process_time()
     for _ in range(steps):
         vec.step(actions)
-    vector = num_envs * steps / (time.perf_counter() - started)
+    vector = num_envs * steps / (time.process_time() - started)
     envs = [gym.make("pymunk_bot/Navigation-v0", **kwargs) for _ in range(num_envs)]
     for i, env in enumerate(envs):
         env.reset(seed=i)
-    started = time.perf_counter()
+    started = time.process_time()
     for _ in range(steps):
         for env in envs:
             env.step(ACTION)
-    separate = num_envs * steps / (time.perf_counter() - started)
+    separate = num_envs * steps / (time.process_time() - started)
     return vector, separate
 
 
