@@ -107,3 +107,15 @@ def test_robots_at_rest_among_moving_ones_match_pymunk_every_frame():
             want = reference_cast(space, o, a, r, f)
             assert np.array_equal(got, want), f"frame {frame}"
             assert np.array_equal(caster.cast(o, a, r, f), want), f"frame {frame}"
+
+
+def test_endpoints_of_many_casts_are_those_of_each():
+    from pymunk_bot.sensors.raycast.reference import endpoints, endpoints_many
+    rng = np.random.default_rng(2)
+    ox, oy, r = rng.uniform(-50, 50, 5), rng.uniform(-50, 50, 5), rng.uniform(0.1, 30, 5)
+    angles = rng.uniform(-10, 10, (5, 73))
+    cos, sin, ends = endpoints_many(ox, oy, angles, r)
+    for k in range(5):
+        c, s, e = endpoints(float(ox[k]), float(oy[k]), angles[k], float(r[k]))
+        assert np.array_equal(cos[k], c) and np.array_equal(sin[k], s)
+        assert np.array_equal(ends[k], e)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import bisect
 import math
 import os
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -18,7 +19,7 @@ import pymunk
 from .cache import SceneCache
 from .fan import Fan
 from .geometry import World
-from .reference import check_args, endpoints, reference_cast
+from .reference import check_args, endpoints, endpoints_many, reference_cast
 from .scene import EDGE_NEAR, Scene, trace_rings
 
 # Rays within this angle [rad] of a box side line through the origin are left to pymunk.
@@ -26,11 +27,30 @@ _SIDE_ANGLE = 1e-4
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
 REFERENCE_RAYS = 40
-_NO_SIDES = np.empty((2, 0))
-_NO_ORDER = np.empty(0, dtype=np.intp)
+# The same for the compiled tracer, whose fixed cost per cast is far lower.
+COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
+
+
+@dataclass(slots=True)
+class _Job:
+    """A cast for the fast path: checked arguments, the scene it sees, its side-line rays."""
+
+    ox: float  # origin [m]
+    oy: float
+    ang: np.ndarray  # world-frame ray angles [rad]
+    rng: float  # max range [m]
+    filter: pymunk.ShapeFilter
+    parts: list[World]  # the primitive tables
+    bound: np.ndarray  # every shape's bounding circle (cx, cy, r) [m]
+    keep: np.ndarray  # the shapes to trace
+    n_keep: int
+    scale: float  # coordinate scale [m]: rounding errors are ~1e-16 of it
+    directions: list[float]  # side-line directions [rad]: rays there are asked of pymunk
+    rings: tuple[np.ndarray, ...] | None  # numpy's dense scenes: (gap, dx, dy, dist) per shape
+    dense: bool  # numpy's dense scenes: keep was culled by distance
 
 
 class RayCaster:
@@ -45,12 +65,24 @@ class RayCaster:
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
                   max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
-        """Many casts at once: what :meth:`cast` gives for each. Compiled, one cast after
-        another is cheapest; with numpy, one pass for them all (see :mod:`.batch`)."""
-        if self._kernel is not None:
-            return [self.cast(*args) for args in zip(origins, angles, max_ranges, filters)]
-        from .batch import cast_many
-        return cast_many(self, origins, angles, max_ranges, filters)
+        """Many casts at once: what :meth:`cast` gives for each, with less work per cast
+        (compiled: one tracer call for every cast on the same table and ray count; numpy:
+        one pass for them all, see :mod:`.batch`)."""
+        if self._kernel is None:
+            from .batch import cast_many
+            return cast_many(self, origins, angles, max_ranges, filters)
+        out: list[np.ndarray | None] = []
+        groups: dict[tuple[int, int], list[tuple[int, _Job]]] = {}
+        for i, args in enumerate(zip(origins, angles, max_ranges, filters)):
+            job = self._prepare(*args)
+            out.append(job if isinstance(job, np.ndarray) else None)
+            if isinstance(job, _Job):
+                groups.setdefault((id(job.parts[0]), job.ang.shape[0]), []).append((i, job))
+        for members in groups.values():
+            jobs = [job for _, job in members]
+            for (i, _), ranges in zip(members, self._trace_compiled(jobs)):
+                out[i] = ranges
+        return [r if r is not None else np.empty(0) for r in out]
 
     def begin_frame(self) -> None:
         """Bodies have moved: casts until the next call share one view of the scene (the
@@ -66,18 +98,45 @@ class RayCaster:
              shape_filter: pymunk.ShapeFilter = pymunk.ShapeFilter()) -> np.ndarray:
         """Distance along each ray (world-frame angles [rad]) from origin to the first shape the
         filter admits; max_range where nothing is hit within max_range. float64 array, len(angles)."""
+        job = self._prepare(origin, angles, max_range, shape_filter)
+        if isinstance(job, np.ndarray):
+            return job
+        if self._kernel is not None:
+            return self._trace_compiled([job])[0]
+        ox, oy, rng, n_keep = job.ox, job.oy, job.rng, job.n_keep
+        cos, sin, ends = endpoints(ox, oy, job.ang, rng)
+        best = np.ones(job.ang.shape[0])
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            fan = Fan(np.arctan2(sin, cos), ends)
+            if job.directions:
+                lohi = _side_lohi(job.directions)
+                fan.flagged.append(fan.every.expand(*fan.every.ranges(lohi, None))[0])
+            if n_keep <= _DENSE_SHAPES:
+                Scene(job.parts, job.keep, ox, oy, job.scale, rng, subset=job.dense).trace(
+                    fan, fan.every, best)
+            else:
+                assert job.rings is not None  # set with dense, which n_keep > _DENSE_SHAPES implies
+                trace_rings(job.parts, job.bound, job.keep, n_keep, job.rings, fan, best,
+                            (ox, oy, rng, job.scale))
+        return self._finish(job, ends, best, np.concatenate(fan.flagged) if fan.flagged else None)
+
+    def _prepare(self, origin: tuple[float, float], angles: np.ndarray, max_range: float,
+                 shape_filter: pymunk.ShapeFilter) -> np.ndarray | _Job:
+        """The answer where it needs no tracing (or only pymunk can give it); else the job."""
         ox, oy, ang, rng = check_args(origin, angles, max_range)
         n_rays = ang.shape[0]
         if n_rays == 0:
             return np.empty(0)
-        if n_rays <= REFERENCE_RAYS:
+        compiled = self._kernel is not None
+        if n_rays <= (COMPILED_REFERENCE_RAYS if compiled else REFERENCE_RAYS):
             return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-        cos, sin, ends = endpoints(ox, oy, ang, rng)
         parts, bound, keep, n_keep = self._cache.world(shape_filter)
         # Coordinate scale of this cast: rounding errors are ~1e-16 of it.
         scale = 1.0 + abs(ox) + abs(oy) + rng
         slack = 1e-9 * scale
-        dense = n_keep > _DENSE_SHAPES
+        # The compiled tracer culls shapes out of range itself, for less than numpy's cost.
+        dense = n_keep > _DENSE_SHAPES and not compiled
+        rings = None
         if dense:  # cull by distance; in small worlds the pair tests reject far shapes anyway
             dx, dy = bound[0] - ox, bound[1] - oy
             dist = np.sqrt(dx * dx + dy * dy)
@@ -102,54 +161,67 @@ class RayCaster:
         if directions is None:
             # Next to a box corner that may be a flag: its direction is too uncertain.
             return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-        best = np.ones(n_rays)
-        if self._kernel is not None and n_keep <= _DENSE_SHAPES and len(parts) == 1:
-            flagged = self._trace_compiled(parts[0], keep, not dense, ox, oy, scale, rng, sin,
-                                           cos, ends, directions, best)
-            if flagged is None:
-                return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-        else:
-            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                fan = Fan(np.arctan2(sin, cos), ends)
-                if directions:
-                    fan.flagged.append(fan.every.expand(*fan.every.ranges(_side_lohi(directions), None))[0])
-                if n_keep <= _DENSE_SHAPES:
-                    Scene(parts, keep, ox, oy, scale, rng, subset=dense).trace(fan, fan.every, best)
-                else:
-                    trace_rings(parts, bound, keep, n_keep, rings, fan, best, (ox, oy, rng, scale))
-            flagged = np.concatenate(fan.flagged) if fan.flagged else None
-        if flagged is not None and flagged.shape[0]:
-            # Rays near a box corner or along a box side (see cache.corner_flags): ask pymunk.
-            query, start = self.space.segment_query_first, (ox, oy)
-            for i in np.unique(flagged).tolist():
-                hit = query(start, (ends[0, i], ends[1, i]), 0.0, shape_filter)
-                best[i] = 1.0 if hit is None else hit.alpha
-        return best * rng
+        return _Job(ox=ox, oy=oy, ang=ang, rng=rng, filter=shape_filter, parts=parts,
+                    bound=bound, keep=keep, n_keep=n_keep, scale=scale, directions=directions,
+                    rings=rings, dense=dense)
 
-    def _trace_compiled(self, world: World, keep: np.ndarray, cached: bool, ox: float,
-                        oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
-                        ends: np.ndarray, directions: list[float],
-                        best: np.ndarray) -> np.ndarray | None:
-        """The compiled tracer on one table: the flagged rays, or None if they overflowed
-        its buffer (then pymunk answers the whole cast). ``cached``: keep is a filter's own
-        mask (not one culled for this cast), so its columns are kept on the table."""
-        found = world.admitted.get(id(keep)) if cached else None
-        if found is None or found[0] is not keep:
-            found = (keep, keep[world.owner], np.array(world.counts, dtype=np.intp))
-            if cached:
-                world.admitted[id(keep)] = found
-        _, columns, counts = found
+    def _finish(self, job: _Job, ends: np.ndarray, best: np.ndarray,
+                flagged: np.ndarray | None) -> np.ndarray:
+        """Ranges from alphas, after pymunk answers the flagged rays: those near a box corner
+        or along a box side (see cache.corner_flags)."""
+        if flagged is not None and flagged.shape[0]:
+            query, start = self.space.segment_query_first, (job.ox, job.oy)
+            for i in np.unique(flagged).tolist():
+                hit = query(start, (ends[0, i], ends[1, i]), 0.0, job.filter)
+                best[i] = 1.0 if hit is None else hit.alpha
+        return best * job.rng
+
+    def _trace_compiled(self, jobs: list[_Job], order: np.ndarray | None = None
+                        ) -> list[np.ndarray]:
+        """Ranges of casts on one table with one ray count, by the compiled tracer (one call
+        for all of them); ``order``: the rays' angle order, for a single cast whose rays are
+        not one turn in order (the tracer asks for it)."""
         assert self._kernel is not None
-        n = best.shape[0]
-        flagged = np.empty(4 * n + 64, dtype=np.intp)
-        side = _side_lohi(directions) if directions else _NO_SIDES
-        args = (world.rows, counts, columns, world.rounded, ox, oy, scale, rng, sin, cos, ends,
-                side)
-        got = self._kernel(*args, _NO_ORDER, best, flagged)
-        if got == -2:  # rays in no simple order: sort them here
-            order = np.argsort(np.arctan2(sin, cos), kind="stable")
-            got = self._kernel(*args, order, best, flagged)
-        return None if got < 0 else flagged[:got]
+        world, bound = jobs[0].parts[0], jobs[0].bound
+        k, n = len(jobs), jobs[0].ang.shape[0]
+        ox = np.array([job.ox for job in jobs])
+        oy = np.array([job.oy for job in jobs])
+        rng = np.array([job.rng for job in jobs])
+        scale = np.array([job.scale for job in jobs])
+        angles = jobs[0].ang[None] if k == 1 else np.stack([job.ang for job in jobs])
+        cos, sin, ends = endpoints_many(ox, oy, angles, rng)
+        columns = np.stack([self._columns(world, job.keep) for job in jobs])
+        n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
+        sides = np.zeros((k, 2, int(n_sides.max())))
+        for row, job in zip(sides, jobs):
+            if job.directions:
+                row[:, :len(job.directions)] = _side_lohi(job.directions)
+        best = np.ones((k, n))
+        flagged = np.empty((k, 4 * n + 64), dtype=np.intp)
+        got = np.empty(k, dtype=np.intp)
+        counts = np.array(world.counts, dtype=np.intp)
+        self._kernel(world.rows, counts, columns, world.owner, bound, world.rounded, ox, oy,
+                     scale, rng, sin, cos, ends, sides, n_sides,
+                     np.empty((k, 0), dtype=np.intp) if order is None else order[None], best,
+                     flagged, got)
+        out = []
+        for job, row, ray_ends, flags, count in zip(jobs, best, ends, flagged, got.tolist()):
+            if count == -2:  # rays in no simple order: sort them, trace this cast again
+                out.append(self._trace_compiled([job], np.argsort(
+                    np.arctan2(np.sin(job.ang), np.cos(job.ang)), kind="stable"))[0])
+            elif count < 0:  # more flagged rays than the buffer holds: pymunk answers
+                out.append(reference_cast(self.space, (job.ox, job.oy), job.ang, job.rng,
+                                          job.filter))
+            else:
+                out.append(self._finish(job, ray_ends, row, flags[:count]))
+        return out
+
+    def _columns(self, world: World, keep: np.ndarray) -> np.ndarray:
+        """The table's columns this filter admits (cached on the table per filter)."""
+        found = world.admitted.get(id(keep))
+        if found is None or found[0] is not keep:
+            found = world.admitted[id(keep)] = (keep, keep[world.owner])
+        return found[1]
 
     def _side_directions(self, ox: float, oy: float, scale: float) -> list[float] | None:
         """Directions [rad] of the rays that may run along a side line of a static bounding
@@ -179,15 +251,15 @@ def _side_lohi(directions: list[float]) -> np.ndarray:
     return np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
 
 
-def _load_kernel(compiled: bool | None) -> Callable[..., int] | None:
+def _load_kernel(compiled: bool | None) -> Callable[..., None] | None:
     """The compiled tracer, unless ``compiled`` is False (or None and the environment sets
     PYMUNK_BOT_NUMBA=0) or numba cannot be imported: then None (the numpy path)."""
     if compiled is False or (compiled is None and os.environ.get("PYMUNK_BOT_NUMBA") == "0"):
         return None
     try:
-        from .compiled import trace
+        from .compiled import trace_many
     except ImportError:
         if compiled:
             raise
         return None
-    return trace
+    return trace_many

@@ -110,12 +110,28 @@ def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, rounded: bool,
-          ox: float, oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
+def trace_many(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
+               bound: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
+               scale: np.ndarray, rng: np.ndarray, sin: np.ndarray, cos: np.ndarray,
+               ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
+               order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray,
+               n_flagged: np.ndarray) -> None:
+    """:func:`trace` for K casts on one table, row k of every array (``admitted`` per cast;
+    ``sides[k, :, :n_sides[k]]`` its side intervals); each result goes to ``n_flagged[k]``."""
+    for k in range(ox.shape[0]):
+        n_flagged[k] = trace(rows, counts, admitted[k], owner, bound, rounded, ox[k], oy[k],
+                             scale[k], rng[k], sin[k], cos[k], ends[k], sides[k, :, :n_sides[k]],
+                             order_given[k], best[k], flagged[k])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
+          bound: np.ndarray, rounded: bool, ox: float, oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
           ends: np.ndarray, side: np.ndarray, order_given: np.ndarray, best: np.ndarray,
           flagged: np.ndarray) -> int:
     """Lower ``best`` (alpha per ray, starting at 1) by every hit of an admitted primitive
-    of the table ``rows`` (columns: ``counts`` edges, flags, circles, segments); write the
+    of the table ``rows`` (columns: ``counts`` edges, flags, circles, segments; ``owner``:
+    the shape of each, whose bounding circle (cx, cy, r) is a column of ``bound``); write the
     rays that pass near a flag, or inside a ``side`` interval (2, k) [rad], to ``flagged``
     and return how many there are (a ray may appear more than once); -1 if they do not
     fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
@@ -145,24 +161,25 @@ def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, rounded: b
     for j in range(m):
         if not admitted[j] or (j < ne and not d_edge[j] >= 0.0):
             continue
+        o = owner[j]  # no ray reaches a shape whose bounding circle is out of range
+        cx, cy, reach = bound[0, o] - ox, bound[1, o] - oy, rng + bound[2, o] + slack
+        if cx * cx + cy * cy > reach * reach:
+            continue
         kind = 0 if j < ne else (1 if j < ne + nf else (2 if j < ne + nf + nc else 3))
         ax, ay = rows[AX, j] - ox, rows[AY, j] - oy
         bx, by = rows[BX, j] - ox, rows[BY, j] - oy
-        if kind == 2:  # out of range (a far robot): no ray reaches the disc
-            reach = rng + rows[RAD, j] + slack
-            if ax * ax + ay * ay > reach * reach:
-                continue
-        elif kind == 3 and ax * by - ay * bx < 0.0:  # segments: A to B counter-clockwise
+        if kind == 3 and ax * by - ay * bx < 0.0:  # segments: A to B counter-clockwise
             ax, ay, bx, by = bx, by, ax, ay
+        point = kind == 1 or kind == 2  # A = B: no span, one distance
         phi = math.atan2(ay, ax)
-        span = math.atan2(by, bx) - phi
+        span = 0.0 if point else math.atan2(by, bx) - phi
         if span < 0.0:
             span += _TWO_PI
         half = margin
         full = kind == 0 and on_plane and d_edge[j] <= near_plane
         if kind >= 2 or rounded:  # widen by the end discs (flags: radius 0)
             reach = rows[RAD, j] + slack
-            near = min(math.hypot(ax, ay), math.hypot(bx, by))
+            near = math.hypot(ax, ay) if point else min(math.hypot(ax, ay), math.hypot(bx, by))
             half += math.asin(min(reach / near, 1.0))
             full = full or near <= reach
             if kind == 3:

@@ -39,6 +39,20 @@ def endpoints(ox: float, oy: float, ang: np.ndarray,
     return cos, sin, ends
 
 
+def endpoints_many(ox: np.ndarray, oy: np.ndarray, ang: np.ndarray,
+                   rng: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`endpoints` of K casts at once (origins and ranges (K,), angles (K, n)): cos and
+    sin (K, n) and end points (K, 2, n), each row the very floats :func:`endpoints` gives."""
+    trig = np.empty((2,) + ang.shape)
+    cos, sin = np.cos(ang, out=trig[0]), np.sin(ang, out=trig[1])
+    ends = np.empty((ang.shape[0], 2, ang.shape[1]))
+    np.multiply(cos, rng[:, None], out=ends[:, 0])
+    np.multiply(sin, rng[:, None], out=ends[:, 1])
+    ends[:, 0] += ox[:, None]
+    ends[:, 1] += oy[:, None]
+    return cos, sin, ends
+
+
 def reference_cast(space: pymunk.Space, origin: tuple[float, float], angles: np.ndarray,
                    max_range: float,
                    shape_filter: pymunk.ShapeFilter = pymunk.ShapeFilter()) -> np.ndarray:
