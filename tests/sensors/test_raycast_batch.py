@@ -119,3 +119,16 @@ def test_endpoints_of_many_casts_are_those_of_each():
         c, s, e = endpoints(float(ox[k]), float(oy[k]), angles[k], float(r[k]))
         assert np.array_equal(cos[k], c) and np.array_equal(sin[k], s)
         assert np.array_equal(ends[k], e)
+
+
+def test_compiled_mover_builds_numpys_table_bit_for_bit():
+    from pymunk_bot.sensors.raycast.cache import SceneCache
+    from pymunk_bot.sensors.raycast.compiled import move_into
+    space, robots = sharp_world(1)
+    for _ in range(3):
+        numpy_cache, compiled_cache = SceneCache(space), SceneCache(space, move_into)
+        (a,), bound_a, _, _ = numpy_cache.world(pymunk.ShapeFilter())
+        (b,), bound_b, _, _ = compiled_cache.world(pymunk.ShapeFilter())
+        assert np.array_equal(a.rows, b.rows) and np.array_equal(a.owner, b.owner)
+        assert a.counts == b.counts and np.array_equal(bound_a, bound_b)
+        space.step(0.05)

@@ -15,10 +15,13 @@ pymunk directly. Everything else only chooses which pairs to test, always
 with margins far above rounding, so the choice never changes a result.
 
 How it is fast: shapes the filter rejects are dropped, back-facing polygon edges are
-dropped by Chipmunk's own plane test, and each primitive meets only the rays inside the
-angle it subtends (the rays are sorted by angle, so that is an index range). Dense scenes
-are traced in rings of growing distance, so rays already stopped nearby skip far shapes.
-Static geometry is cached in world coordinates; moving bodies are re-read every cast.
+dropped by Chipmunk's own plane test, shapes out of range by their bounding circles, and
+each primitive meets only the rays inside the angle it subtends (the rays are sorted by
+angle, so that is an index range). The loop over primitives and their rays is compiled with
+numba (``compiled``); without numba, numpy does the same work in arrays, tracing dense
+scenes in rings of growing distance so rays already stopped nearby skip far shapes. Static
+geometry is cached in world coordinates; moving bodies are moved once per frame, and a
+filter whose visible bodies have not moved keeps the table it had.
 
 Differences from pymunk, by design:
 - pymunk queries see a shape where it was at the last ``space.step()`` or reindex; this
@@ -39,6 +42,7 @@ Modules (all but this one are internal):
 - ``fan``: the rays of one cast sorted by angle, and angle interval -> ray index range.
 - ``scene``: per-cast culling, the angle interval of each primitive, and tracing.
 - ``kernels``: the exact per-pair Chipmunk formulas.
+- ``compiled``: ``fan``, ``scene`` and ``kernels`` in one numba loop (loaded on first use).
 - ``caster``: ``RayCaster``, which ties these together and picks pymunk fallbacks.
 """
 

@@ -7,6 +7,8 @@ disagree with the shape's own, so the caster can hand exactly those rays to pymu
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 import pymunk
 
@@ -83,8 +85,10 @@ class SceneCache:
     Rebuilt when the space's shapes change (compared by identity on every cast) or a
     static body's transform changes."""
 
-    def __init__(self, space: pymunk.Space) -> None:
+    def __init__(self, space: pymunk.Space, move_into: Callable[..., None] | None = None) -> None:
+        """``move_into``: the compiled mover (compiled.move_into), or None to move with numpy."""
         self.space = space
+        self._move_into = move_into
         self._key: tuple[pymunk.Shape, ...] | None = None
         self._framed = False  # True once frames are used: the scene is frozen between them
         self._frame: _Frame | None = None  # this frame's scene, built on demand
@@ -141,14 +145,26 @@ class SceneCache:
         if now is not None and last is not None and last[0] is keep and np.array_equal(last[1], now):
             return last[2]
         if frame.table is None:
-            rows, bound = moved(self._local.rows, self._local.bound, frame.tf, self._prim_body,
-                                self._shape_body)
-            moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
-            frame.table = (merge([self._static, moving]),
-                           np.concatenate((self._static.bound, bound), axis=1))
+            frame.table = self._merged(frame.tf)
         if now is not None:
             self._resting[id(keep)] = (keep, now, frame.table)
         return frame.table
+
+    def _merged(self, tf: np.ndarray) -> tuple[World, np.ndarray]:
+        """The static table and the moving one, moved by ``tf``, merged kind by kind; and
+        every shape's bounding circle."""
+        if self._move_into is None:
+            rows, bound = moved(self._local.rows, self._local.bound, tf, self._prim_body,
+                                self._shape_body)
+            moving = World(rows, self._local.owner, self._local.counts, bound, self._local.rounded)
+            return merge([self._static, moving]), np.concatenate((self._static.bound, bound), axis=1)
+        template, bounds = self._template
+        rows, bound = template.rows.copy(), bounds.copy()
+        self._move_into(self._local.rows, self._local.bound, tf, self._prim_body,
+                        self._shape_body, self._dest, self._static.bound.shape[1], rows, bound)
+        table = World(rows, template.owner, template.counts, template.bound, template.rounded)
+        table.admitted = template.admitted  # per-filter columns: the owners never change
+        return table, bound
 
     def _body_admitted(self, keep: np.ndarray) -> tuple[np.ndarray, int]:
         """Which moving bodies have a shape the filter admits (bool per body), and how many
@@ -196,6 +212,17 @@ class SceneCache:
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]
+        if self._move_into is not None:
+            # The merged layout, fixed until the shapes change: static columns then moving
+            # ones, kind by kind; dest is where each moving column lands.
+            self._template = (merge([self._static, self._local]),
+                              np.concatenate((self._static.bound, self._local.bound), axis=1))
+            ends_s = np.cumsum(self._static.counts)
+            ends_m = np.cumsum(self._local.counts)
+            kind = np.searchsorted(ends_m, np.arange(ends_m[-1]), side="right")
+            start_m = ends_m - np.asarray(self._local.counts)
+            self._dest = (ends_s[kind] + start_m[kind]
+                          + (np.arange(ends_m[-1]) - start_m[kind])).astype(np.intp)
         # Per filter (keyed by its admitted array, kept alive here): the table of its last
         # cast with the transforms of the bodies it sees then; and which bodies it sees.
         self._resting: dict[int, tuple[np.ndarray, np.ndarray, tuple[World, np.ndarray]]] = {}

@@ -60,8 +60,11 @@ class RayCaster:
         """``compiled``: trace with numba (True), with numpy (False), or numba when it can be
         imported and PYMUNK_BOT_NUMBA is not 0 (None). Both give pymunk's answers."""
         self.space = space
-        self._cache = SceneCache(space)
         self._kernel = _load_kernel(compiled)
+        mover: Callable[..., None] | None = None
+        if self._kernel is not None:
+            from .compiled import move_into as mover
+        self._cache = SceneCache(space, mover)
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
                   max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:

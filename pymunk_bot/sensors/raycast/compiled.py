@@ -260,3 +260,33 @@ def _segment_alpha(rows: np.ndarray, j: int, ox: float, oy: float, bx: float,
     if a1 < a2:
         return a1 if hit1 else 2.0
     return a2 if hit2 else 2.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def move_into(local: np.ndarray, local_bound: np.ndarray, tf: np.ndarray, prim_body: np.ndarray,
+              shape_body: np.ndarray, dest: np.ndarray, first_shape: int, rows: np.ndarray,
+              bound: np.ndarray) -> None:
+    """geometry.moved, written straight into a merged table: moving primitive c (body-local
+    column c of ``local``) goes to column ``dest[c]`` of ``rows``, moving shape s's bounding
+    circle to column ``first_shape + s`` of ``bound``; Chipmunk's transform arithmetic in
+    Chipmunk's order, the very floats geometry.moved computes."""
+    for c in range(local.shape[1]):
+        b = prim_body[c]
+        rx, ry, tx, ty = tf[0, b], tf[1, b], tf[2, b], tf[3, b]
+        d = dest[c]
+        rows[AX, d] = rx * local[AX, c] - ry * local[AY, c] + tx
+        rows[AY, d] = ry * local[AX, c] + rx * local[AY, c] + ty
+        rows[BX, d] = rx * local[BX, c] - ry * local[BY, c] + tx
+        rows[BY, d] = ry * local[BX, c] + rx * local[BY, c] + ty
+        rows[NX, d] = rx * local[NX, c] - ry * local[NY, c]
+        rows[NY, d] = ry * local[NX, c] + rx * local[NY, c]
+        rows[RAD, d] = local[RAD, c]
+        rows[VN, d] = rows[AX, d] * rows[NX, d] + rows[AY, d] * rows[NY, d]
+        rows[DTMIN, d] = rows[NX, d] * rows[BY, d] - rows[NY, d] * rows[BX, d]
+        rows[DTMAX, d] = rows[NX, d] * rows[AY, d] - rows[NY, d] * rows[AX, d]
+    for s in range(local_bound.shape[1]):
+        b = shape_body[s]
+        rx, ry, tx, ty = tf[0, b], tf[1, b], tf[2, b], tf[3, b]
+        bound[0, first_shape + s] = rx * local_bound[0, s] - ry * local_bound[1, s] + tx
+        bound[1, first_shape + s] = ry * local_bound[0, s] + rx * local_bound[1, s] + ty
+        bound[2, first_shape + s] = local_bound[2, s]
