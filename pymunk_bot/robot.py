@@ -33,6 +33,7 @@ class Fleet:
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
+        self._targets = self._goal_targets()
         if not self.small:
             self.xy, self.distance = np.array(self.xy, dtype=float).reshape(n, 2), np.zeros(n)
         self.check_goals(np.array(self.xy, dtype=float).reshape(n, 2), 0.0)  # started inside: t = 0
@@ -40,6 +41,12 @@ class Fleet:
     def watch_goal(self, i: int) -> None:
         self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
         self._pending = np.union1d(self._pending, [i])
+        self._targets = self._goal_targets()
+
+    def _goal_targets(self) -> list[tuple[int, float, float, float]]:
+        """(robot, goal x, goal y, squared tolerance) of every pending goal, as floats."""
+        return [(i, float(self.goal[i, 0]), float(self.goal[i, 1]), float(self.tolerance[i]) ** 2)
+                for i in self._pending.tolist()]
 
     def advance(self, xy: Any, time: float) -> None:
         """Bookkeeping after a tick, from every robot's new position [m]: an (n, 2) array, or a
@@ -61,15 +68,15 @@ class Fleet:
     def _check_goals_each(self, xy: Any, time: float) -> None:
         """check_goals robot by robot (the same arithmetic, cheaper for a few robots)."""
         reached = []
-        for i in self._pending.tolist():
-            gx, gy = self.goal[i].tolist()
+        for i, gx, gy, tolerance2 in self._targets:
             dx, dy = xy[i][0] - gx, xy[i][1] - gy
-            if dx * dx + dy * dy <= float(self.tolerance[i]) ** 2:
+            if dx * dx + dy * dy <= tolerance2:
                 reached.append(i)
         if reached:
             self.time_to_goal[reached] = time
             self.distance_to_goal[reached] = np.asarray(self.distance, dtype=float)[reached]
             self._pending = np.setdiff1d(self._pending, reached)
+            self._targets = self._goal_targets()
 
     def check_goals(self, xy: np.ndarray, time: float) -> None:
         p = self._pending
@@ -80,6 +87,7 @@ class Fleet:
             self.time_to_goal[done] = time
             self.distance_to_goal[done] = np.asarray(self.distance, dtype=float)[done]
             self._pending = p[~reached]
+            self._targets = self._goal_targets()
 
 
 class Robot:

@@ -107,8 +107,12 @@ def _learning(quick: bool) -> list[Verdict]:
         return [("learning environments (skipped: gymnasium is not installed; "
                  "pip install 'pymunk-bot[rl]')", None)]
     from . import learning
-    learning.run(quick)
-    return []
+    result = learning.run(quick)
+    return [(f"one env: >= {learning.ENV_TARGET:g}x bare pymunk (got {result['env_ratio']:.2f}x)",
+             result["env_ratio"] >= learning.ENV_TARGET),
+            (f"16 envs as a vector env: >= {learning.VECTOR_TARGET:g}x 16 separate envs "
+             f"(got {result['vector_16_ratio']:.2f}x)",
+             result["vector_16_ratio"] >= learning.VECTOR_TARGET)]
 
 
 def _fuzz(quick: bool) -> list[Verdict]:

@@ -104,7 +104,7 @@ def prepare_scenario(config: ScenarioConfig, source: str, agents: list[str] | No
 
     Errors name the key path, as for a scenario file.
     """
-    data = config.model_dump()
+    data = config.model_dump(exclude_unset=True)  # unset keys stay unset (e.g. no localizer)
     names = [r["name"] for r in data["robots"]]
     agents = names[:1] if agents is None else list(agents)
     for name in agents:
