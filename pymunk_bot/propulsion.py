@@ -57,6 +57,7 @@ class Propulsion:
         self.space = space
         self.bodies, self.controls = list(bodies), list(controls)
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
+        self._members = [idx.tolist() for _, idx in self.groups]  # the same, as lists
         self.n = len(self.bodies)
         self.batched = self.n >= SMALL_GROUP
         # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
@@ -84,15 +85,22 @@ class Propulsion:
                 space.step(h)
             return
         # Groups settled before the step keep their twists through it: held, and coasted.
-        held: list[tuple[Any, np.ndarray]] = []
+        held: list[tuple[Any, list[int]]] = []
         loose: list[tuple[Any, np.ndarray]] = []
-        for group, idx in self.groups:
-            (held if substeps > 1 and group.settled() else loose).append((group, idx))
+        for (group, idx), members in zip(self.groups, self._members):
+            if substeps > 1 and group.settled():
+                held.append((group, members))
+            else:
+                loose.append((group, idx))
         steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed
-        for group, idx in held:
-            for k, twist in zip(idx.tolist(), zip(*group.coast(h, substeps))):
+        for group, members in held:
+            for k, twist in zip(members, zip(*group.coast(h, substeps))):
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
+        if not (steady or loose):  # every robot held: nothing to do between substeps
+            for _ in range(substeps):
+                space.step(h)
+            return
         for sub in range(substeps):
             if sub:
                 for k, twist in steady:

@@ -209,9 +209,10 @@ class RobotTask:
 
     def act(self, action: np.ndarray) -> None:
         """Command the normalised body velocity (clipped to [-1, 1])."""
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
-        if a.shape[0] != self.action_size or not np.all(np.isfinite(a)):
+        values = np.asarray(action, dtype=np.float64).reshape(-1).tolist()
+        if len(values) != self.action_size or not all(map(math.isfinite, values)):
             raise ValueError(f"action must be {self.action_size} finite numbers (got {action!r})")
+        a = [min(1.0, max(-1.0, value)) for value in values]
         robot = self.bound()
         if self.vy_max is None:
             robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max)
@@ -255,8 +256,9 @@ class RobotTask:
         if self.vy_max is not None:
             obs[b + 5] = (-s * vx + c * vy) / self.vy_max
         # Contacts can push a robot past its own limits for a moment: keep to the bounds.
-        np.clip(obs, -1.0, 1.0, out=obs)
-        np.clip(obs[: b + 1], 0.0, 1.0, out=obs[: b + 1])
+        np.maximum(obs, -1.0, out=obs)  # np.clip costs twice as much
+        np.minimum(obs, 1.0, out=obs)
+        np.maximum(obs[: b + 1], 0.0, out=obs[: b + 1])
         return obs
 
     def outcome(self, elapsed: float, terminate_on_collision: bool = False

@@ -187,13 +187,16 @@ class RayCaster:
         assert self._kernel is not None
         world, bound = jobs[0].parts[0], jobs[0].bound
         k, n = len(jobs), jobs[0].ang.shape[0]
-        ox = np.array([job.ox for job in jobs])
-        oy = np.array([job.oy for job in jobs])
-        rng = np.array([job.rng for job in jobs])
-        scale = np.array([job.scale for job in jobs])
-        angles = jobs[0].ang[None] if k == 1 else np.stack([job.ang for job in jobs])
+        # Per cast: origin x, y [m], max range [m], coordinate scale [m].
+        per_cast = np.array([(job.ox, job.oy, job.rng, job.scale) for job in jobs]).T.copy()
+        ox, oy, rng, scale = per_cast
+        if k == 1:  # one cast (a single LiDAR): views, no stacking
+            angles = jobs[0].ang[None]
+            columns = self._columns(world, jobs[0].keep)[None]
+        else:
+            angles = np.stack([job.ang for job in jobs])
+            columns = np.stack([self._columns(world, job.keep) for job in jobs])
         cos, sin, ends = endpoints_many(ox, oy, angles, rng)
-        columns = np.stack([self._columns(world, job.keep) for job in jobs])
         n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
         sides = np.zeros((k, 2, int(n_sides.max())))
         for row, job in zip(sides, jobs):
@@ -202,7 +205,9 @@ class RayCaster:
         best = np.ones((k, n))
         flagged = np.empty((k, 4 * n + 64), dtype=np.intp)
         got = np.empty(k, dtype=np.intp)
-        counts = np.array(world.counts, dtype=np.intp)
+        counts = world.admitted.get("counts")
+        if counts is None:
+            counts = world.admitted["counts"] = np.array(world.counts, dtype=np.intp)
         self._kernel(world.rows, counts, columns, world.owner, bound, world.rounded, ox, oy,
                      scale, rng, sin, cos, ends, sides, n_sides,
                      np.empty((k, 0), dtype=np.intp) if order is None else order[None], best,
