@@ -82,7 +82,6 @@ class DiffDriveGroup(DriveGroup):
 
     def _advance_each(self, h: float) -> tuple[list[float], list[float], list[float]]:
         """The same arithmetic robot by robot: cheaper than numpy for a few robots."""
-        ux, uy, omega = [], [], []
         for i, (l0, r0) in enumerate(self.commanded):
             self.turning[i] = [l0, r0]
             travel = self._travel[i]
@@ -90,13 +89,17 @@ class DiffDriveGroup(DriveGroup):
             travel[1] += r0 * h
             step = self._accel[i] * h
             lt, rt = self.target[i]
-            left = l0 + min(step, max(-step, lt - l0))
-            right = r0 + min(step, max(-step, rt - r0))
-            self.commanded[i] = [left, right]
+            self.commanded[i] = [l0 + min(step, max(-step, lt - l0)),
+                                 r0 + min(step, max(-step, rt - r0))]
+        return self._twists_each()
+
+    def _twists_each(self) -> tuple[list[float], list[float], list[float]]:
+        """(ux, uy, omega) of the commanded wheel speeds, robot by robot."""
+        ux, omega = [], []
+        for (left, right), track in zip(self.commanded, self._track):
             ux.append(0.5 * (left + right))
-            uy.append(0.0)
-            omega.append((right - left) / self._track[i])
-        return ux, uy, omega
+            omega.append((right - left) / track)
+        return ux, [0.0] * self.n, omega
 
     def settled(self) -> bool:
         if self.small:
@@ -106,16 +109,12 @@ class DiffDriveGroup(DriveGroup):
     def coast(self, h: float, substeps: int) -> tuple[Any, Any, Any]:
         span = h * substeps  # [s] the wheels turn at their commanded speeds throughout
         if self.small:
-            ux, uy, omega = [], [], []
             for i, (left, right) in enumerate(self.commanded):
                 self.turning[i] = [left, right]
                 travel = self._travel[i]
                 travel[0] += left * span
                 travel[1] += right * span
-                ux.append(0.5 * (left + right))
-                uy.append(0.0)
-                omega.append((right - left) / self._track[i])
-            return ux, uy, omega
+            return self._twists_each()
         self.turning[:] = self.commanded
         self._travel += self.commanded * span
         left, right = self.commanded[:, 0], self.commanded[:, 1]
