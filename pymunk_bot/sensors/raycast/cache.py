@@ -124,6 +124,29 @@ class SceneCache:
         merged, bounds = self._moving_table(keep)
         return [merged], bounds, keep, n_keep
 
+    def scene(self) -> tuple[World, np.ndarray]:
+        """This frame's table of every shape (static and moving) and every shape's bounding
+        circle, whatever the filter: for tracers that apply filters themselves (their
+        groups, categories and masks are ``groups``, ``categories``, ``masks``, per shape)."""
+        if not self._framed or self._frame is None:
+            self.world(pymunk.ShapeFilter())  # checks the shapes, starts the frame
+        if not self._bodies:
+            return self._static, self._static.bound
+        frame = self._frame
+        assert frame is not None
+        if frame.table is None:
+            frame.table = self._merged(self._read_bodies(frame))
+        return frame.table
+
+    def _read_bodies(self, frame: _Frame) -> np.ndarray:
+        """The moving bodies' transforms in this frame (read once), and how many moved."""
+        if frame.tf is None:
+            frame.tf = tf = transforms(self._bodies)
+            before, self._last_tf = self._last_tf, tf
+            frame.moved = (len(self._bodies) if before is None
+                           else int(np.count_nonzero((tf != before).any(axis=0))))
+        return frame.tf
+
     def _moving_table(self, keep: np.ndarray) -> tuple[World, np.ndarray]:
         """The static and moving primitives in one table, with every shape's bounding circle.
 
@@ -132,20 +155,16 @@ class SceneCache:
         cached on the table; the shapes it rejects may be stale there, which it never sees."""
         frame = self._frame
         assert frame is not None
-        if frame.tf is None:
-            frame.tf = tf = transforms(self._bodies)
-            before, self._last_tf = self._last_tf, tf
-            frame.moved = (len(self._bodies) if before is None
-                           else int(np.count_nonzero((tf != before).any(axis=0))))
+        tf = self._read_bodies(frame)
         seen, unseen = self._body_admitted(keep)
         # More bodies moved since the last frame that read them than this filter ignores:
         # one it sees has moved (the usual case in a fleet), so skip the exact comparison.
-        now = None if frame.moved > unseen else frame.tf[:, seen]
+        now = None if frame.moved > unseen else tf[:, seen]
         last = self._resting.get(id(keep))
         if now is not None and last is not None and last[0] is keep and np.array_equal(last[1], now):
             return last[2]
         if frame.table is None:
-            frame.table = self._merged(frame.tf)
+            frame.table = self._merged(tf)
         if now is not None:
             self._resting[id(keep)] = (keep, now, frame.table)
         return frame.table
@@ -185,6 +204,8 @@ class SceneCache:
         self.groups = np.array([f.group for f in filters], dtype=np.uint64)
         self.categories = np.array([f.categories for f in filters], dtype=np.uint64)
         self.masks = np.array([f.mask for f in filters], dtype=np.uint64)
+        # (group, categories, mask) of every shape, for tracers that filter by themselves.
+        self.shape_filters = np.stack((self.groups, self.categories, self.masks)).reshape(3, -1)
         self._admitted: dict[pymunk.ShapeFilter,
                              tuple[np.ndarray, int, np.ndarray | None, int]] = {}
 
@@ -203,6 +224,7 @@ class SceneCache:
         finite = np.isfinite(box).all(axis=0)
         self.side_x: list[float] = np.unique(box[[0, 2]][:, finite]).tolist()
         self.side_y: list[float] = np.unique(box[[1, 3]][:, finite]).tolist()
+        self.side_lines = (np.array(self.side_x), np.array(self.side_y))  # the same, as arrays
 
         collect = Collector()
         for i, s in enumerate(dynamic):

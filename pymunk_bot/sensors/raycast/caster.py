@@ -27,7 +27,7 @@ _SIDE_ANGLE = 1e-4
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
 REFERENCE_RAYS = 40
-# The same for the compiled tracer, whose fixed cost per cast is far lower.
+# The same for the compiled tracer: its fixed cost per cast (about 20 us) buys ~6 of pymunk's rays.
 COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
@@ -62,8 +62,11 @@ class RayCaster:
         self.space = space
         self._kernel = _load_kernel(compiled)
         mover: Callable[..., None] | None = None
+        self._filtered: Callable[..., None] | None = None
         if self._kernel is not None:
             from .compiled import move_into as mover
+            from .compiled import trace_filtered
+            self._filtered = trace_filtered
         self._cache = SceneCache(space, mover)
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
@@ -74,6 +77,10 @@ class RayCaster:
         if self._kernel is None:
             from .batch import cast_many
             return cast_many(self, origins, angles, max_ranges, filters)
+        if self._filtered is not None and len(origins) > 1:
+            uniform = _uniform(origins, angles, max_ranges)
+            if uniform is not None:
+                return self._cast_uniform(*uniform, list(filters))
         out: list[np.ndarray | None] = []
         groups: dict[tuple[int, int], list[tuple[int, _Job]]] = {}
         for i, args in enumerate(zip(origins, angles, max_ranges, filters)):
@@ -86,6 +93,75 @@ class RayCaster:
             for (i, _), ranges in zip(members, self._trace_compiled(jobs)):
                 out[i] = ranges
         return [r if r is not None else np.empty(0) for r in out]
+
+    def _cast_uniform(self, xy: np.ndarray, ang: np.ndarray, rng: np.ndarray,
+                      filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
+        """cast_many for checked casts with one ray count: the pymunk queries per origin, all
+        else one array operation or one tracer call for them all."""
+        assert self._filtered is not None
+        k, n = ang.shape
+        table, bound = self._cache.scene()  # first: it also checks the shapes for changes
+        ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
+        scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
+        sides, n_sides, cornered = self._sides_many(ox, oy, scale)
+        # Origins at a shape (the start-inside rule) or a box corner: the single cast's path.
+        query = self.space.point_query_nearest
+        single = [i for i in range(k) if cornered[i] or query(
+            (float(ox[i]), float(oy[i])), float(1e-9 * scale[i]), filters[i]) is not None]
+        out: list[np.ndarray | None] = [None] * k
+        for i in single:
+            out[i] = self.cast((float(ox[i]), float(oy[i])), ang[i], float(rng[i]), filters[i])
+        traced = np.setdiff1d(np.arange(k), single) if single else np.arange(k)
+        if single:
+            ox, oy, ang, rng, scale = ox[traced], oy[traced], ang[traced], rng[traced], scale[traced]
+            sides, n_sides = sides[traced], n_sides[traced]
+        cos, sin, ends = endpoints_many(ox, oy, ang, rng)
+        f = np.array([(filters[i].group, filters[i].categories, filters[i].mask)
+                      for i in traced.tolist()], dtype=np.uint64).reshape(-1, 3)
+        best = np.ones((traced.shape[0], n))
+        flagged = np.empty((traced.shape[0], 4 * n + 64), dtype=np.intp)
+        got = np.empty(traced.shape[0], dtype=np.intp)
+        self._filtered(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
+                       self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, sin, cos,
+                       ends, sides, n_sides, best, flagged, got)
+        query_first = self.space.segment_query_first
+        for row, i in enumerate(traced.tolist()):
+            count, start = int(got[row]), (float(ox[row]), float(oy[row]))
+            if count == -2 or count == -1:  # rays in no simple order, or too many flagged
+                out[i] = self.cast(start, ang[row], float(rng[row]), filters[i])
+                continue
+            alphas = best[row]
+            for ray in np.unique(flagged[row, :count]).tolist():  # near a flag: pymunk answers
+                end = (ends[row, 0, ray], ends[row, 1, ray])
+                hit = query_first(start, end, 0.0, filters[i])
+                alphas[ray] = 1.0 if hit is None else hit.alpha
+            out[i] = alphas * rng[row]
+        return [r if r is not None else np.empty(0) for r in out]
+
+    def _sides_many(self, ox: np.ndarray, oy: np.ndarray, scale: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_side_directions` for many origins: side intervals (K, 2, 5) [rad], how many
+        each has, and which origins are near a vertical and a horizontal side line at once."""
+        near, corner = 1e-7 * scale, EDGE_NEAR * scale
+        found = []
+        for lines, v in zip(self._cache.side_lines, (ox, oy)):
+            i = np.searchsorted(lines, v - corner)
+            close = i < lines.shape[0]
+            close[close] &= lines[i[close]] <= (v + corner)[close]
+            i = np.searchsorted(lines, v - near)
+            on = i < lines.shape[0]
+            on[on] &= lines[i[on]] <= (v + near)[on]
+            found.append((close, on & close))
+        (close_x, on_x), (close_y, on_y) = found
+        k = ox.shape[0]
+        sides = np.zeros((k, 2, 5))
+        n_sides = np.zeros(k, dtype=np.intp)
+        for i in np.flatnonzero(on_x | on_y).tolist():
+            directions = ([-0.5 * math.pi, 0.5 * math.pi] if on_x[i] else []) + (
+                [-math.pi, 0.0, math.pi] if on_y[i] else [])
+            sides[i, :, :len(directions)] = _side_lohi(directions)
+            n_sides[i] = len(directions)
+        return sides, n_sides, close_x & close_y
 
     def begin_frame(self) -> None:
         """Bodies have moved: casts until the next call share one view of the scene (the
@@ -252,6 +328,26 @@ class RayCaster:
                 if i < len(sides) and sides[i] <= v + near:
                     directions.extend(along)
         return None if close == 2 else directions
+
+
+def _uniform(origins: list, angles: list, max_ranges: list
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Casts as arrays (origins (K, 2), angles (K, n), ranges (K,)) if they share a ray
+    count above COMPILED_REFERENCE_RAYS and pass check_args' checks; else None."""
+    try:
+        xy = np.array(origins, dtype=np.float64)
+        ang = np.array(angles, dtype=np.float64)
+        rng = np.array(max_ranges, dtype=np.float64)
+    except (TypeError, ValueError):  # ragged or not numbers: the single casts say what is wrong
+        return None
+    k = len(origins)
+    if (xy.shape != (k, 2) or ang.ndim != 2 or rng.shape != (k,)
+            or ang.shape[1] <= COMPILED_REFERENCE_RAYS):
+        return None
+    if not (np.isfinite(xy).all() and np.isfinite(ang).all() and np.isfinite(rng).all()
+            and (rng > 0.0).all()):
+        return None
+    return xy, ang, rng
 
 
 def _side_lohi(directions: list[float]) -> np.ndarray:

@@ -125,6 +125,30 @@ def trace_many(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, bound: np.ndarray,
+                   shape_filters: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
+                   scale: np.ndarray, rng: np.ndarray, filters: np.ndarray, sin: np.ndarray,
+                   cos: np.ndarray, ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
+                   best: np.ndarray, flagged: np.ndarray, n_flagged: np.ndarray) -> None:
+    """:func:`trace_many` with the query filters applied here: ``filters`` (K, 3) and
+    ``shape_filters`` (3, n_shapes) hold (group, categories, mask) of each cast and of each
+    shape; a shape is traced unless cpShapeFilterReject rejects the pair."""
+    m = rows.shape[1]
+    admitted = np.empty(m, dtype=np.bool_)
+    no_order = np.empty(0, dtype=np.intp)
+    for k in range(ox.shape[0]):
+        group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
+        for j in range(m):
+            o = owner[j]
+            admitted[j] = not ((shape_filters[0, o] != 0 and shape_filters[0, o] == group)
+                               or (shape_filters[1, o] & mask) == 0
+                               or (categories & shape_filters[2, o]) == 0)
+        n_flagged[k] = trace(rows, counts, admitted, owner, bound, rounded, ox[k], oy[k],
+                             scale[k], rng[k], sin[k], cos[k], ends[k], sides[k, :, :n_sides[k]],
+                             no_order, best[k], flagged[k])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
           bound: np.ndarray, rounded: bool, ox: float, oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
           ends: np.ndarray, side: np.ndarray, order_given: np.ndarray, best: np.ndarray,
