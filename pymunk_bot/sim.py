@@ -92,6 +92,8 @@ class Simulation:
         self.steps = 0
         self.wall_time = 0.0  # [s] spent inside step()
         self._robots = list(self.robots.values())
+        self._odometry = [(drive, odometry) for (drive, _), (odometry, _)
+                          in zip(built.drive_groups, built.odometry_groups)]
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
         self._lidars = [r.lidar for r in self._robots if r.lidar is not None]
@@ -125,17 +127,17 @@ class Simulation:
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
         started = wallclock.perf_counter()
-        built, world = self._built, self.world
-        now = self.time
+        built, world, dt = self._built, self.world, self.dt
+        now = self.steps * dt  # self.time, inlined: this runs every tick
         self._run_controllers(now)
         for actor in world.actors:
-            actor.before_step(now, self.dt)
+            actor.before_step(now, dt)
         propulsion = built.propulsion
-        propulsion.step(self.dt / self.substeps, self.substeps)
+        propulsion.step(dt / self.substeps, self.substeps)
         self.steps += 1
-        now = world.time = self.time
+        now = world.time = self.steps * dt
         built.fleet.advance(propulsion.positions(), now)
-        for (drive, _), (odometry, _) in zip(built.drive_groups, built.odometry_groups):
+        for drive, odometry in self._odometry:
             odometry.update(drive.take_travel())
         self._read_sensors(now)
         for robot in self._mapping:
