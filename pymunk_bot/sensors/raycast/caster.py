@@ -115,14 +115,14 @@ class RayCaster:
         if single:
             ox, oy, ang, rng, scale = ox[traced], oy[traced], ang[traced], rng[traced], scale[traced]
             sides, n_sides = sides[traced], n_sides[traced]
-        cos, sin, ends = endpoints_many(ox, oy, ang, rng)
+        ends = endpoints_many(ox, oy, ang, rng)[2]
         f = np.array([(filters[i].group, filters[i].categories, filters[i].mask)
                       for i in traced.tolist()], dtype=np.uint64).reshape(-1, 3)
         best = np.ones((traced.shape[0], n))
         flagged = np.empty((traced.shape[0], 4 * n + 64), dtype=np.intp)
         got = np.empty(traced.shape[0], dtype=np.intp)
         self._filtered(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
-                       self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, sin, cos,
+                       self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang,
                        ends, sides, n_sides, best, flagged, got)
         query_first = self.space.segment_query_first
         for row, i in enumerate(traced.tolist()):
@@ -272,7 +272,7 @@ class RayCaster:
         else:
             angles = np.stack([job.ang for job in jobs])
             columns = np.stack([self._columns(world, job.keep) for job in jobs])
-        cos, sin, ends = endpoints_many(ox, oy, angles, rng)
+        ends = endpoints_many(ox, oy, angles, rng)[2]
         n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
         sides = np.zeros((k, 2, int(n_sides.max())))
         for row, job in zip(sides, jobs):
@@ -285,14 +285,14 @@ class RayCaster:
         if counts is None:
             counts = world.admitted["counts"] = np.array(world.counts, dtype=np.intp)
         self._kernel(world.rows, counts, columns, world.owner, bound, world.rounded, ox, oy,
-                     scale, rng, sin, cos, ends, sides, n_sides,
+                     scale, rng, angles, ends, sides, n_sides,
                      np.empty((k, 0), dtype=np.intp) if order is None else order[None], best,
                      flagged, got)
         out = []
         for job, row, ray_ends, flags, count in zip(jobs, best, ends, flagged, got.tolist()):
             if count == -2:  # rays in no simple order: sort them, trace this cast again
-                out.append(self._trace_compiled([job], np.argsort(
-                    np.arctan2(np.sin(job.ang), np.cos(job.ang)), kind="stable"))[0])
+                order = np.argsort(_wrapped(job.ang), kind="stable")
+                out.append(self._trace_compiled([job], order)[0])
             elif count < 0:  # more flagged rays than the buffer holds: pymunk answers
                 out.append(reference_cast(self.space, (job.ox, job.oy), job.ang, job.rng,
                                           job.filter))
@@ -348,6 +348,13 @@ def _uniform(origins: list, angles: list, max_ranges: list
             and (rng > 0.0).all()):
         return None
     return xy, ang, rng
+
+
+def _wrapped(ang: np.ndarray) -> np.ndarray:
+    """Angles [rad] wrapped to [-pi, pi) by the compiled tracer's own arithmetic, so that an
+    order sorted here is sorted there."""
+    two_pi = 2.0 * math.pi
+    return ang - two_pi * np.floor((ang + math.pi) / two_pi)
 
 
 def _side_lohi(directions: list[float]) -> np.ndarray:

@@ -3,7 +3,8 @@
 
 The pair tests are the kernels' Chipmunk expressions, operand for operand; numba compiles
 them without fused multiply-adds or reordering (no fastmath), so each alpha is the float
-numpy and Chipmunk compute. Angles (atan2, asin, hypot) only choose which pairs are tested,
+numpy and Chipmunk compute. Angles (atan2, asin, hypot; the rays' angles wrapped to a turn)
+only choose which pairs are tested,
 with the same margins as the numpy path, far above any difference in their last bits.
 Imported lazily by the caster: ``import pymunk_bot`` never loads numba.
 """
@@ -42,15 +43,19 @@ def _circle_alpha(dax: float, day: float, dbx: float, dby: float, r: float) -> f
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _sorted_rays(sin: np.ndarray, cos: np.ndarray, given: np.ndarray) -> tuple:
-    """The rays' direction angles in sorted order, the ray of each, and an evenly spaced
-    grid's (t0, 1 / step, err) when they form one (as fan.Rays decides; else err < 0).
-    ``given`` is the order for rays that are not one turn rotated (else empty); without it
-    such rays give an empty order."""
-    n = sin.shape[0]
+def _sorted_rays(ang: np.ndarray, given: np.ndarray) -> tuple:
+    """The rays' direction angles (``ang`` [rad] wrapped to [-pi, pi)) in sorted order, the
+    ray of each, an evenly spaced grid's (t0, 1 / step, err) when they form one (as
+    fan.Rays decides; else err < 0), and the wrap's rounding bound [rad]. ``given`` is the
+    order for rays that are not one turn rotated (else empty); without it such rays give an
+    empty order."""
+    n = ang.shape[0]
     theta = np.empty(n)
+    biggest = 0.0
     for i in range(n):
-        theta[i] = math.atan2(sin[i], cos[i])
+        theta[i] = ang[i] - _TWO_PI * math.floor((ang[i] + math.pi) / _TWO_PI)
+        biggest = max(biggest, abs(ang[i]))
+    wrap = 1e-15 * (1.0 + biggest)  # what wrapping can be off by, far below the margins
     drops, k = 0, 0
     for i in range(n - 1):
         if theta[i + 1] < theta[i]:
@@ -58,7 +63,7 @@ def _sorted_rays(sin: np.ndarray, cos: np.ndarray, given: np.ndarray) -> tuple:
             k = i + 1
     rotated = drops == 0 or (drops == 1 and theta[n - 1] <= theta[0])
     if not rotated and given.shape[0] != n:
-        return theta, given, 0.0, 0.0, -1.0
+        return theta, given, 0.0, 0.0, -1.0, wrap
     order = np.empty(n, dtype=np.intp)
     st = np.empty(n)
     for i in range(n):
@@ -77,7 +82,7 @@ def _sorted_rays(sin: np.ndarray, cos: np.ndarray, given: np.ndarray) -> tuple:
             e = off + 2.0 * abs(n * step - _TWO_PI) / step + 1e-6
             if e < 0.25:
                 t0, err = st[0] - _TWO_PI, e
-    return st, order, t0, inv, err
+    return st, order, t0, inv, err, wrap
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -112,23 +117,22 @@ def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace_many(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
                bound: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
-               scale: np.ndarray, rng: np.ndarray, sin: np.ndarray, cos: np.ndarray,
-               ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
-               order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray,
-               n_flagged: np.ndarray) -> None:
+               scale: np.ndarray, rng: np.ndarray, ang: np.ndarray, ends: np.ndarray,
+               sides: np.ndarray, n_sides: np.ndarray, order_given: np.ndarray,
+               best: np.ndarray, flagged: np.ndarray, n_flagged: np.ndarray) -> None:
     """:func:`trace` for K casts on one table, row k of every array (``admitted`` per cast;
     ``sides[k, :, :n_sides[k]]`` its side intervals); each result goes to ``n_flagged[k]``."""
     for k in range(ox.shape[0]):
         n_flagged[k] = trace(rows, counts, admitted[k], owner, bound, rounded, ox[k], oy[k],
-                             scale[k], rng[k], sin[k], cos[k], ends[k], sides[k, :, :n_sides[k]],
+                             scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
                              order_given[k], best[k], flagged[k])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, bound: np.ndarray,
                    shape_filters: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
-                   scale: np.ndarray, rng: np.ndarray, filters: np.ndarray, sin: np.ndarray,
-                   cos: np.ndarray, ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
+                   scale: np.ndarray, rng: np.ndarray, filters: np.ndarray, ang: np.ndarray,
+                   ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
                    best: np.ndarray, flagged: np.ndarray, n_flagged: np.ndarray) -> None:
     """:func:`trace_many` with the query filters applied here: ``filters`` (K, 3) and
     ``shape_filters`` (3, n_shapes) hold (group, categories, mask) of each cast and of each
@@ -144,15 +148,15 @@ def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, boun
                                or (shape_filters[1, o] & mask) == 0
                                or (categories & shape_filters[2, o]) == 0)
         n_flagged[k] = trace(rows, counts, admitted, owner, bound, rounded, ox[k], oy[k],
-                             scale[k], rng[k], sin[k], cos[k], ends[k], sides[k, :, :n_sides[k]],
+                             scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
                              no_order, best[k], flagged[k])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
-          bound: np.ndarray, rounded: bool, ox: float, oy: float, scale: float, rng: float, sin: np.ndarray, cos: np.ndarray,
-          ends: np.ndarray, side: np.ndarray, order_given: np.ndarray, best: np.ndarray,
-          flagged: np.ndarray) -> int:
+          bound: np.ndarray, rounded: bool, ox: float, oy: float, scale: float, rng: float,
+          ang: np.ndarray, ends: np.ndarray, side: np.ndarray, order_given: np.ndarray,
+          best: np.ndarray, flagged: np.ndarray) -> int:
     """Lower ``best`` (alpha per ray, starting at 1) by every hit of an admitted primitive
     of the table ``rows`` (columns: ``counts`` edges, flags, circles, segments; ``owner``:
     the shape of each, whose bounding circle (cx, cy, r) is a column of ``bound``); write the
@@ -161,11 +165,11 @@ def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.
     fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
     with their angle order)."""
     n = best.shape[0]
-    st, order, t0, inv, err = _sorted_rays(sin, cos, order_given)
+    st, order, t0, inv, err, wrap = _sorted_rays(ang, order_given)
     if order.shape[0] != n:
         return -2
     slack = 1e-9 * scale
-    margin = _EDGE_MARGIN + 1e-15 * scale / rng
+    margin = _EDGE_MARGIN + 1e-15 * scale / rng + wrap
     near_plane = _EDGE_NEAR * scale
     ne, nf, nc = counts[0], counts[1], counts[2]
     m = rows.shape[1]
