@@ -92,16 +92,14 @@ class DiffOdometryGroup:
 
     def _update_each(self, travel: Sequence[Sequence[float]]) -> None:
         """The noise-free update robot by robot, on lists (see ``scalar``)."""
-        for i, (lt, rt) in enumerate(travel):
-            scale = self._scale_list[i]
-            left, right = lt * scale[0], rt * scale[1]
-            wheels = self.wheel_travel[i]
+        for (lt, rt), (scale_l, scale_r), track, wheels, pose in zip(
+                travel, self._scale_list, self._track_list, self.wheel_travel, self.pose):
+            left, right = lt * scale_l, rt * scale_r
             wheels[0] += left
             wheels[1] += right
             ds = 0.5 * (left + right)
-            dtheta = (right - left) / self._track_list[i]
+            dtheta = (right - left) / track
             chord = ds * sinc_half_scalar(dtheta)
-            pose = self.pose[i]
             heading = pose[2] + 0.5 * dtheta
             pose[0] += chord * math.cos(heading)
             pose[1] += chord * math.sin(heading)

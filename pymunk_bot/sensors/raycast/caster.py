@@ -124,18 +124,13 @@ class RayCaster:
         self._filtered(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
                        self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang,
                        ends, sides, n_sides, best, flagged, got)
-        query_first = self.space.segment_query_first
         for row, i in enumerate(traced.tolist()):
             count, start = int(got[row]), (float(ox[row]), float(oy[row]))
-            if count == -2 or count == -1:  # rays in no simple order, or too many flagged
+            if count < 0:  # rays in no simple order, or too many flagged: the single cast
                 out[i] = self.cast(start, ang[row], float(rng[row]), filters[i])
-                continue
-            alphas = best[row]
-            for ray in np.unique(flagged[row, :count]).tolist():  # near a flag: pymunk answers
-                end = (ends[row, 0, ray], ends[row, 1, ray])
-                hit = query_first(start, end, 0.0, filters[i])
-                alphas[ray] = 1.0 if hit is None else hit.alpha
-            out[i] = alphas * rng[row]
+            else:
+                out[i] = self._finish(start, filters[i], float(rng[row]), ends[row], best[row],
+                                      flagged[row, :count])
         return [r if r is not None else np.empty(0) for r in out]
 
     def _sides_many(self, ox: np.ndarray, oy: np.ndarray, scale: np.ndarray
@@ -197,7 +192,8 @@ class RayCaster:
                 assert job.rings is not None  # set with dense, which n_keep > _DENSE_SHAPES implies
                 trace_rings(job.parts, job.bound, job.keep, n_keep, job.rings, fan, best,
                             (ox, oy, rng, job.scale))
-        return self._finish(job, ends, best, np.concatenate(fan.flagged) if fan.flagged else None)
+        return self._finish((ox, oy), job.filter, rng, ends, best,
+                            np.concatenate(fan.flagged) if fan.flagged else None)
 
     def _prepare(self, origin: tuple[float, float], angles: np.ndarray, max_range: float,
                  shape_filter: pymunk.ShapeFilter) -> np.ndarray | _Job:
@@ -244,16 +240,17 @@ class RayCaster:
                     bound=bound, keep=keep, n_keep=n_keep, scale=scale, directions=directions,
                     rings=rings, dense=dense)
 
-    def _finish(self, job: _Job, ends: np.ndarray, best: np.ndarray,
+    def _finish(self, start: tuple[float, float], shape_filter: pymunk.ShapeFilter,
+                max_range: float, ends: np.ndarray, best: np.ndarray,
                 flagged: np.ndarray | None) -> np.ndarray:
         """Ranges from alphas, after pymunk answers the flagged rays: those near a box corner
         or along a box side (see cache.corner_flags)."""
         if flagged is not None and flagged.shape[0]:
-            query, start = self.space.segment_query_first, (job.ox, job.oy)
+            query = self.space.segment_query_first
             for i in np.unique(flagged).tolist():
-                hit = query(start, (ends[0, i], ends[1, i]), 0.0, job.filter)
+                hit = query(start, (ends[0, i], ends[1, i]), 0.0, shape_filter)
                 best[i] = 1.0 if hit is None else hit.alpha
-        return best * job.rng
+        return best * max_range
 
     def _trace_compiled(self, jobs: list[_Job], order: np.ndarray | None = None
                         ) -> list[np.ndarray]:
@@ -297,7 +294,8 @@ class RayCaster:
                 out.append(reference_cast(self.space, (job.ox, job.oy), job.ang, job.rng,
                                           job.filter))
             else:
-                out.append(self._finish(job, ray_ends, row, flags[:count]))
+                out.append(self._finish((job.ox, job.oy), job.filter, job.rng, ray_ends, row,
+                                        flags[:count]))
         return out
 
     def _columns(self, world: World, keep: np.ndarray) -> np.ndarray:
