@@ -86,12 +86,9 @@ class Propulsion:
             return
         # Groups settled before the step keep their twists through it: held, and coasted.
         held: list[tuple[Any, list[int]]] = []
-        loose: list[tuple[Any, np.ndarray]] = []
-        for (group, idx), members in zip(self.groups, self._members):
-            if substeps > 1 and group.settled():
-                held.append((group, members))
-            else:
-                loose.append((group, idx))
+        loose: list[tuple[Any, list[int]]] = []
+        for (group, _), members in zip(self.groups, self._members):
+            (held if substeps > 1 and group.settled() else loose).append((group, members))
         steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed
         for group, members in held:
             for k, twist in zip(members, zip(*group.coast(h, substeps))):
@@ -152,16 +149,17 @@ class Propulsion:
         return xy[self._robot_rows]
 
     def _each(self, h: float) -> None:
-        for k, twist in self._twists(h, self.groups):
+        for k, twist in self._twists(h, [(g, m) for (g, _), m in zip(self.groups, self._members)]):
             self._aim(k, twist, h)
 
     @staticmethod
-    def _twists(h: float, groups: Sequence[tuple[Any, np.ndarray]]
+    def _twists(h: float, groups: Sequence[tuple[Any, list[int]]]
                 ) -> list[tuple[int, tuple[float, float, float]]]:
-        """(robot, twist) of every robot of these groups, their motors advanced by ``h`` [s]."""
+        """(robot, twist) of every robot of these groups (each with its robots' indices),
+        their motors advanced by ``h`` [s]."""
         out: list[tuple[int, tuple[float, float, float]]] = []
-        for group, idx in groups:
-            out.extend(zip(idx.tolist(), zip(*group.advance(h))))
+        for group, members in groups:
+            out.extend(zip(members, zip(*group.advance(h))))
         return out
 
     def _aim(self, k: int, twist: tuple[float, float, float], h: float) -> None:
