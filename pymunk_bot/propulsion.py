@@ -89,11 +89,7 @@ class Propulsion:
         loose: list[tuple[Any, list[int]]] = []
         for (group, _), members in zip(self.groups, self._members):
             (held if substeps > 1 and group.settled() else loose).append((group, members))
-        steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed
-        for group, members in held:
-            for k, twist in zip(members, zip(*group.coast(h, substeps))):
-                if not self._hold(k, twist, h):
-                    steady.append((k, twist))
+        steady = self._hold_groups(held, h, substeps)  # held, yet aimed every substep
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
                 space.step(h)
@@ -106,6 +102,25 @@ class Propulsion:
                 for k, twist in self._twists(h, loose):
                     self._aim(k, twist, h)
             space.step(h)
+            left = substeps - 1 - sub
+            if loose and left > 1:  # a group whose motors settled now holds for the rest
+                settled = [(group, members) for group, members in loose if group.settled()]
+                if settled:
+                    loose = [(group, members) for group, members in loose
+                             if not any(group is g for g, _ in settled)]
+                    steady += self._hold_groups(settled, h, left)
+
+    def _hold_groups(self, groups: list[tuple[Any, list[int]]], h: float, substeps: int
+                     ) -> list[tuple[int, tuple[float, float, float]]]:
+        """Hold every robot of these settled groups for ``substeps`` substeps (their motors
+        coast through them); the robots that must be aimed every substep instead, with their
+        twists."""
+        steady: list[tuple[int, tuple[float, float, float]]] = []
+        for group, members in groups:
+            for k, twist in zip(members, zip(*group.coast(h, substeps))):
+                if not self._hold(k, twist, h):
+                    steady.append((k, twist))
+        return steady
 
     def substep(self, h: float) -> None:
         """Advance every drive by one substep of ``h`` [s] and set the control velocities."""

@@ -181,9 +181,7 @@ class SceneCache:
         rows, bound = template.rows.copy(), bounds.copy()
         self._move_into(self._local.rows, self._local.bound, tf, self._prim_body,
                         self._shape_body, self._dest, self._static.bound.shape[1], rows, bound)
-        table = World(rows, template.owner, template.counts, template.bound, template.rounded)
-        table.admitted = template.admitted  # per-filter columns: the owners never change
-        return table, bound
+        return World(rows, template.owner, template.counts, template.bound, template.rounded), bound
 
     def _body_admitted(self, keep: np.ndarray) -> tuple[np.ndarray, int]:
         """Which moving bodies have a shape the filter admits (bool per body), and how many

@@ -62,11 +62,8 @@ class RayCaster:
         self.space = space
         self._kernel = _load_kernel(compiled)
         mover: Callable[..., None] | None = None
-        self._filtered: Callable[..., None] | None = None
         if self._kernel is not None:
             from .compiled import move_into as mover
-            from .compiled import trace_filtered
-            self._filtered = trace_filtered
         self._cache = SceneCache(space, mover)
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
@@ -77,7 +74,7 @@ class RayCaster:
         if self._kernel is None:
             from .batch import cast_many
             return cast_many(self, origins, angles, max_ranges, filters)
-        if self._filtered is not None and len(origins) > 1:
+        if len(origins) > 1:
             uniform = _uniform(origins, angles, max_ranges)
             if uniform is not None:
                 return self._cast_uniform(*uniform, list(filters))
@@ -98,7 +95,7 @@ class RayCaster:
                       filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
         """cast_many for checked casts with one ray count: the pymunk queries per origin, all
         else one array operation or one tracer call for them all."""
-        assert self._filtered is not None
+        assert self._kernel is not None
         k, n = ang.shape
         table, bound = self._cache.scene()  # first: it also checks the shapes for changes
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
@@ -121,9 +118,10 @@ class RayCaster:
         best = np.ones((traced.shape[0], n))
         flagged = np.empty((traced.shape[0], 4 * n + 64), dtype=np.intp)
         got = np.empty(traced.shape[0], dtype=np.intp)
-        self._filtered(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
-                       self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang,
-                       ends, sides, n_sides, best, flagged, got)
+        self._kernel(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
+                     self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang, ends,
+                     sides, n_sides, np.empty((traced.shape[0], 0), dtype=np.intp), best,
+                     flagged, got)
         for row, i in enumerate(traced.tolist()):
             count, start = int(got[row]), (float(ox[row]), float(oy[row]))
             if count < 0:  # rays in no simple order, or too many flagged: the single cast
@@ -263,12 +261,9 @@ class RayCaster:
         # Per cast: origin x, y [m], max range [m], coordinate scale [m].
         per_cast = np.array([(job.ox, job.oy, job.rng, job.scale) for job in jobs]).T.copy()
         ox, oy, rng, scale = per_cast
-        if k == 1:  # one cast (a single LiDAR): views, no stacking
-            angles = jobs[0].ang[None]
-            columns = self._columns(world, jobs[0].keep)[None]
-        else:
-            angles = np.stack([job.ang for job in jobs])
-            columns = np.stack([self._columns(world, job.keep) for job in jobs])
+        angles = jobs[0].ang[None] if k == 1 else np.stack([job.ang for job in jobs])
+        filters = np.array([(job.filter.group, job.filter.categories, job.filter.mask)
+                            for job in jobs], dtype=np.uint64)
         ends = endpoints_many(ox, oy, angles, rng)[2]
         n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
         sides = np.zeros((k, 2, int(n_sides.max())))
@@ -278,11 +273,9 @@ class RayCaster:
         best = np.ones((k, n))
         flagged = np.empty((k, 4 * n + 64), dtype=np.intp)
         got = np.empty(k, dtype=np.intp)
-        counts = world.admitted.get("counts")
-        if counts is None:
-            counts = world.admitted["counts"] = np.array(world.counts, dtype=np.intp)
-        self._kernel(world.rows, counts, columns, world.owner, bound, world.rounded, ox, oy,
-                     scale, rng, angles, ends, sides, n_sides,
+        self._kernel(world.rows, np.array(world.counts, dtype=np.intp), world.owner, bound,
+                     self._cache.shape_filters, world.rounded, ox, oy, scale, rng, filters,
+                     angles, ends, sides, n_sides,
                      np.empty((k, 0), dtype=np.intp) if order is None else order[None], best,
                      flagged, got)
         out = []
@@ -297,13 +290,6 @@ class RayCaster:
                 out.append(self._finish((job.ox, job.oy), job.filter, job.rng, ray_ends, row,
                                         flags[:count]))
         return out
-
-    def _columns(self, world: World, keep: np.ndarray) -> np.ndarray:
-        """The table's columns this filter admits (cached on the table per filter)."""
-        found = world.admitted.get(id(keep))
-        if found is None or found[0] is not keep:
-            found = world.admitted[id(keep)] = (keep, keep[world.owner])
-        return found[1]
 
     def _side_directions(self, ox: float, oy: float, scale: float) -> list[float] | None:
         """Directions [rad] of the rays that may run along a side line of a static bounding
@@ -366,9 +352,9 @@ def _load_kernel(compiled: bool | None) -> Callable[..., None] | None:
     if compiled is False or (compiled is None and os.environ.get("PYMUNK_BOT_NUMBA") == "0"):
         return None
     try:
-        from .compiled import trace_many
+        from .compiled import trace_filtered
     except ImportError:
         if compiled:
             raise
         return None
-    return trace_many
+    return trace_filtered

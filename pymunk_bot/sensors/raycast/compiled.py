@@ -115,31 +115,19 @@ def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def trace_many(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
-               bound: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
-               scale: np.ndarray, rng: np.ndarray, ang: np.ndarray, ends: np.ndarray,
-               sides: np.ndarray, n_sides: np.ndarray, order_given: np.ndarray,
-               best: np.ndarray, flagged: np.ndarray, n_flagged: np.ndarray) -> None:
-    """:func:`trace` for K casts on one table, row k of every array (``admitted`` per cast;
-    ``sides[k, :, :n_sides[k]]`` its side intervals); each result goes to ``n_flagged[k]``."""
-    for k in range(ox.shape[0]):
-        n_flagged[k] = trace(rows, counts, admitted[k], owner, bound, rounded, ox[k], oy[k],
-                             scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
-                             order_given[k], best[k], flagged[k])
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, bound: np.ndarray,
                    shape_filters: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
                    scale: np.ndarray, rng: np.ndarray, filters: np.ndarray, ang: np.ndarray,
                    ends: np.ndarray, sides: np.ndarray, n_sides: np.ndarray,
-                   best: np.ndarray, flagged: np.ndarray, n_flagged: np.ndarray) -> None:
-    """:func:`trace_many` with the query filters applied here: ``filters`` (K, 3) and
-    ``shape_filters`` (3, n_shapes) hold (group, categories, mask) of each cast and of each
-    shape; a shape is traced unless cpShapeFilterReject rejects the pair."""
+                   order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray,
+                   n_flagged: np.ndarray) -> None:
+    """:func:`trace` for K casts on one table, row k of every array: each result goes to
+    ``n_flagged[k]``, ``sides[k, :, :n_sides[k]]`` are its side intervals. The query
+    filters are applied here: ``filters`` (K, 3) and ``shape_filters`` (3, n_shapes) hold
+    (group, categories, mask) of each cast and of each shape; a shape is traced unless
+    cpShapeFilterReject rejects the pair."""
     m = rows.shape[1]
     admitted = np.empty(m, dtype=np.bool_)
-    no_order = np.empty(0, dtype=np.intp)
     for k in range(ox.shape[0]):
         group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
         for j in range(m):
@@ -149,7 +137,7 @@ def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, boun
                                or (categories & shape_filters[2, o]) == 0)
         n_flagged[k] = trace(rows, counts, admitted, owner, bound, rounded, ox[k], oy[k],
                              scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
-                             no_order, best[k], flagged[k])
+                             order_given[k], best[k], flagged[k])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

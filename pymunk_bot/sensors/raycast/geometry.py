@@ -131,7 +131,6 @@ class World:
         # Cast-independent work on a cached static table (see scene._static_selection).
         self.scratch: np.ndarray | None = None
         self.selections: dict = {}
-        self.admitted: dict = {}  # per filter: the compiled tracer's column mask and counts
 
 
 def kind_slices(counts: tuple[int, ...]) -> list[slice]:
