@@ -128,6 +128,12 @@ class Lidar:
 
     def _apply_model(self, true: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         c = self.config
+        if c.noise_std == 0.0 and c.dropout == 0.0:  # exact ranges: the limits only
+            np.minimum(true, c.max_range, out=true)
+            short = true < c.min_range
+            if short.any():
+                true[short] = c.max_range
+            return true
         no_return = (true < c.min_range) | (true >= c.max_range)
         if c.noise_std > 0.0:
             ranges = true + c.noise_std * rng.standard_normal(true.shape[0])
