@@ -123,10 +123,8 @@ class Propulsion:
         return steady
 
     def substep(self, h: float) -> None:
-        """Advance every drive by one substep of ``h`` [s] and set the control velocities."""
-        if not self.batched:
-            self._each(h)
-            return
+        """Advance every drive by one substep of ``h`` [s] and set the control velocities
+        (the batched path: many robots, read and written through ``pymunk.batch``)."""
         ux, uy, omega = np.empty(self.n), np.empty(self.n), np.empty(self.n)
         for group, idx in self.groups:
             ux[idx], uy[idx], omega[idx] = group.advance(h)
@@ -162,10 +160,6 @@ class Propulsion:
         if xy.shape[0] != self._rows:
             self._index(xy.shape[0])
         return xy[self._robot_rows]
-
-    def _each(self, h: float) -> None:
-        for k, twist in self._twists(h, [(g, m) for (g, _), m in zip(self.groups, self._members)]):
-            self._aim(k, twist, h)
 
     @staticmethod
     def _twists(h: float, groups: Sequence[tuple[Any, list[int]]]
