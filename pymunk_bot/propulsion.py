@@ -66,8 +66,9 @@ class Propulsion:
         self._offset = [k for k in range(self.n) if self.cog[k].any()]
         self._offset_set = set(self._offset)
         if self.batched:
-            self._read, self._write = batch.Buffer(), batch.Buffer()
+            self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
             self._rows = -1  # bodies the last index was built for
+            self._held_twists: np.ndarray | None = None  # (n, 3) twists held, or None
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
@@ -80,9 +81,7 @@ class Propulsion:
         """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s]."""
         space = self.space
         if self.batched:
-            for _ in range(substeps):
-                self.substep(h)
-                space.step(h)
+            self._step_batched(h, substeps)
             return
         # Groups settled before the step keep their twists through it: held, and coasted.
         held: list[tuple[Any, list[int]]] = []
@@ -122,17 +121,105 @@ class Propulsion:
                     steady.append((k, twist))
         return steady
 
-    def substep(self, h: float) -> None:
-        """Advance every drive by one substep of ``h`` [s] and set the control velocities
-        (the batched path: many robots, read and written through ``pymunk.batch``)."""
+    def _step_batched(self, h: float, substeps: int) -> None:
+        """``step`` for many robots: held as a whole fleet when every group has settled,
+        else aimed every substep; bodies read and written through ``pymunk.batch``."""
+        space = self.space
+        if substeps > 1 and all(group.settled() for group, _ in self.groups):
+            twists = self._gather(lambda group: group.coast(h, substeps))
+            if self._hold_all(twists, h):
+                for _ in range(substeps):
+                    space.step(h)
+                return
+            self._release_anchors()
+            for _ in range(substeps):  # an almost straight arc: aimed, at constant twists
+                self._aim_all(twists, h)
+                space.step(h)
+            return
+        self._release_anchors()
+        for _ in range(substeps):
+            self.substep(h)
+            space.step(h)
+
+    def _gather(self, twists_of: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ux, uy, omega) of every robot, each group's from ``twists_of(group)``."""
         ux, uy, omega = np.empty(self.n), np.empty(self.n), np.empty(self.n)
         for group, idx in self.groups:
-            ux[idx], uy[idx], omega[idx] = group.advance(h)
+            ux[idx], uy[idx], omega[idx] = twists_of(group)
+        return ux, uy, omega
+
+    def _hold_all(self, twists: tuple[np.ndarray, np.ndarray, np.ndarray], h: float) -> bool:
+        """The batched :meth:`_hold`: every robot held for the step (a turning one by its
+        pivot's anchor, a straight one aimed once), in one read and one write; False (nothing
+        written) if some robot's anchor would lie beyond _MAX_ANCHOR."""
+        ux, uy, omega = twists
+        turning = omega != 0.0
+        half = 0.5 * omega * h
+        chord = sinc_half(omega * h)
+        c, s = np.cos(half), np.sin(half)
+        wx, wy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
+        for k in self._offset:
+            dvx, dvy = _origin_correction(self.cog[k], 0.0, float(omega[k]), h)
+            wx[k] += dvx
+            wy[k] += dvy
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ax, ay = np.where(turning, wy / omega, 0.0), np.where(turning, -wx / omega, 0.0)
+        if not ((np.abs(ax) <= _MAX_ANCHOR).all() and (np.abs(ay) <= _MAX_ANCHOR).all()):
+            return False
+        held = np.stack((ux, uy, omega), axis=1)
+        changed = np.flatnonzero((held != self._held_twists).any(axis=1))
+        for k in changed.tolist():  # pivot anchors are no batch field: written on change only
+            if turning[k] or self._anchored[k]:
+                self.pivots[k].anchor_a = (float(ax[k]), float(ay[k]))
+                self._anchored[k] = bool(turning[k])
+        self._held_twists = held
+        state = self._read_state()
+        robot, control = self._robot_rows, self._control_rows
+        angle, spin = state[robot, 0], state[robot, 3]
+        out = self._held_out
+        out[:] = state
+        # Turning: the control body spins at omega, headed as the robot will be at the solve.
+        out[control, 0] = np.where(turning, angle + (spin - omega) * h, state[control, 0])
+        # Straight: one aim along the heading, as _aim gives it (chord 1, no turn).
+        heading = angle + spin * h
+        cos, sin = np.cos(heading), np.sin(heading)
+        out[control, 1] = np.where(turning, 0.0, ux * cos - uy * sin)
+        out[control, 2] = np.where(turning, 0.0, ux * sin + uy * cos)
+        out[control, 3] = omega
+        for k in self._offset:
+            if not turning[k]:
+                dvx, dvy = _origin_correction(self.cog[k], float(heading[k]), 0.0, h)
+                out[control[k], 1] += dvx
+                out[control[k], 2] += dvy
+        batch.set_space_bodies(self.space, _READ, self._write_held)
+        return True
+
+    def _release_anchors(self) -> None:
+        """Back from holding: every pivot anchor to its control body's centre."""
+        if self._held_twists is not None:
+            for k in np.flatnonzero(self._anchored).tolist():
+                self.pivots[k].anchor_a = (0.0, 0.0)
+                self._anchored[k] = False
+            self._held_twists = None
+
+    def _read_state(self) -> np.ndarray:
+        """Every body's (angle, vx, vy, omega), in pymunk's body order."""
         self._read.clear()
         batch.get_space_bodies(self.space, _READ, self._read)
         state = np.frombuffer(self._read.float_buf()).reshape(-1, 4)
         if state.shape[0] != self._rows:
             self._index(state.shape[0])
+        return state
+
+    def substep(self, h: float) -> None:
+        """Advance every drive by one substep of ``h`` [s] and set the control velocities
+        (the batched path: many robots, read and written through ``pymunk.batch``)."""
+        self._aim_all(self._gather(lambda group: group.advance(h)), h)
+
+    def _aim_all(self, twists: tuple[np.ndarray, np.ndarray, np.ndarray], h: float) -> None:
+        """The batched :meth:`_aim`: every control body's velocity for the next substep."""
+        ux, uy, omega = twists
+        state = self._read_state()
         robot, control = self._robot_rows, self._control_rows
         heading = state[robot, 0] + state[robot, 3] * h + (0.5 * h) * omega
         chord = sinc_half(omega * h)
@@ -242,4 +329,6 @@ class Propulsion:
         self._control_rows = np.array([order[b.id] for b in self.controls], dtype=np.intp)
         self._out = np.zeros((rows, 3))
         self._write.set_float_buf(self._out)
+        self._held_out = np.zeros((rows, 4))
+        self._write_held.set_float_buf(self._held_out)
         self._rows = rows

@@ -32,6 +32,9 @@ COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
+_MAX_FILTER_ROWS = 4096  # query filters remembered (one per robot, usually)
+_NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
+_NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
 
 
 @dataclass(slots=True)
@@ -65,6 +68,16 @@ class RayCaster:
         if self._kernel is not None:
             from .compiled import move_into as mover
         self._cache = SceneCache(space, mover)
+        self._filter_rows: dict[pymunk.ShapeFilter, tuple[int, int, int]] = {}
+
+    def _filter_row(self, f: pymunk.ShapeFilter) -> tuple[int, int, int]:
+        """(group, categories, mask) of a query filter, as the tracer takes them."""
+        row = self._filter_rows.get(f)
+        if row is None:
+            if len(self._filter_rows) >= _MAX_FILTER_ROWS:
+                self._filter_rows.clear()
+            row = self._filter_rows[f] = (int(f.group), int(f.categories), int(f.mask))
+        return row
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
                   max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
@@ -113,12 +126,12 @@ class RayCaster:
             ox, oy, ang, rng, scale = ox[traced], oy[traced], ang[traced], rng[traced], scale[traced]
             sides, n_sides = sides[traced], n_sides[traced]
         ends = endpoints_many(ox, oy, ang, rng)[2]
-        f = np.array([(filters[i].group, filters[i].categories, filters[i].mask)
-                      for i in traced.tolist()], dtype=np.uint64).reshape(-1, 3)
+        f = np.array([self._filter_row(filters[i]) for i in traced.tolist()],
+                     dtype=np.uint64).reshape(-1, 3)
         best = np.ones((traced.shape[0], n))
         flagged = np.empty((traced.shape[0], 4 * n + 64), dtype=np.intp)
         got = np.empty(traced.shape[0], dtype=np.intp)
-        self._kernel(table.rows, np.array(table.counts, dtype=np.intp), table.owner, bound,
+        self._kernel(table.rows, table.count_array, table.owner, bound,
                      self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang, ends,
                      sides, n_sides, np.empty((traced.shape[0], 0), dtype=np.intp), best,
                      flagged, got)
@@ -261,23 +274,28 @@ class RayCaster:
         # Per cast: origin x, y [m], max range [m], coordinate scale [m].
         per_cast = np.array([(job.ox, job.oy, job.rng, job.scale) for job in jobs]).T.copy()
         ox, oy, rng, scale = per_cast
-        angles = jobs[0].ang[None] if k == 1 else np.stack([job.ang for job in jobs])
-        filters = np.array([(job.filter.group, job.filter.categories, job.filter.mask)
-                            for job in jobs], dtype=np.uint64)
-        ends = endpoints_many(ox, oy, angles, rng)[2]
+        if k == 1:  # a LiDAR's own cast: the same floats, without the batch's array set-up
+            angles = jobs[0].ang[None]
+            ends = endpoints(jobs[0].ox, jobs[0].oy, jobs[0].ang, jobs[0].rng)[2][None]
+        else:
+            angles = np.stack([job.ang for job in jobs])
+            ends = endpoints_many(ox, oy, angles, rng)[2]
+        filters = np.array([self._filter_row(job.filter) for job in jobs], dtype=np.uint64)
         n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
-        sides = np.zeros((k, 2, int(n_sides.max())))
-        for row, job in zip(sides, jobs):
-            if job.directions:
-                row[:, :len(job.directions)] = _side_lohi(job.directions)
+        if n_sides.any():
+            sides = np.zeros((k, 2, int(n_sides.max())))
+            for row, job in zip(sides, jobs):
+                if job.directions:
+                    row[:, :len(job.directions)] = _side_lohi(job.directions)
+        else:
+            sides = _NO_SIDES
         best = np.ones((k, n))
         flagged = np.empty((k, 4 * n + 64), dtype=np.intp)
         got = np.empty(k, dtype=np.intp)
-        self._kernel(world.rows, np.array(world.counts, dtype=np.intp), world.owner, bound,
+        self._kernel(world.rows, world.count_array, world.owner, bound,
                      self._cache.shape_filters, world.rounded, ox, oy, scale, rng, filters,
-                     angles, ends, sides, n_sides,
-                     np.empty((k, 0), dtype=np.intp) if order is None else order[None], best,
-                     flagged, got)
+                     angles, ends, sides, n_sides, _NO_ORDER if order is None else order[None],
+                     best, flagged, got)
         out = []
         for job, row, ray_ends, flags, count in zip(jobs, best, ends, flagged, got.tolist()):
             if count == -2:  # rays in no simple order: sort them, trace this cast again

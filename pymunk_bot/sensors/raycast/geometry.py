@@ -126,6 +126,7 @@ class World:
     def __init__(self, rows: np.ndarray, owner: np.ndarray, counts: tuple[int, ...],
                  bound: np.ndarray, rounded: bool | None = None) -> None:
         self.rows, self.owner, self.counts, self.bound = rows, owner, counts, bound
+        self.count_array = np.array(counts, dtype=np.intp)  # the compiled tracer's form
         # Whether any polygon edge has a radius (those need the slower interval rule).
         self.rounded = bool(rows[RAD, :counts[0]].any()) if rounded is None else rounded
         # Cast-independent work on a cached static table (see scene._static_selection).
