@@ -9,11 +9,12 @@ keeps a robot in free space exactly on its commanded arc.
 With many robots the bodies are read and written in one call each through ``pymunk.batch``;
 with few, property access per robot is cheaper. Both paths use the same formulas.
 
-With few robots, a drive group whose motors have settled on their commands is *held* for the
-whole step instead: a turning robot's control body spins at omega about its own centre and the
-pivot joint's anchor on it sits where that spin gives the same chord velocity (the anchor is
-fixed in the control body's frame, because the wanted velocity turns with the robot), so the
-substeps run without Python in between. The control body's heading is matched to the robot's
+A drive group whose motors have settled on their commands is *held* for the whole step
+instead (with many robots, once every group has settled: one batch read and write for all): a
+turning robot's control body spins at omega about its own centre and the pivot joint's anchor
+on it sits where that spin gives the same chord velocity (the anchor is fixed in the control
+body's frame, because the wanted velocity turns with the robot), so the substeps run without
+Python in between. The control body's heading is matched to the robot's
 at the start of each step, as the per-substep aim does every substep; only a robot knocked off
 its heading by a contact within a step follows the held heading for the rest of that step.
 """

@@ -47,12 +47,13 @@ def cast_all(space: pymunk.Space, robots: list[pymunk.Body], beams: int, max_ran
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("beams", [64, 360])
-def test_batched_casts_equal_pymunk_bit_for_bit(seed, beams):
+@pytest.mark.parametrize("extra", [8, 40])  # 20 casts, or 52 (side lines found as arrays)
+def test_batched_casts_equal_pymunk_bit_for_bit(seed, beams, extra):
     space, robots = sharp_world(seed)
     caster = RayCaster(space)
     caster.begin_frame()
     rng = np.random.default_rng(100 + seed)
-    requests = cast_all(space, robots, beams, float(rng.uniform(3.0, 15.0)), rng)
+    requests = cast_all(space, robots, beams, float(rng.uniform(3.0, 15.0)), rng, extra)
     got = caster.cast_many(*requests)
     for origin, angles, max_range, f, ranges in zip(*requests, got):
         want = reference_cast(space, origin, angles, max_range, f)
@@ -132,3 +133,31 @@ def test_compiled_mover_builds_numpys_table_bit_for_bit():
         assert np.array_equal(a.rows, b.rows) and np.array_equal(a.owner, b.owner)
         assert a.counts == b.counts and np.array_equal(bound_a, bound_b)
         space.step(0.05)
+
+
+def test_side_lines_are_found_alike_for_few_and_many_origins():
+    """A few casts look side lines up origin by origin, many as arrays: the same answers,
+    for origins on box side lines, a hair off them, at corners and anywhere."""
+    space, _ = sharp_world(3)
+    caster = RayCaster(space)
+    caster.begin_frame()
+    caster.cast((6.0, 6.0), np.linspace(-3, 3, 64), 5.0)  # builds the scene's side lines
+    xs, ys = caster._cache.side_x, caster._cache.side_y
+    rng = np.random.default_rng(7)
+    points = []
+    for _ in range(40):
+        x, y = float(rng.choice(xs)), float(rng.choice(ys))
+        off = float(rng.choice([0.0, 1e-12, -1e-9, 1e-6, 0.3]))
+        points += [(x + off, float(rng.uniform(0, 12))), (float(rng.uniform(0, 12)), y - off),
+                   (x, y + off)]
+    ox, oy = np.array(points).T.copy()
+    scale = 1.0 + np.abs(ox) + np.abs(oy) + 5.0
+    many = caster._sides_many(ox, oy, scale)
+    assert ox.shape[0] > 32 and many[2].any() and (many[1] > 0).any()  # corners and sides met
+    for start in range(0, ox.shape[0], 16):
+        chunk = slice(start, start + 16)
+        sides, n_sides, cornered = caster._sides_many(ox[chunk], oy[chunk], scale[chunk])
+        assert np.array_equal(cornered, many[2][chunk])
+        free = ~cornered  # a cornered origin takes the single cast's path: its sides unused
+        assert np.array_equal(n_sides[free], many[1][chunk][free])
+        assert np.array_equal(sides[free], many[0][chunk][free])

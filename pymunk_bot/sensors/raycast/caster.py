@@ -32,6 +32,7 @@ COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
+_FEW_ORIGINS = 32  # up to this many casts, side lines are looked up origin by origin
 _MAX_FILTER_ROWS = 4096  # query filters remembered (one per robot, usually)
 _NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
 _NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
@@ -148,6 +149,19 @@ class RayCaster:
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_side_directions` for many origins: side intervals (K, 2, 5) [rad], how many
         each has, and which origins are near a vertical and a horizontal side line at once."""
+        k = ox.shape[0]
+        if k <= _FEW_ORIGINS:  # numpy's per-call cost dominates: the single cast's rule
+            sides = np.zeros((k, 2, 5))
+            n_sides = np.zeros(k, dtype=np.intp)
+            cornered = np.zeros(k, dtype=np.bool_)
+            for i, (x, y, c) in enumerate(zip(ox.tolist(), oy.tolist(), scale.tolist())):
+                directions = self._side_directions(x, y, c)
+                if directions is None:
+                    cornered[i] = True
+                elif directions:
+                    sides[i, :, :len(directions)] = _side_lohi(directions)
+                    n_sides[i] = len(directions)
+            return sides, n_sides, cornered
         near, corner = 1e-7 * scale, EDGE_NEAR * scale
         found = []
         for lines, v in zip(self._cache.side_lines, (ox, oy)):
@@ -159,7 +173,6 @@ class RayCaster:
             on[on] &= lines[i[on]] <= (v + near)[on]
             found.append((close, on & close))
         (close_x, on_x), (close_y, on_y) = found
-        k = ox.shape[0]
         sides = np.zeros((k, 2, 5))
         n_sides = np.zeros(k, dtype=np.intp)
         for i in np.flatnonzero(on_x | on_y).tolist():
