@@ -72,13 +72,14 @@ class MapSource:
 
 
 def build(config: ScenarioConfig, seed: int, source: str,
-          handles: dict[str, Robot] | None = None) -> Built:
-    """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew."""
+          handles: dict[str, Robot] | None = None, world: World | None = None) -> Built:
+    """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew.
+    ``world``: a world already made for it (a copy on a shared ground), else a new one."""
     rng = np.random.default_rng(seed)
     world_rng, sensor_rng = rng.spawn(2)
     (mind_rng,) = rng.spawn(1)  # controllers and localizers
     (actor_rng,) = rng.spawn(1)  # pedestrians (spawned last: earlier streams stay as they were)
-    world = World(config)
+    world = World(config) if world is None else world
     fleet = Fleet(list(config.robots))
     n = len(config.robots)
     robots: dict[str, Robot] = {}
@@ -159,7 +160,7 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
         shape.friction = rc.friction
         shape.collision_type = physics.ROBOT
         # The group keeps the robot's own LiDAR from seeing its own body.
-        shape.filter = pymunk.ShapeFilter(group=group_id)
+        shape.filter = world.shape_filter(group_id)
     shape = shapes[0]
     control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     control.position = (x, y)

@@ -23,6 +23,22 @@ PUSHING_ITERATIONS = 30
 OVERLAP_CORRECTION = 0.3
 
 
+# Copies of one scenario sharing a Space (pymunk_bot.replicas) keep apart by category bits:
+# copy r's moving shapes are in category 1 << r and collide with, and are seen by, no other copy's.
+MAX_REPLICAS = 16
+_REPLICA_BITS = (1 << MAX_REPLICAS) - 1
+
+
+def replica_filter(replica: int, group: int = 0) -> pymunk.ShapeFilter:
+    """The shape filter of a moving shape of copy ``replica`` (a robot's has its ``group``):
+    it meets static shapes and its own copy's, and its queries see just those."""
+    if not 0 <= replica < MAX_REPLICAS:
+        raise ValueError(f"replica must be in [0, {MAX_REPLICAS}) (got {replica})")
+    own = 1 << replica
+    return pymunk.ShapeFilter(group=group, categories=own,
+                              mask=pymunk.ShapeFilter.ALL_MASKS() ^ (_REPLICA_BITS ^ own))
+
+
 def new_space(pushable: bool = False) -> pymunk.Space:
     """A top-down Space in SI units: no gravity, fixed solver settings, no threads.
 

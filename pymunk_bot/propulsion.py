@@ -203,6 +203,19 @@ class Propulsion:
                 self._anchored[k] = False
             self._held_twists = None
 
+    def adopt(self, previous: "Propulsion") -> None:
+        """Take over what ``previous`` knew of the bodies both steer (anchors, last writes),
+        as a fleet of copies rebuilds its Propulsion after one copy's reset."""
+        known = {id(body): j for j, body in enumerate(previous.bodies)}
+        for k, body in enumerate(self.bodies):
+            j = known.get(id(body))
+            if j is not None:
+                self._given[k] = previous._given[j]
+                self._held[k] = previous._held[j]
+                self._anchored[k] = previous._anchored[j]
+        if self.batched and any(self._anchored):
+            self._held_twists = np.full((self.n, 3), np.nan)  # every anchor written anew
+
     def _read_state(self) -> np.ndarray:
         """Every body's (angle, vx, vy, omega), in pymunk's body order."""
         self._read.clear()

@@ -16,6 +16,7 @@ from .localization.base import LocalizerInputs
 from .readings import Observation
 from .robot import Robot
 from .sensors.schedule import Schedule, ScheduleArray
+from .world import World
 
 MAX_SEED = 2 ** 63 - 1
 
@@ -27,6 +28,17 @@ def check_seed(seed: Any) -> int:
     if not 0 <= int(seed) <= MAX_SEED:
         raise ValueError(f"seed must be in [0, 2**63 - 1] (got {seed})")
     return int(seed)
+
+
+def scan_all(caster: Any, due: list[tuple[Any, float]]) -> None:
+    """Every due LiDAR (with the time [s] its scan is recorded at) casts: one pass for all."""
+    if len(due) > 1:
+        casts = caster.cast_many(*zip(*(lidar.cast_request() for lidar, _ in due)))
+        for (lidar, now), true_ranges in zip(due, casts):
+            lidar.record(now, true_ranges)
+    elif due:
+        lidar, now = due[0]
+        lidar.record(now, lidar.true_ranges())
 
 
 class LocalizationScore:
@@ -67,7 +79,23 @@ class Simulation:
         self.seed = check_seed(config.seed if seed is None else seed)
         self.robots: dict[str, Robot] = {}
         self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
+        self._ground: World | None = None  # a shared ground this run is a copy on (replicas)
+        self._replica: int | None = None
         self._build()
+
+    @classmethod
+    def _on_ground(cls, config: ScenarioConfig, seed: int, source: str | None, ground: World,
+                   replica: int) -> "Simulation":
+        """Copy ``replica`` of ``config`` on a shared ground (see :mod:`pymunk_bot.replicas`,
+        which steps it: its own :meth:`step` would step every copy's physics)."""
+        sim = cls.__new__(cls)
+        sim.config = config
+        sim.source = source or f"scenario '{config.name}'"
+        sim.seed = check_seed(seed)
+        sim.robots, sim.observers = {}, []
+        sim._ground, sim._replica = ground, replica
+        sim._build()
+        return sim
 
     @classmethod
     def from_file(cls, path: str | Path | None = None, seed: int | None = None) -> "Simulation":
@@ -82,7 +110,13 @@ class Simulation:
         return cls(parse_scenario(data, source), seed=seed, source=source)
 
     def _build(self) -> None:
-        built: Built = build(self.config, self.seed, self.source, handles=self.robots)
+        world = None
+        if self._ground is not None:
+            if hasattr(self, "world"):  # a reset: this copy's bodies leave the shared space
+                self.world.retire([b for r in self._robots for b in (r.body, r.control)])
+            world = World(self.config, self._ground, self._replica)
+        built: Built = build(self.config, self.seed, self.source, handles=self.robots,
+                             world=world)
         self._built = built
         self.robots.clear()
         self.robots.update(built.robots)  # the same dict and the same handles after a reset
@@ -126,20 +160,39 @@ class Simulation:
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
+        if self._ground is not None:
+            raise RuntimeError("a copy on a shared ground advances with its Replicas.step()")
         started = wallclock.perf_counter()
-        built, world, dt = self._built, self.world, self.dt
-        now = self.steps * dt  # self.time, inlined: this runs every tick
+        self._before_physics()
+        propulsion = self._built.propulsion
+        propulsion.step(self.dt / self.substeps, self.substeps)
+        now = self._bookkeep(propulsion.positions())
+        self._read_sensors(now)
+        self._after_sensors(now)
+        self.wall_time += wallclock.perf_counter() - started
+        for observer in self.observers:
+            observer(self)
+
+    # The tick's phases, in order (Replicas runs them for many copies around one physics step).
+    def _before_physics(self) -> None:
+        """Controllers whose period has come set commands; actors set their motion."""
+        now = self.steps * self.dt  # self.time, inlined: this runs every tick
         self._run_controllers(now)
-        for actor in world.actors:
-            actor.before_step(now, dt)
-        propulsion = built.propulsion
-        propulsion.step(dt / self.substeps, self.substeps)
+        for actor in self.world.actors:
+            actor.before_step(now, self.dt)
+
+    def _bookkeep(self, positions: Any) -> float:
+        """After the physics: the clock, distance and goals from the robots' new positions,
+        odometry from the encoders. Returns the time now [s]."""
         self.steps += 1
-        now = world.time = self.steps * dt
-        built.fleet.advance(propulsion.positions(), now)
+        now = self.world.time = self.steps * self.dt
+        self._built.fleet.advance(positions, now)
         for drive, odometry in self._odometry:
             odometry.update(drive.take_travel())
-        self._read_sensors(now)
+        return now
+
+    def _after_sensors(self, now: float) -> None:
+        """Maps, localizers, localization scores and metrics, once the sensors have read."""
         for robot in self._mapping:
             scan = robot.lidar.latest
             if scan.time == now and robot.mapper.due(now):
@@ -148,11 +201,8 @@ class Simulation:
             robot.localizer.update(self._localizer_inputs(robot, now))
         if self._scores:
             self._score(now)
-        for metrics in built.metrics:
+        for metrics in self._built.metrics:
             metrics.update(now)
-        self.wall_time += wallclock.perf_counter() - started
-        for observer in self.observers:
-            observer(self)
 
     def run(self, duration: float) -> None:
         """Advance ``duration`` simulated seconds (rounded to whole steps)."""
@@ -190,13 +240,16 @@ class Simulation:
         if self._lidars:
             caster = self.world.ray_caster()
             caster.begin_frame()  # every LiDAR of this tick sees one scene
-            due = [self._lidars[k] for k in self._lidar_schedule.due(now).tolist()]
-            if len(due) > 1:  # one pass for all of them
-                casts = caster.cast_many(*zip(*(lidar.cast_request() for lidar in due)))
-                for lidar, true_ranges in zip(due, casts):
-                    lidar.record(now, true_ranges)
-            elif due:
-                due[0].record(now, due[0].true_ranges())
+            scan_all(caster, [(lidar, now) for lidar in self._due_lidars(now)])
+        self._read_other_sensors(now)
+
+    def _due_lidars(self, now: float) -> list[Any]:
+        """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
+        if not self._lidars:
+            return []
+        return [self._lidars[k] for k in self._lidar_schedule.due(now).tolist()]
+
+    def _read_other_sensors(self, now: float) -> None:
         for sensor in self._sensors:
             sensor.update(now)
 

@@ -15,26 +15,81 @@ from .plugins import obstacles as obstacle_kinds
 
 class World:
     """Owns the Space. ``actors`` move things before every tick (moving obstacles, pedestrians):
-    objects with ``before_step(time, dt)``."""
+    objects with ``before_step(time, dt)``.
 
-    def __init__(self, config: ScenarioConfig) -> None:
+    Copies of one scenario can share a Space (:mod:`pymunk_bot.replicas`): :meth:`ground`
+    builds the arena and the fixed obstacles once, and ``World(config, ground, replica)`` adds
+    one copy's movable obstacles, kept apart from the other copies' moving shapes."""
+
+    def __init__(self, config: ScenarioConfig, ground: "World | None" = None,
+                 replica: int | None = None, *, movables: bool = True) -> None:
         self.config = config
         self.width, self.height = config.world.arena
         # (x0, y0, x1, y1) [m]: [0, width] x [0, height], or a map's extent in the map's frame
         self.extent: tuple[float, float, float, float] = config.world.extent
-        self.space = physics.new_space(
-            pushable=any(getattr(o, "movable", False) for o in config.obstacles))
-        self.map = config.world.map_geometry()  # a MapGeometry, or None
-        self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
-        self.obstacles: list[Obstacle] = [
-            obstacle_kinds.get(o.type)(self.space, o) for o in config.obstacles]
+        self.replica = replica
+        self._own: list[Obstacle] = []  # the movable obstacles this world added to the space
+        if ground is None:
+            self.space = physics.new_space(
+                pushable=any(getattr(o, "movable", False) for o in config.obstacles))
+            self.map = config.world.map_geometry()  # a MapGeometry, or None
+            self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
+            self.substeps = config.world.substeps or required_substeps(config)
+            self._caster: Any = None
+            self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
+            for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
+                self.space.on_collision(physics.ROBOT, other, begin=self._begin)
+            self._fixed: dict[int, Obstacle] = {}
+        else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
+            self.space, self.map, self.arena_shapes = ground.space, ground.map, ground.arena_shapes
+            self.substeps, self._on_contact = ground.substeps, ground._on_contact
+            self._ground = ground
+            self._fixed = ground._fixed
+        self.obstacles: list[Obstacle] = []
+        for index, o in enumerate(config.obstacles):  # in the file's order, for determinism
+            fixed = self._fixed.get(index)
+            if fixed is not None:  # a copy: the ground's
+                self.obstacles.append(fixed)
+                continue
+            obstacle = obstacle_kinds.get(o.type)(self.space, o)
+            if obstacle.movable:
+                if not movables:  # the ground holds no moving body: each copy adds its own
+                    self.space.remove(*obstacle.body.constraints, *obstacle.shapes, obstacle.body)
+                    continue
+                if replica is not None:
+                    for shape in obstacle.shapes:
+                        shape.filter = physics.replica_filter(replica)
+                self._own.append(obstacle)
+            elif not movables:
+                self._fixed[index] = obstacle
+            self.obstacles.append(obstacle)
         self.actors: list[Any] = []
         self.time = 0.0  # simulated time [s], kept by the simulation
-        self.substeps = config.world.substeps or required_substeps(config)
-        self._caster: Any = None
-        self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
-        for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
-            self.space.on_collision(physics.ROBOT, other, begin=self._begin)
+
+    @classmethod
+    def ground(cls, config: ScenarioConfig) -> "World":
+        """The arena and fixed obstacles of ``config`` alone: what copies of it share."""
+        return cls(config, movables=False)
+
+    def shape_filter(self, group: int) -> pymunk.ShapeFilter:
+        """The filter of a robot's shapes: its ``group`` keeps its LiDAR off its own body (and,
+        in a copy on a shared ground, its category keeps it apart from the other copies)."""
+        if self.replica is None:
+            return pymunk.ShapeFilter(group=group)
+        return physics.replica_filter(self.replica, group)
+
+    def retire(self, bodies: list[pymunk.Body]) -> None:
+        """Take this copy's movable obstacles and the given bodies (its robots' bodies and
+        control bodies), with their shapes and joints, out of the shared space."""
+        gone: dict[Any, None] = {}  # ordered and unique: two bodies may share a joint
+        for body in [o.body for o in self._own] + bodies:
+            gone.update(dict.fromkeys(body.constraints))
+            for shape in body.shapes:
+                self._on_contact.pop(shape, None)
+                gone[shape] = None
+            gone[body] = None
+        self.space.remove(*gone)
+        self._own.clear()
 
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
@@ -55,7 +110,10 @@ class World:
 
     def ray_caster(self) -> Any:
         """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:
-        only worlds with a LiDAR pay for its geometry tables)."""
+        only worlds with a LiDAR pay for its geometry tables; one per space)."""
+        ground = getattr(self, "_ground", None)
+        if ground is not None:
+            return ground.ray_caster()
         if self._caster is None:
             from .sensors.raycast import RayCaster
             self._caster = RayCaster(self.space)

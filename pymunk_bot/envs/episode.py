@@ -9,6 +9,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..config import ScenarioConfig
+from ..replicas import Replicas
 from ..sim import Simulation
 from .task import RewardWeights, RobotTask, arena_size, load_config, prepare_scenario, \
     robot_result, sample_goal
@@ -21,10 +22,9 @@ SEED_BOUND = 2**31 - 1  # simulation seeds drawn from the episode's generator li
 def advance(sims: Sequence[Simulation], steps: int) -> None:
     """Advance every simulation by ``steps`` physics steps: one control period for all.
 
-    The one place where the environments move their worlds: a batched core (one call that
-    steps many worlds and casts all their LiDAR beams at once) replaces this loop. Until then
-    each world runs its steps in one go: interleaving the worlds tick by tick measured 1.6x
-    slower (16 worlds), each Space falling out of the caches between its ticks.
+    For worlds of their own (each world runs its steps in one go: interleaving them tick by
+    tick measured 1.6x slower for 16 worlds, each Space falling out of the caches between its
+    ticks). Copies sharing a space advance together instead: :meth:`Replicas.step`.
     """
     for sim in sims:
         for _ in range(steps):
@@ -73,11 +73,22 @@ class NavigationEpisode:
                               RewardWeights.from_any(reward), pose_source)
         self.sim: Simulation | None = None
         self.done = True  # no episode under way until reset
+        self._copy: tuple[Replicas, int] | None = None
+
+    def share(self, replicas: "Replicas", index: int) -> None:
+        """Play every episode in copy ``index`` of ``replicas`` (a space shared with other
+        episodes) instead of a simulation of its own."""
+        self._copy = (replicas, index)
+        self.sim = None
 
     def reset(self, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         """Start an episode: the simulation seed (and a random goal) come from ``rng``."""
         seed = int(rng.integers(SEED_BOUND))
-        if self.sim is None:
+        if self._copy is not None:
+            replicas, index = self._copy
+            replicas.reset(index, seed)
+            self.sim = replicas.sims[index]
+        elif self.sim is None:
             self.sim = Simulation(self.config, seed=seed, source=self.source)
         else:
             self.sim.reset(seed)

@@ -1,11 +1,12 @@
-"""A native vector env: N navigation worlds stepped together through one call.
+"""A native vector env: N navigation worlds stepped together, up to 16 to a pymunk Space.
 
     envs = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=16,
                         vectorization_mode="vector_entry_point")
 
-Sub-env i reset with seed s + i plays exactly the episode a single env reset with that seed
-plays. Autoreset follows Gymnasium 1.x (NEXT_STEP by default: the step after an episode ends
-resets that slot, ignores its action and returns reward 0; SAME_STEP and DISABLED also work).
+Sub-env i reset with seed s + i plays the episode a single env reset with that seed plays:
+exactly, as long as its robot pushes nothing (see docs/learning.md). Autoreset follows
+Gymnasium 1.x (NEXT_STEP by default: the step after an episode ends resets that slot, ignores
+its action and returns reward 0; SAME_STEP and DISABLED also work).
 """
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..physics import MAX_REPLICAS
+from ..replicas import Replicas, shareable
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
 
@@ -29,13 +32,18 @@ MAX_ENVS = 4096
 
 class NavigationVectorEnv(VectorEnv):
     """``num_envs`` copies of :class:`~pymunk_bot.envs.NavigationEnv` (same keyword
-    arguments) whose simulations advance in lockstep (:func:`~pymunk_bot.envs.episode.advance`)."""
+    arguments) whose simulations advance in lockstep.
+
+    ``share_space`` (default): up to MAX_REPLICAS worlds share one pymunk Space and advance
+    as one (:class:`~pymunk_bot.replicas.Replicas`), unless the scenario has pedestrians.
+    False: each world in a space of its own (slower; a pushed crate then moves exactly as in a
+    single env, where sharing can change its last bits: see docs/learning.md)."""
 
     metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, num_envs: int = 1, render_mode: str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
-                 **kwargs: Any) -> None:
+                 share_space: bool = True, **kwargs: Any) -> None:
         if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_ENVS):
             raise ValueError(f"num_envs must be an integer in [1, {MAX_ENVS}] (got {num_envs!r})")
         if render_mode not in (None, "rgb_array"):
@@ -48,6 +56,7 @@ class NavigationVectorEnv(VectorEnv):
         self.episodes = [first] + [NavigationEpisode(**kwargs) for _ in range(num_envs - 1)]
         for episode in self.episodes[1:]:
             episode.source = first.source
+        self._shards = self._share_spaces(first) if share_space and num_envs > 1 else []
         self.num_envs = num_envs
         self.render_mode = render_mode
         self.single_observation_space, self.single_action_space = make_spaces(first.task)
@@ -99,9 +108,15 @@ class NavigationVectorEnv(VectorEnv):
         stepping = [i for i in range(n) if not self._autoreset[i]]
         for i in stepping:
             self.episodes[i].act(actions[i])
-        advance([sims[i] for i in stepping],
-                self.episodes[0].steps_per_action)
-        infos: dict = {}
+        steps = self.episodes[0].steps_per_action
+        if self._shards:  # every copy advances, even one about to be reset: it shares the step
+            for shard in self._shards:
+                for _ in range(steps):
+                    shard.step()
+        else:
+            advance([sims[i] for i in stepping], steps)
+        each: list[dict] = []
+        final: list[tuple[int, dict]] = []
         for i in range(n):
             episode = self.episodes[i]
             if self._autoreset[i]:  # NEXT_STEP: this step is the reset
@@ -111,9 +126,11 @@ class NavigationVectorEnv(VectorEnv):
                  info) = episode.finish(self._obs[i])
                 if self.autoreset_mode == AutoresetMode.SAME_STEP and (terminated[i] or
                                                                        truncated[i]):
-                    infos = self._add_info(infos, {"final_obs": self._obs[i].copy(),
-                                                   "final_info": info}, i)
+                    final.append((i, {"final_obs": self._obs[i].copy(), "final_info": info}))
                     self._obs[i], info = episode.reset(self._rngs[i])
+            each.append(info)
+        infos = self._gather_infos(each)
+        for i, info in final:
             infos = self._add_info(infos, info, i)
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             self._autoreset = terminated | truncated
@@ -123,6 +140,38 @@ class NavigationVectorEnv(VectorEnv):
                 self.episodes[k].done = True
         self._attach_renderers()
         return self._obs.copy(), rewards, terminated, truncated, infos
+
+    def _gather_infos(self, each: list[dict]) -> dict:
+        """Gymnasium's dict of arrays (each key with its ``_key`` mask) from every env's info:
+        what ``_add_info`` env by env gives, with the keys every env has in one array each."""
+        n, infos = self.num_envs, {}
+        scalars = (int, float, bool, np.bool_, np.integer, np.floating)
+        for key, value in each[0].items():
+            kind = type(value)
+            if isinstance(value, scalars) and all(type(info.get(key)) is kind for info in each):
+                infos[key] = np.array([info[key] for info in each], dtype=kind)
+                infos[f"_{key}"] = np.ones(n, dtype=np.bool_)
+        for i, info in enumerate(each):
+            rest = {k: v for k, v in info.items() if k not in infos}
+            if rest:
+                infos = self._add_info(infos, rest, i)
+        return infos
+
+    def _share_spaces(self, first: NavigationEpisode) -> list[Replicas]:
+        """The worlds as copies sharing spaces (MAX_REPLICAS to a space), when the scenario
+        allows it (no pedestrians); else none: each world keeps a space of its own."""
+        if shareable(first.config):
+            return []
+        n = len(self.episodes)
+        count = -(-n // MAX_REPLICAS)
+        shards = []
+        for k in range(count):
+            members = self.episodes[k * n // count:(k + 1) * n // count]
+            shard = Replicas(first.config, [0] * len(members), first.source)
+            for index, episode in enumerate(members):
+                episode.share(shard, index)
+            shards.append(shard)
+        return shards
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         if self.render_mode is None:

@@ -139,17 +139,44 @@ def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
     assert env.state().shape == (6,)
 
 
-def test_one_call_advances_every_world_per_vector_step(monkeypatch):
-    """The seam a batched core replaces: one advance(sims, steps) call per step, all worlds."""
-    import pymunk_bot.envs.vector as vector
+def test_the_worlds_share_spaces_and_advance_together():
+    """Up to 16 worlds to a pymunk Space, every one a control period further per step."""
+    from pymunk_bot.physics import MAX_REPLICAS
 
-    calls = []
-    real = vector.advance
-    monkeypatch.setattr(vector, "advance", lambda sims, steps: (calls.append((len(sims), steps)),
-                                                                real(sims, steps)))
-    envs = NavigationVectorEnv(num_envs=4, scenario=short_task(duration=2.0))
+    envs = NavigationVectorEnv(num_envs=MAX_REPLICAS + 4, scenario=short_task(duration=2.0))
     envs.reset(seed=0)
-    envs.step(np.zeros((4, 2), np.float32))
-    envs.step(np.zeros((4, 2), np.float32))
-    assert calls == [(4, 6), (4, 6)]  # 0.1 s = 6 physics steps of 1/60 s
+    envs.step(np.zeros((MAX_REPLICAS + 4, 2), np.float32))
+    envs.step(np.zeros((MAX_REPLICAS + 4, 2), np.float32))
+    spaces = {id(e.sim.world.space) for e in envs.episodes}
+    assert len(spaces) == 2  # 20 worlds: two spaces of 10
     assert all(e.sim.time == pytest.approx(0.2) for e in envs.episodes)
+
+
+def test_worlds_with_pedestrians_keep_spaces_of_their_own():
+    scenario = short_task(duration=2.0)
+    scenario["obstacles"] = [{"type": "pedestrian", "center": [3.0, 0.5], "goals": [[3.0, 2.5]]}]
+    envs = NavigationVectorEnv(num_envs=2, scenario=scenario)
+    envs.reset(seed=0)
+    envs.step(np.zeros((2, 2), np.float32))
+    assert envs.episodes[0].sim.world.space is not envs.episodes[1].sim.world.space
+
+
+def test_worlds_of_their_own_push_crates_exactly_as_single_envs():
+    """share_space=False: each world in its own space, float for float the single env's
+    episode, crate pushing included."""
+    from pymunk_bot.config import load_scenario
+
+    data = load_scenario(None).model_dump(exclude_unset=True)
+    data["robots"][0]["pose"] = [4.0, 4.7, 0.0]  # the crate 1 m ahead
+    envs = NavigationVectorEnv(num_envs=2, scenario=data, share_space=False)
+    singles = [NavigationEnv(scenario=data) for _ in range(2)]
+    obs, _ = envs.reset(seed=3)
+    for i, env in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], env.reset(seed=3 + i)[0])
+    assert envs.episodes[0].sim.world.space is not envs.episodes[1].sim.world.space
+    actions = np.array([[0.6, 0.05], [0.5, -0.05]], np.float32)
+    for _ in range(40):
+        obs, rewards, *_ = envs.step(actions)
+        for i, env in enumerate(singles):
+            np.testing.assert_array_equal(obs[i], env.step(actions[i])[0])
+    assert all(e.sim.world.obstacles[4].body.position.x > 5.1 for e in envs.episodes)  # pushed

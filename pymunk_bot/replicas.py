@@ -1,0 +1,106 @@
+"""Copies of one scenario in one pymunk Space, advanced as one: the vector env's core.
+
+Each copy is a whole :class:`~pymunk_bot.sim.Simulation` of its own (robots, sensors, seed,
+clock, results) and can be reset alone. The arena and fixed obstacles are built once and
+shared; each copy's moving shapes (robots, crates, scripted movers) are in a category of their
+own, so they meet, and their sensors see, only the fixed world and their own copy. One tick
+steps the Space once for every copy, steers every robot in one pass and casts every due LiDAR
+in one call.
+
+    replicas = Replicas(config, seeds=[0, 1, 2, 3])
+    replicas.step()                      # every copy advances dt
+    replicas.reset(2, seed=7)            # copy 2 starts again, the others run on
+    replicas.sims[2].robots["r1"].pose
+"""
+from __future__ import annotations
+
+import time as wallclock
+from typing import Any, Sequence
+
+from .actors.motion import ScriptedMotion
+from .config import ScenarioConfig
+from .physics import MAX_REPLICAS
+from .propulsion import Propulsion
+from .sim import Simulation, scan_all
+from .world import World
+
+
+class Replicas:
+    """``len(seeds)`` copies of ``config`` (at most MAX_REPLICAS) sharing one Space."""
+
+    def __init__(self, config: ScenarioConfig, seeds: Sequence[int],
+                 source: str | None = None) -> None:
+        if not 1 <= len(seeds) <= MAX_REPLICAS:
+            raise ValueError(f"a shared space holds 1 to {MAX_REPLICAS} copies (got {len(seeds)})")
+        problem = shareable(config)
+        if problem:
+            raise ValueError(f"copies of scenario '{config.name}' cannot share a space: {problem}")
+        self.ground = World.ground(config)
+        self.sims = [Simulation._on_ground(config, seed, source, self.ground, r)
+                     for r, seed in enumerate(seeds)]
+        self.dt = self.sims[0].dt
+        self.substeps = self.sims[0].substeps
+        self._propulsion: Propulsion | None = None
+        self._assemble()
+
+    def reset(self, index: int, seed: int | None = None) -> None:
+        """Rebuild copy ``index`` (with a new ``seed``); the other copies are untouched."""
+        self.sims[index].reset(seed)
+        self._assemble()
+
+    def step(self) -> None:
+        """Advance every copy by one physics step of ``dt``: the tick of
+        :meth:`Simulation.step <pymunk_bot.sim.Simulation.step>` for all of them at once."""
+        started = wallclock.perf_counter()
+        sims, propulsion = self.sims, self._propulsion
+        assert propulsion is not None
+        for sim in self._driven:  # the copies with controllers or actors
+            sim._before_physics()
+        propulsion.step(self.dt / self.substeps, self.substeps)
+        positions = propulsion.positions()
+        due: list[tuple[Any, float]] = []
+        for sim, (start, stop) in zip(sims, self._spans):
+            now = sim._bookkeep(positions[start:stop])
+            if sim._lidars:
+                due.extend((lidar, now) for lidar in sim._due_lidars(now))
+        caster = self.ground.ray_caster()
+        caster.begin_frame()  # every copy's LiDARs see one scene
+        scan_all(caster, due)
+        for sim in self._busy:  # the copies with more to do after their LiDARs
+            now = sim.time
+            sim._read_other_sensors(now)
+            sim._after_sensors(now)
+        share = (wallclock.perf_counter() - started) / len(sims)
+        for sim in sims:
+            sim.wall_time += share
+            for observer in sim.observers:
+                observer(sim)
+
+    def _assemble(self) -> None:
+        """One Propulsion for every copy's robots (rebuilt after a reset: a copy's bodies
+        are new), keeping what the old one knew about the bodies that stayed."""
+        bodies, controls, groups, spans = [], [], [], []
+        for sim in self.sims:
+            start = len(bodies)
+            for robot in sim._robots:
+                bodies.append(robot.body)
+                controls.append(robot.control)
+            for group, idx in sim._built.drive_groups:
+                groups.append((group, [start + i for i in idx]))
+            spans.append((start, len(bodies)))
+        propulsion = Propulsion(self.ground.space, bodies, controls, groups)
+        if self._propulsion is not None:
+            propulsion.adopt(self._propulsion)
+        self._propulsion, self._spans = propulsion, spans
+        self._driven = [sim for sim in self.sims if sim._controlled or sim.world.actors]
+        self._busy = [sim for sim in self.sims if sim._sensors or sim._mapping or sim._localized
+                      or sim._scores or sim._built.metrics]
+
+
+def shareable(config: ScenarioConfig) -> str:
+    """Why copies of ``config`` cannot share a space ('' if they can)."""
+    probe = Simulation(config)  # what a copy would hold, built once on its own
+    for actor in probe.world.actors:
+        if not isinstance(actor, ScriptedMotion):  # pedestrians look around the whole space
+            return f"its {type(actor).__name__} would meet the other copies"
+    return ""

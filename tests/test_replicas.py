@@ -1,0 +1,114 @@
+"""Copies of a scenario sharing one Space: each plays exactly the run it would play alone,
+and no copy meets or sees another."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pymunk_bot.config import load_scenario, parse_scenario
+from pymunk_bot.physics import MAX_REPLICAS
+from pymunk_bot.replicas import Replicas
+from pymunk_bot.sim import Simulation
+
+
+def _lidar_default(crate: bool = True):
+    """The built-in default (walls, pillars and, with ``crate``, a pushable crate) with a
+    90-beam LiDAR, the robot starting in front of where the crate is."""
+    data = load_scenario(None).model_dump(exclude_unset=True)
+    data["robots"][0]["lidar"] = {"beams": 90, "noise_std": 0.01}
+    data["robots"][0].pop("controller", None)
+    data["robots"][0]["pose"] = [4.0, 4.7, 0.0]  # facing the crate 1 m ahead
+    if not crate:
+        data["obstacles"] = [o for o in data["obstacles"] if not o.get("movable")]
+    return parse_scenario(data, "default")
+
+
+def _drive(sims, commands) -> None:
+    for sim, (v, omega) in zip(sims, commands):
+        sim.robots["r1"].set_velocity(float(v), float(omega))
+
+
+def _wander(config, periods: int, check) -> tuple[Replicas, list[Simulation]]:
+    """Three copies and three single runs driven alike into walls (and the crate) for
+    ``periods`` x 0.1 s, copy 1 reset half way; ``check(copies, singles, period)`` after each."""
+    seeds = [11, 22, 33]
+    copies = Replicas(config, seeds)
+    alone = [Simulation(config, seed=s) for s in seeds]
+    rng = np.random.default_rng(0)
+    for period in range(periods):
+        commands = np.column_stack([rng.uniform(0.1, 0.5, 3), rng.uniform(-1.5, 1.5, 3)])
+        _drive(copies.sims, commands)
+        _drive(alone, commands)
+        for _ in range(6):
+            copies.step()
+            for sim in alone:
+                sim.step()
+        if period == periods // 2:
+            copies.reset(1, seed=99)
+            alone[1].reset(99)
+        check(copies.sims, alone, period)
+    assert sum(s.robots["r1"].collisions for s in alone) > 10  # they did meet things
+    return copies, alone
+
+
+def test_each_copy_plays_its_single_run_to_the_bit():
+    """Where only the robots move, a copy's run is its single run, float for float."""
+    def same(copies, alone, period):
+        for shared, single in zip(copies, alone):
+            a, b = shared.robots["r1"], single.robots["r1"]
+            assert np.array_equal(a.pose, b.pose), period
+            assert np.array_equal(a.lidar.latest.ranges, b.lidar.latest.ranges), period
+            assert np.array_equal(a.odometry.pose, b.odometry.pose), period
+
+    copies, alone = _wander(_lidar_default(crate=False), 600, same)
+    assert [s.result()["robots"] for s in copies.sims] == [s.result()["robots"] for s in alone]
+
+
+def test_copies_pushing_crates_stay_within_a_millimetre_of_their_single_runs():
+    """pymunk orders contacts between moving bodies by their place in the space, so a pushed
+    crate's last bits can differ from its single run's, and a long push can grow that."""
+    gaps = []
+
+    def close(copies, alone, period):
+        for shared, single in zip(copies, alone):
+            crate = shared.world.obstacles[4].body.position - single.world.obstacles[4].body.position
+            gaps.append(max(np.abs(shared.robots["r1"].pose - single.robots["r1"].pose).max(),
+                            abs(crate.x), abs(crate.y)))
+
+    copies, _ = _wander(_lidar_default(crate=True), 600, close)
+    assert max(gaps) < 1e-3
+    assert any(tuple(s.world.obstacles[4].body.position) != (5.0, 4.8) for s in copies.sims)
+
+
+def test_copies_neither_meet_nor_see_each_other():
+    config = parse_scenario({
+        "name": "two", "world": {"size": [6.0, 3.0]},
+        "obstacles": [{"type": "box", "center": [3.0, 1.5], "size": [0.4, 0.4],
+                       "movable": True, "mass": 1.0}],
+        "robots": [{"name": "r1", "pose": [1.0, 1.5, 0.0],
+                    "lidar": {"beams": 4, "fov": 6.283185307179586, "max_range": 5.0}}]}, "two")
+    copies = Replicas(config, [0, 1])
+    pusher, bystander = (sim.robots["r1"] for sim in copies.sims)
+    pusher.set_velocity(0.8, 0.0)  # copy 0 drives through where copy 1's robot stands
+    ahead = int(np.argmin(np.abs(bystander.lidar.angles)))
+    seen = []
+    for _ in range(240):
+        copies.step()
+        if 1.6 < pusher.pose[0] < 2.4:  # copy 0's robot right in front of copy 1's
+            seen.append(float(bystander.lidar.scan()[ahead]))
+    assert seen and seen == pytest.approx([1.8] * len(seen), abs=1e-9)  # its own crate only
+    assert bystander.pose[0] == pytest.approx(1.0, abs=1e-9)  # never pushed by copy 0
+    crate_0, crate_1 = (sim.world.obstacles[0].body.position for sim in copies.sims)
+    assert crate_0.x > 3.5 and crate_1.x == pytest.approx(3.0)  # copy 0 pushed its own crate only
+    # Copy 1 still sees its own crate ahead (its near face at 2.8 m), not copy 0's.
+    assert bystander.lidar.scan()[ahead] == pytest.approx(1.8, abs=1e-9)
+    assert bystander.collisions == 0
+
+
+def test_what_cannot_share_a_space_is_refused():
+    with pytest.raises(ValueError, match="pedestrian|Crowd"):
+        Replicas(load_scenario("pedestrian_corridor"), [0, 1])
+    with pytest.raises(ValueError, match=f"1 to {MAX_REPLICAS}"):
+        Replicas(_lidar_default(), list(range(MAX_REPLICAS + 1)))
+    with pytest.raises(RuntimeError, match="Replicas.step"):
+        Replicas(_lidar_default(), [0]).sims[0].step()
