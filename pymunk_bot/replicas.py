@@ -17,6 +17,8 @@ from __future__ import annotations
 import time as wallclock
 from typing import Any, Sequence
 
+import pymunk
+
 from .actors.motion import ScriptedMotion
 from .config import ScenarioConfig
 from .physics import MAX_REPLICAS
@@ -79,7 +81,10 @@ class Replicas:
     def _assemble(self) -> None:
         """One Propulsion for every copy's robots (rebuilt after a reset: a copy's bodies
         are new), keeping what the old one knew about the bodies that stayed."""
-        bodies, controls, groups, spans = [], [], [], []
+        bodies: list[pymunk.Body] = []
+        controls: list[pymunk.Body] = []
+        groups: list[tuple[Any, list[int]]] = []
+        spans: list[tuple[int, int]] = []
         for sim in self.sims:
             start = len(bodies)
             for robot in sim._robots:

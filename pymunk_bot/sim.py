@@ -72,6 +72,9 @@ class Simulation:
     7. metrics that an expectation needs; then the observers (loggers, recorders, views).
     """
 
+    world: World
+    _robots: list[Robot]
+
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None) -> None:
         self.config = config

@@ -154,13 +154,13 @@ class RayCaster:
             sides = np.zeros((k, 2, 5))
             n_sides = np.zeros(k, dtype=np.intp)
             cornered = np.zeros(k, dtype=np.bool_)
-            for i, (x, y, c) in enumerate(zip(ox.tolist(), oy.tolist(), scale.tolist())):
+            for row, (x, y, c) in enumerate(zip(ox.tolist(), oy.tolist(), scale.tolist())):
                 directions = self._side_directions(x, y, c)
                 if directions is None:
-                    cornered[i] = True
+                    cornered[row] = True
                 elif directions:
-                    sides[i, :, :len(directions)] = _side_lohi(directions)
-                    n_sides[i] = len(directions)
+                    sides[row, :, :len(directions)] = _side_lohi(directions)
+                    n_sides[row] = len(directions)
             return sides, n_sides, cornered
         near, corner = 1e-7 * scale, EDGE_NEAR * scale
         found = []
