@@ -18,6 +18,10 @@ class Command:
     vy: float = 0.0
 
     def __post_init__(self) -> None:
+        v, omega, vy = self.v, self.omega, self.vy
+        if (type(v) is float and type(omega) is float and type(vy) is float and  # the usual case
+                math.isfinite(v) and math.isfinite(omega) and math.isfinite(vy)):
+            return
         for name in ("v", "omega", "vy"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):

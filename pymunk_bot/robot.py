@@ -160,33 +160,33 @@ class Robot:
     @property
     def collisions(self) -> int:
         """Contact episodes so far (a begin of contact with anything)."""
-        return int(self._fleet.collisions[self._i])
+        return self._fleet.collisions.item(self._i)
 
     @property
     def goal(self) -> tuple[float, float] | None:
         """The task goal [m] (None: none)."""
-        g = self._fleet.goal[self._i]
-        return None if np.isnan(g[0]) else (float(g[0]), float(g[1]))
+        x, y = self._fleet.goal[self._i].tolist()
+        return None if math.isnan(x) else (x, y)
 
     @property
     def goal_tolerance(self) -> float:
-        return float(self._fleet.tolerance[self._i])
+        return self._fleet.tolerance.item(self._i)
 
     @property
     def time_to_goal(self) -> float | None:
         """Simulated time when the goal was first reached [s] (0: started inside it); None: not yet."""
-        t = self._fleet.time_to_goal[self._i]
-        return None if np.isnan(t) else float(t)
+        t = self._fleet.time_to_goal.item(self._i)
+        return None if math.isnan(t) else t
 
     @property
     def distance_to_goal(self) -> float | None:
         """Path length when the goal was reached [m]; None: not yet."""
-        d = self._fleet.distance_to_goal[self._i]
-        return None if np.isnan(d) else float(d)
+        d = self._fleet.distance_to_goal.item(self._i)
+        return None if math.isnan(d) else d
 
     @property
     def goal_reached(self) -> bool:
-        return not np.isnan(self._fleet.time_to_goal[self._i])
+        return not math.isnan(self._fleet.time_to_goal.item(self._i))
 
     def set_goal(self, position: tuple[float, float], tolerance: float | None = None) -> None:
         """A new task goal (e.g. a click in the viewer); the controller drives there too."""

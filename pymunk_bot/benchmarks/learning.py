@@ -85,8 +85,11 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     return steps / (time.process_time() - started)
 
 
-def vector_vs_separate(num_envs: int = 16, steps: int = 100) -> tuple[float, float]:
-    """(env steps per second) of the native vector env and of ``num_envs`` gym.make envs."""
+def vector_vs_separate(num_envs: int = 16, steps: int = 100, repeats: int = 5
+                       ) -> tuple[float, float]:
+    """(env steps per second) of the native vector env and of ``num_envs`` gym.make envs
+    stepped one after another: blocks of ``steps`` steps alternate between the two, and each
+    figure is the median over ``repeats`` blocks."""
     import gymnasium as gym
 
     import pymunk_bot.envs  # noqa: F401
@@ -96,19 +99,21 @@ def vector_vs_separate(num_envs: int = 16, steps: int = 100) -> tuple[float, flo
                        vectorization_mode="vector_entry_point", **kwargs)
     vec.reset(seed=0)
     actions = np.tile(ACTION, (num_envs, 1))
-    started = time.process_time()
-    for _ in range(steps):
-        vec.step(actions)
-    vector = num_envs * steps / (time.process_time() - started)
     envs = [gym.make("pymunk_bot/Navigation-v0", **kwargs) for _ in range(num_envs)]
     for i, env in enumerate(envs):
         env.reset(seed=i)
-    started = time.process_time()
-    for _ in range(steps):
-        for env in envs:
-            env.step(ACTION)
-    separate = num_envs * steps / (time.process_time() - started)
-    return vector, separate
+    vector_rates, separate_rates = [], []
+    for _ in range(repeats):
+        started = time.process_time()
+        for _ in range(steps):
+            vec.step(actions)
+        vector_rates.append(num_envs * steps / (time.process_time() - started))
+        started = time.process_time()
+        for _ in range(steps):
+            for env in envs:
+                env.step(ACTION)
+        separate_rates.append(num_envs * steps / (time.process_time() - started))
+    return statistics.median(vector_rates), statistics.median(separate_rates)
 
 
 def sweep_scenario() -> dict:
@@ -178,7 +183,8 @@ def run(quick: bool = False) -> dict:
     results: dict[str, Any] = {"env_steps_per_s": env, "bare_pymunk_steps_per_s": bare,
                                "env_ratio": env / bare}
     for n in (16, 64):
-        vector, separate = vector_vs_separate(n, steps=30 if quick else 100)
+        vector, separate = vector_vs_separate(n, steps=20 if quick else 50,
+                                              repeats=3 if quick else 5)
         print(f"  {n} envs: vector env {vector:8.0f}   {n} separate envs {separate:8.0f}   "
               f"ratio {vector / separate:.2f}x")
         results[f"vector_{n}"] = (vector, separate)

@@ -43,6 +43,7 @@ class DiffDriveGroup(DriveGroup):
         self._travel: Any = zeros()  # wheel travel since take_travel [m]
         self._accel = self.max_accel.tolist()
         self._track = self.track.tolist()
+        self._twists: tuple[list[float], list[float], list[float]] | None = None  # of commanded
 
     def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
@@ -82,6 +83,7 @@ class DiffDriveGroup(DriveGroup):
 
     def _advance_each(self, h: float) -> tuple[list[float], list[float], list[float]]:
         """The same arithmetic robot by robot: cheaper than numpy for a few robots."""
+        self._twists = None  # the commanded speeds may change
         for i, (l0, r0) in enumerate(self.commanded):
             self.turning[i] = [l0, r0]
             travel = self._travel[i]
@@ -103,18 +105,19 @@ class DiffDriveGroup(DriveGroup):
 
     def settled(self) -> bool:
         if self.small:
-            return all(c == t for c, t in zip(self.commanded, self.target))
+            return self.commanded == self.target  # lists of [left, right]: compared in C
         return bool(np.array_equal(self.commanded, self.target))
 
     def coast(self, h: float, substeps: int) -> tuple[Any, Any, Any]:
         span = h * substeps  # [s] the wheels turn at their commanded speeds throughout
         if self.small:
-            for i, (left, right) in enumerate(self.commanded):
-                self.turning[i] = [left, right]
-                travel = self._travel[i]
-                travel[0] += left * span
-                travel[1] += right * span
-            return self._twists_each()
+            for wheels, turning, travel in zip(self.commanded, self.turning, self._travel):
+                turning[:] = wheels
+                travel[0] += wheels[0] * span
+                travel[1] += wheels[1] * span
+            if self._twists is None:  # settled: the same until the commanded speeds change
+                self._twists = self._twists_each()
+            return self._twists
         self.turning[:] = self.commanded
         self._travel += self.commanded * span
         left, right = self.commanded[:, 0], self.commanded[:, 1]

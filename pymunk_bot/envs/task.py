@@ -212,7 +212,10 @@ class RobotTask:
         values = np.asarray(action, dtype=np.float64).reshape(-1).tolist()
         if len(values) != self.action_size or not all(map(math.isfinite, values)):
             raise ValueError(f"action must be {self.action_size} finite numbers (got {action!r})")
-        a = [min(1.0, max(-1.0, value)) for value in values]
+        self.command([min(1.0, max(-1.0, value)) for value in values])
+
+    def command(self, a: list[float]) -> None:
+        """Command a checked, clipped normalised action (``action_size`` floats in [-1, 1])."""
         robot = self.bound()
         if self.vy_max is None:
             robot.set_velocity(a[0] * self.v_max, a[1] * self.omega_max)
@@ -227,9 +230,15 @@ class RobotTask:
         else:
             robot.set_velocity(0.0, 0.0, 0.0)
 
-    def pose(self) -> np.ndarray:
+    def pose(self) -> tuple[float, float, float]:
+        """(x, y, theta) the task sees [m, m, rad]: the truth, or the odometry estimate."""
         robot = self.bound()
-        return robot.pose if self.pose_source == "ground_truth" else robot.odometry.pose
+        if self.pose_source == "ground_truth":
+            body = robot.body
+            x, y = body.position
+            return x, y, body.angle
+        x, y, theta = robot.odometry.pose.tolist()
+        return x, y, theta
 
     def goal_distance(self) -> float:
         goal = self.goal()
@@ -240,25 +249,22 @@ class RobotTask:
         """The observation vector (see the module docstring), written into ``out`` if given."""
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
         robot, b = self.bound(), self.beams
-        obs[:b] = robot.lidar.latest.ranges
+        obs[:b] = robot.lidar.latest.ranges  # within [min_range, max_range]: no clipping needed
         obs[:b] /= self.max_range
         x, y, theta = self.pose()
         gx, gy = self.goal()
         bearing = math.atan2(gy - y, gx - x) - theta
-        obs[b] = math.hypot(gx - x, gy - y) / self.diagonal
-        obs[b + 1] = math.cos(bearing)
-        obs[b + 2] = math.sin(bearing)
         body = robot.body
         c, s = math.cos(body.angle), math.sin(body.angle)
         vx, vy = body.velocity
-        obs[b + 3] = (c * vx + s * vy) / self.v_max
-        obs[b + 4] = body.angular_velocity / self.omega_max
+        tail = [math.hypot(gx - x, gy - y) / self.diagonal, math.cos(bearing), math.sin(bearing),
+                (c * vx + s * vy) / self.v_max, body.angular_velocity / self.omega_max]
         if self.vy_max is not None:
-            obs[b + 5] = (-s * vx + c * vy) / self.vy_max
+            tail.append((-s * vx + c * vy) / self.vy_max)
         # Contacts can push a robot past its own limits for a moment: keep to the bounds.
-        np.maximum(obs, -1.0, out=obs)  # np.clip costs twice as much
-        np.minimum(obs, 1.0, out=obs)
-        np.maximum(obs[: b + 1], 0.0, out=obs[: b + 1])
+        tail = [min(1.0, max(-1.0, value)) for value in tail]
+        tail[0] = max(0.0, tail[0])
+        obs[b:] = tail
         return obs
 
     def outcome(self, elapsed: float, terminate_on_collision: bool = False

@@ -106,8 +106,14 @@ class NavigationVectorEnv(VectorEnv):
         terminated = np.zeros(n, dtype=np.bool_)
         truncated = np.zeros(n, dtype=np.bool_)
         stepping = [i for i in range(n) if not self._autoreset[i]]
-        for i in stepping:
-            self.episodes[i].act(actions[i])
+        checked = actions.astype(np.float64)
+        if checked.shape[1] == self.episodes[0].task.action_size and np.isfinite(checked).all():
+            clipped = np.clip(checked, -1.0, 1.0).tolist()  # what each act() would clip to
+            for i in stepping:
+                self.episodes[i].task.command(clipped[i])
+        else:  # the env that got a bad action says what is wrong with it
+            for i in stepping:
+                self.episodes[i].act(actions[i])
         steps = self.episodes[0].steps_per_action
         if self._shards:  # every copy advances, even one about to be reset: it shares the step
             for shard in self._shards:

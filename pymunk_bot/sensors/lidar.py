@@ -9,7 +9,7 @@ A beam without a return reads max_range. Beam angles are fixed in the robot fram
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import Protocol, Sequence
 
 import numpy as np
 import pymunk
@@ -118,6 +118,9 @@ class Lidar:
         """Store the periodic scan taken at ``time`` [s] from these noise-free ranges [m]."""
         ranges = self._apply_model(true_ranges, self._periodic_rng)
         ranges.setflags(write=False)
+        self._keep(time, ranges)
+
+    def _keep(self, time: float, ranges: np.ndarray) -> None:
         c = self.config
         self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
                                 max_range=c.max_range, offset=self.offset, time=time)
@@ -145,3 +148,42 @@ class Lidar:
             no_return |= rng.random(true.shape[0]) < c.dropout
         ranges[no_return] = c.max_range
         return ranges
+
+
+def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
+    """:meth:`Lidar.record` for many LiDARs (each with the time [s] of its scan): the same
+    floats from the same random streams, with the model's array work done once for all the
+    noisy ones that share a beam count."""
+    noisy = [k for k, (lidar, _) in enumerate(due) if lidar.config.noise_std > 0.0]
+    beams = {true_ranges[k].shape[0] for k in noisy}
+    if len(noisy) < 2 or len(beams) != 1:
+        noisy = []
+    batch = set(noisy)
+    for k, ((lidar, time), true) in enumerate(zip(due, true_ranges)):
+        if k not in batch:
+            lidar.record(time, true)
+    if not noisy:
+        return
+    lidars = [due[k][0] for k in noisy]
+    true = np.stack([true_ranges[k] for k in noisy])
+    configs = [lidar.config for lidar in lidars]
+    std = np.array([c.noise_std for c in configs])[:, None]
+    low = np.array([c.min_range for c in configs])[:, None]
+    high = np.array([c.max_range for c in configs])[:, None]
+    ranges = np.empty_like(true)
+    for row, lidar in zip(ranges, lidars):
+        lidar._periodic_rng.standard_normal(out=row)
+    ranges *= std  # the single scan's true + std * noise, operand for operand
+    ranges += true
+    np.maximum(ranges, low, out=ranges)
+    np.minimum(ranges, high, out=ranges)
+    no_return = (true < low) | (true >= high)
+    for row, lidar in zip(no_return, lidars):
+        dropout = lidar.config.dropout
+        if dropout > 0.0:
+            row |= lidar._periodic_rng.random(row.shape[0]) < dropout
+    np.copyto(ranges, np.broadcast_to(high, ranges.shape), where=no_return)
+    ranges.setflags(write=False)
+    for row, k in zip(ranges, noisy):
+        lidar, time = due[k]
+        lidar._keep(time, row)

@@ -161,3 +161,27 @@ def test_side_lines_are_found_alike_for_few_and_many_origins():
         free = ~cornered  # a cornered origin takes the single cast's path: its sides unused
         assert np.array_equal(n_sides[free], many[1][chunk][free])
         assert np.array_equal(sides[free], many[0][chunk][free])
+
+
+def test_body_reader_gives_pymunks_own_transforms():
+    """One batch read gives every moving body's (cos, sin, tx, ty) exactly as pymunk's
+    rotation_vector and position, also after bodies come and go."""
+    from pymunk_bot.sensors.raycast.geometry import BodyReader, transforms
+
+    space, robots = sharp_world(4)
+    spare = pymunk.Body(body_type=pymunk.Body.KINEMATIC)  # shapeless, before the crate
+    space.add(spare)
+    crate = pymunk.Body(2.0, 1.0)
+    crate.position, crate.angle = (3.0, 3.0), 0.7
+    space.add(crate, pymunk.Poly(crate, [(0.1, 0.1), (0.6, 0.1), (0.3, 0.5)]))  # cog off the origin
+    bodies = robots + [crate]
+    reader = BodyReader(space, bodies)
+    assert reader.batched
+    rng = np.random.default_rng(2)
+    for step in range(20):
+        for body in bodies:
+            body.angular_velocity = float(rng.uniform(-40, 40))
+        space.step(0.05)
+        if step == 10:  # a shapeless body leaves: pymunk moves the last body into its place
+            space.remove(spare)
+        assert np.array_equal(reader.read(), transforms(bodies))

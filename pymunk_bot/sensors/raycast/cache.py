@@ -12,8 +12,8 @@ from typing import Callable
 import numpy as np
 import pymunk
 
-from .geometry import (AX, AY, BX, BY, RAD, ROWS, Collector, World, body_transform, kind_slices,
-                       merge, moved, transforms)
+from .geometry import (AX, AY, BX, BY, RAD, ROWS, BodyReader, Collector, World, body_transform,
+                       kind_slices, merge, moved)
 
 
 def bounding_boxes(world: World) -> np.ndarray:
@@ -141,7 +141,7 @@ class SceneCache:
     def _read_bodies(self, frame: _Frame) -> np.ndarray:
         """The moving bodies' transforms in this frame (read once), and how many moved."""
         if frame.tf is None:
-            frame.tf = tf = transforms(self._bodies)
+            frame.tf = tf = self._reader.read()
             before, self._last_tf = self._last_tf, tf
             frame.moved = (len(self._bodies) if before is None
                            else int(np.count_nonzero((tf != before).any(axis=0))))
@@ -229,6 +229,7 @@ class SceneCache:
             collect.add(s, len(static) + i)
         self._local = World(*collect.tables())
         self._bodies = list({id(_body(s)): _body(s) for s in dynamic}.values())
+        self._reader = BodyReader(self.space, self._bodies)
         slot = {id(b): k for k, b in enumerate(self._bodies)}
         self._shape_body = np.array([slot[id(s.body)] for s in dynamic], dtype=np.intp)
         self._prim_body = self._shape_body[self._local.owner - len(static)]
