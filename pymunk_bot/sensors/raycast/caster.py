@@ -69,16 +69,28 @@ class RayCaster:
         if self._kernel is not None:
             from .compiled import move_into as mover
         self._cache = SceneCache(space, mover)
-        self._filter_rows: dict[pymunk.ShapeFilter, tuple[int, int, int]] = {}
+        self._filter_rows: dict[pymunk.ShapeFilter, np.ndarray] = {}
+        self._scratch: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
-    def _filter_row(self, f: pymunk.ShapeFilter) -> tuple[int, int, int]:
-        """(group, categories, mask) of a query filter, as the tracer takes them."""
+    def _filter_row(self, f: pymunk.ShapeFilter) -> np.ndarray:
+        """(group, categories, mask) of a query filter, as the tracer takes them (uint64)."""
         row = self._filter_rows.get(f)
         if row is None:
             if len(self._filter_rows) >= _MAX_FILTER_ROWS:
                 self._filter_rows.clear()
-            row = self._filter_rows[f] = (int(f.group), int(f.categories), int(f.mask))
+            row = self._filter_rows[f] = np.array((f.group, f.categories, f.mask), dtype=np.uint64)
         return row
+
+    def _buffers(self, k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The tracer's scratch for k casts of n rays: flagged-ray lists and their counts
+        (read before the next call, so one pair serves every call of that size)."""
+        found = self._scratch.get((k, n))
+        if found is None:
+            if len(self._scratch) >= _MAX_FILTER_ROWS:
+                self._scratch.clear()
+            found = self._scratch[(k, n)] = (np.empty((k, 4 * n + 64), dtype=np.intp),
+                                             np.empty(k, dtype=np.intp))
+        return found
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
                   max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
@@ -130,8 +142,7 @@ class RayCaster:
         f = np.array([self._filter_row(filters[i]) for i in traced.tolist()],
                      dtype=np.uint64).reshape(-1, 3)
         best = np.ones((traced.shape[0], n))
-        flagged = np.empty((traced.shape[0], 4 * n + 64), dtype=np.intp)
-        got = np.empty(traced.shape[0], dtype=np.intp)
+        flagged, got = self._buffers(traced.shape[0], n)
         self._kernel(table.rows, table.count_array, table.owner, bound,
                      self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang, ends,
                      sides, n_sides, np.empty((traced.shape[0], 0), dtype=np.intp), best,
@@ -285,29 +296,33 @@ class RayCaster:
         world, bound = jobs[0].parts[0], jobs[0].bound
         k, n = len(jobs), jobs[0].ang.shape[0]
         # Per cast: origin x, y [m], max range [m], coordinate scale [m].
-        per_cast = np.array([(job.ox, job.oy, job.rng, job.scale) for job in jobs]).T.copy()
-        ox, oy, rng, scale = per_cast
+        ox, oy, rng, scale = np.array([[job.ox for job in jobs], [job.oy for job in jobs],
+                                       [job.rng for job in jobs], [job.scale for job in jobs]])
         if k == 1:  # a LiDAR's own cast: the same floats, without the batch's array set-up
-            angles = jobs[0].ang[None]
-            ends = endpoints(jobs[0].ox, jobs[0].oy, jobs[0].ang, jobs[0].rng)[2][None]
+            job = jobs[0]
+            angles = job.ang[None]
+            ends = endpoints(job.ox, job.oy, job.ang, job.rng)[2][None]
+            filters = self._filter_row(job.filter)[None]
         else:
             angles = np.stack([job.ang for job in jobs])
             ends = endpoints_many(ox, oy, angles, rng)[2]
-        filters = np.array([self._filter_row(job.filter) for job in jobs], dtype=np.uint64)
-        n_sides = np.array([len(job.directions) for job in jobs], dtype=np.intp)
-        if n_sides.any():
-            sides = np.zeros((k, 2, int(n_sides.max())))
+            filters = np.concatenate([self._filter_row(job.filter)[None] for job in jobs])
+        counts = [len(job.directions) for job in jobs]
+        if any(counts):
+            n_sides = np.array(counts, dtype=np.intp)
+            sides = np.zeros((k, 2, max(counts)))
             for row, job in zip(sides, jobs):
                 if job.directions:
                     row[:, :len(job.directions)] = _side_lohi(job.directions)
         else:
-            sides = _NO_SIDES
+            n_sides = np.zeros(k, dtype=np.intp)
+            sides = _NO_SIDES if k == 1 else np.zeros((k, 2, 0))
         best = np.ones((k, n))
-        flagged = np.empty((k, 4 * n + 64), dtype=np.intp)
-        got = np.empty(k, dtype=np.intp)
+        flagged, got = self._buffers(k, n)
         self._kernel(world.rows, world.count_array, world.owner, bound,
                      self._cache.shape_filters, world.rounded, ox, oy, scale, rng, filters,
-                     angles, ends, sides, n_sides, _NO_ORDER if order is None else order[None],
+                     angles, ends, sides, n_sides, order[None] if order is not None else (
+                         _NO_ORDER if k == 1 else np.empty((k, 0), dtype=np.intp)),
                      best, flagged, got)
         out = []
         for job, row, ray_ends, flags, count in zip(jobs, best, ends, flagged, got.tolist()):
