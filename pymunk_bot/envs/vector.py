@@ -157,10 +157,11 @@ class NavigationVectorEnv(VectorEnv):
             if isinstance(value, scalars) and all(type(info.get(key)) is kind for info in each):
                 infos[key] = np.array([info[key] for info in each], dtype=kind)
                 infos[f"_{key}"] = np.ones(n, dtype=np.bool_)
+        gathered = len(infos) // 2
         for i, info in enumerate(each):
-            rest = {k: v for k, v in info.items() if k not in infos}
-            if rest:
-                infos = self._add_info(infos, rest, i)
+            if len(info) > gathered:  # keys only some envs have (e.g. "result" at an end)
+                infos = self._add_info(infos, {k: v for k, v in info.items()
+                                               if k not in infos}, i)
         return infos
 
     def _share_spaces(self, first: NavigationEpisode) -> list[Replicas]:
