@@ -15,7 +15,7 @@ from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .readings import Observation
 from .robot import Robot
-from .sensors.lidar import record_all
+from .sensors.lidar import record_all, requests_all
 from .sensors.schedule import Schedule, ScheduleArray
 from .world import World
 
@@ -34,7 +34,7 @@ def check_seed(seed: Any) -> int:
 def scan_all(caster: Any, due: list[tuple[Any, float]]) -> None:
     """Every due LiDAR (with the time [s] its scan is recorded at) casts: one pass for all."""
     if len(due) > 1:
-        record_all(due, caster.cast_many(*zip(*(lidar.cast_request() for lidar, _ in due))))
+        record_all(due, caster.cast_many(*requests_all([lidar for lidar, _ in due])))
     elif due:
         lidar, now = due[0]
         lidar.record(now, lidar.true_ranges())

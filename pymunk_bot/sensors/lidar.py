@@ -9,7 +9,7 @@ A beam without a return reads max_range. Beam angles are fixed in the robot fram
 from __future__ import annotations
 
 import math
-from typing import Protocol, Sequence
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 import pymunk
@@ -150,18 +150,45 @@ class Lidar:
         return ranges
 
 
+def requests_all(lidars: Sequence[Lidar]) -> tuple[list, Any, list, list]:
+    """:meth:`Lidar.cast_request` of many LiDARs, as the columns ``cast_many`` takes: the same
+    origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
+    origins, thetas, offsets, ranges, filters = [], [], [], [], []
+    for lidar in lidars:
+        body = lidar._body
+        if lidar._mount == (0.0, 0.0):  # the body's origin: its position, exactly
+            p = body.position
+        else:
+            p = body.local_to_world(lidar._mount)
+        origins.append((p.x, p.y))
+        thetas.append(body.angle)
+        offsets.append(lidar._angles)
+        ranges.append(lidar.config.max_range)
+        filters.append(lidar._filter)
+    if len({a.shape[0] for a in offsets}) == 1:
+        angles: Any = np.array(thetas)[:, None] + np.stack(offsets)  # body.angle + _angles, row by row
+    else:
+        angles = [theta + a for theta, a in zip(thetas, offsets)]
+    return origins, angles, ranges, filters
+
+
 def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
     """:meth:`Lidar.record` for many LiDARs (each with the time [s] of its scan): the same
     floats from the same random streams, with the model's array work done once for all the
-    noisy ones that share a beam count."""
-    noisy = [k for k, (lidar, _) in enumerate(due) if lidar.config.noise_std > 0.0]
-    beams = {true_ranges[k].shape[0] for k in noisy}
-    if len(noisy) < 2 or len(beams) != 1:
-        noisy = []
-    batch = set(noisy)
-    for k, ((lidar, time), true) in enumerate(zip(due, true_ranges)):
-        if k not in batch:
+    noisy ones, and once for all the exact ones, that share a beam count."""
+    beams = {true.shape[0] for true in true_ranges}
+    if len(due) < 2 or len(beams) != 1:
+        for (lidar, time), true in zip(due, true_ranges):
             lidar.record(time, true)
+        return
+    exact = [k for k, (lidar, _) in enumerate(due)
+             if lidar.config.noise_std == 0.0 and lidar.config.dropout == 0.0]
+    noisy = [k for k, (lidar, _) in enumerate(due) if lidar.config.noise_std > 0.0]
+    for k in set(range(len(due))) - set(exact) - set(noisy):  # dropout alone: one by one
+        lidar, time = due[k]
+        lidar.record(time, true_ranges[k])
+    if exact:
+        _record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
     if not noisy:
         return
     lidars = [due[k][0] for k in noisy]
@@ -186,4 +213,17 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
     ranges.setflags(write=False)
     for row, k in zip(ranges, noisy):
         lidar, time = due[k]
+        lidar._keep(time, row)
+
+
+def _record_exact(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
+    """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
+    configs = [lidar.config for lidar, _ in due]
+    high = np.array([c.max_range for c in configs])[:, None]
+    low = np.array([c.min_range for c in configs])[:, None]
+    ranges = np.stack(true_ranges)
+    np.minimum(ranges, high, out=ranges)
+    np.copyto(ranges, np.broadcast_to(high, ranges.shape), where=ranges < low)
+    ranges.setflags(write=False)
+    for row, (lidar, time) in zip(ranges, due):
         lidar._keep(time, row)
