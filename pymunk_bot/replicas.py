@@ -27,6 +27,10 @@ from .sim import Simulation, scan_all
 from .world import World
 
 
+class NotShareable(ValueError):
+    """Copies of this scenario cannot share a space (it has pedestrians)."""
+
+
 class Replicas:
     """``len(seeds)`` copies of ``config`` (at most MAX_REPLICAS) sharing one Space."""
 
@@ -36,7 +40,8 @@ class Replicas:
             raise ValueError(f"a shared space holds 1 to {MAX_REPLICAS} copies (got {len(seeds)})")
         problem = shareable(config)
         if problem:
-            raise ValueError(f"copies of scenario '{config.name}' cannot share a space: {problem}")
+            raise NotShareable(f"copies of scenario '{config.name}' cannot share a space: "
+                               f"{problem}")
         self.ground = World.ground(config)
         self.sims = [Simulation._on_ground(config, seed, source, self.ground, r)
                      for r, seed in enumerate(seeds)]

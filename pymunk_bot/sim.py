@@ -73,6 +73,8 @@ class Simulation:
 
     world: World
     _robots: list[Robot]
+    _ground: World | None = None  # the shared ground this run is a copy on (replicas), if any
+    _replica: int | None = None
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None) -> None:
@@ -81,8 +83,6 @@ class Simulation:
         self.seed = check_seed(config.seed if seed is None else seed)
         self.robots: dict[str, Robot] = {}
         self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
-        self._ground: World | None = None  # a shared ground this run is a copy on (replicas)
-        self._replica: int | None = None
         self._build()
 
     @classmethod
@@ -91,12 +91,8 @@ class Simulation:
         """Copy ``replica`` of ``config`` on a shared ground (see :mod:`pymunk_bot.replicas`,
         which steps it: its own :meth:`step` would step every copy's physics)."""
         sim = cls.__new__(cls)
-        sim.config = config
-        sim.source = source or f"scenario '{config.name}'"
-        sim.seed = check_seed(seed)
-        sim.robots, sim.observers = {}, []
         sim._ground, sim._replica = ground, replica
-        sim._build()
+        sim.__init__(config, seed, source)  # type: ignore[misc]
         return sim
 
     @classmethod

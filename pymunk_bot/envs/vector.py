@@ -19,7 +19,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..physics import MAX_REPLICAS
-from ..replicas import Replicas, shareable
+from ..replicas import NotShareable, Replicas
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
 
@@ -167,17 +167,17 @@ class NavigationVectorEnv(VectorEnv):
     def _share_spaces(self, first: NavigationEpisode) -> list[Replicas]:
         """The worlds as copies sharing spaces (MAX_REPLICAS to a space), when the scenario
         allows it (no pedestrians); else none: each world keeps a space of its own."""
-        if shareable(first.config):
-            return []
         n = len(self.episodes)
         count = -(-n // MAX_REPLICAS)
-        shards = []
-        for k in range(count):
-            members = self.episodes[k * n // count:(k + 1) * n // count]
-            shard = Replicas(first.config, [0] * len(members), first.source)
+        groups = [self.episodes[k * n // count:(k + 1) * n // count] for k in range(count)]
+        try:
+            shards = [Replicas(first.config, [0] * len(members), first.source)
+                      for members in groups]
+        except NotShareable:
+            return []
+        for shard, members in zip(shards, groups):
             for index, episode in enumerate(members):
                 episode.share(shard, index)
-            shards.append(shard)
         return shards
 
     def render(self) -> tuple[np.ndarray, ...] | None:
