@@ -92,6 +92,18 @@ def parse_scenario(data: Any, source: str, node=None,
     return config
 
 
+def scenario_data(config: ScenarioConfig, exclude_unset: bool = False) -> dict:
+    """The config as plain data that :func:`parse_scenario` turns back into it, from any
+    folder: a map world's ``size`` (the parser filled it in) is left out and its map path is
+    the resolved one. ``exclude_unset``: only the keys the scenario gave."""
+    data = config.model_dump(exclude_unset=exclude_unset)
+    if config.world.map is not None:
+        data["world"].pop("size", None)
+        if config.world._map_path is not None:
+            data["world"]["map"] = config.world._map_path
+    return data
+
+
 def _more_problems(errors: list[dict], first: dict) -> str:
     """How many other problems pydantic found, worded so it cannot be read as the end of a
     list of valid keys; a misspelt key's 'missing' twin is the same problem, not another."""

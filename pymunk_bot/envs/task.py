@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
-from ..config import ScenarioConfig, load_scenario, parse_scenario
+from ..config import ScenarioConfig, load_scenario, parse_scenario, scenario_data
 from ..errors import ScenarioError
 
 if TYPE_CHECKING:
@@ -104,7 +104,7 @@ def prepare_scenario(config: ScenarioConfig, source: str, agents: list[str] | No
 
     Errors name the key path, as for a scenario file.
     """
-    data = config.model_dump(exclude_unset=True)  # unset keys stay unset (e.g. no localizer)
+    data = scenario_data(config, exclude_unset=True)  # unset keys stay unset (no localizer)
     names = [r["name"] for r in data["robots"]]
     agents = names[:1] if agents is None else list(agents)
     for name in agents:

@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from ..config import ScenarioConfig, load_scenario, parse_scenario
+from ..config import ScenarioConfig, load_scenario, parse_scenario, scenario_data
 from ..errors import ScenarioError
 from .backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
 from .grid import Run, build_grid, parse_assignment, parse_seeds
@@ -104,7 +104,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     todo = [run for run in runs if run.index not in done]
     n_workers = 1 if backend == "serial" else (workers or default_workers())
     chunks = chunk_runs(todo, n_workers, chunk_size)
-    base = config.model_dump()
+    base = scenario_data(config)
     journal = Journal(journal_path(out)) if out is not None and todo else None
     from tqdm import tqdm
 

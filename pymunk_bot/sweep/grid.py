@@ -14,7 +14,7 @@ from typing import Any, Iterable, Sequence
 
 import yaml
 
-from ..config import ScenarioConfig, parse_scenario
+from ..config import ScenarioConfig, parse_scenario, scenario_data
 from ..errors import ScenarioError
 
 MAX_COMBINATIONS = 10_000  # distinct parameter combinations in one sweep
@@ -157,7 +157,7 @@ def build_grid(config: ScenarioConfig, source: str, grid: dict[str, list[Any]],
                                         f"{MAX_COMBINATIONS}")
     if len(combinations) * len(seeds) > MAX_RUNS:
         raise ScenarioError(source, "", f"{len(combinations) * len(seeds)} runs; at most {MAX_RUNS}")
-    base = config.model_dump()
+    base = scenario_data(config)
     keys = list(grid)
     for combo in combinations:
         values = list(zip(keys, combo))

@@ -180,3 +180,20 @@ def test_worlds_of_their_own_push_crates_exactly_as_single_envs():
         for i, env in enumerate(singles):
             np.testing.assert_array_equal(obs[i], env.step(actions[i])[0])
     assert all(e.sim.world.obstacles[4].body.position.x > 5.1 for e in envs.episodes)  # pushed
+
+
+@pytest.mark.parametrize("scenario, extra", [("floor_plan", {}),
+                                             ("scenarios/mcl_office.yaml", {"random_goal": True})])
+def test_envs_run_on_ros_map_scenarios(scenario, extra):
+    """A scenario whose arena comes from a ROS map (`world.map`, no `size`): the single env and
+    the vector env (its worlds sharing the map's geometry) drive in it."""
+    env = NavigationEnv(scenario=scenario, lidar={"beams": 36}, **extra)
+    obs, _ = env.reset(seed=0)
+    envs = NavigationVectorEnv(num_envs=2, scenario=scenario, lidar={"beams": 36}, **extra)
+    vec_obs, _ = envs.reset(seed=0)
+    np.testing.assert_array_equal(vec_obs[0], obs)
+    for _ in range(10):
+        obs = env.step(np.array([0.5, 0.1], np.float32))[0]
+        vec_obs = envs.step(np.array([[0.5, 0.1], [0.5, 0.1]], np.float32))[0]
+    np.testing.assert_array_equal(vec_obs[0], obs)
+    assert obs[:36].min() < 1.0  # the map's walls are in sight

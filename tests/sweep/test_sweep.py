@@ -293,3 +293,13 @@ def test_parquet_output_round_trips(tmp_path):
     assert comparable(read_table(out)) == comparable(rows)
     again = run_sweep(sprint(), SPEEDS, seeds=range(2), duration=0.5, out=out, resume=True)
     assert comparable(again) == comparable(rows)
+
+
+def test_a_ros_map_scenario_sweeps_from_any_folder(tmp_path, monkeypatch):
+    """A scenario whose arena is a ROS map (no `size`) re-parses in every run, its map path
+    resolved against the scenario file, wherever the sweep runs from."""
+    monkeypatch.chdir(tmp_path)
+    rows = run_sweep("floor_plan", {"robots[0].max_wheel_speed": [0.5, 1.0]}, [0],
+                     duration=1.0)
+    assert [row["robots[0].max_wheel_speed"] for row in rows] == [0.5, 1.0]
+    assert rows[1]["r1.distance"] > rows[0]["r1.distance"] > 0.1
