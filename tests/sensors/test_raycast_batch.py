@@ -9,6 +9,7 @@ import pytest
 from test_raycast import add_robot, arena, box, mixed_world
 
 from pymunk_bot.sensors.raycast import RayCaster, reference_cast
+from pymunk_bot.sensors.raycast.sides import sides_many
 
 
 def sharp_world(seed: int, size: float = 12.0) -> tuple[pymunk.Space, list[pymunk.Body]]:
@@ -152,11 +153,11 @@ def test_side_lines_are_found_alike_for_few_and_many_origins():
                    (x, y + off)]
     ox, oy = np.array(points).T.copy()
     scale = 1.0 + np.abs(ox) + np.abs(oy) + 5.0
-    many = caster._sides_many(ox, oy, scale)
+    many = sides_many(caster._cache, ox, oy, scale)
     assert ox.shape[0] > 32 and many[2].any() and (many[1] > 0).any()  # corners and sides met
     for start in range(0, ox.shape[0], 16):
         chunk = slice(start, start + 16)
-        sides, n_sides, cornered = caster._sides_many(ox[chunk], oy[chunk], scale[chunk])
+        sides, n_sides, cornered = sides_many(caster._cache, ox[chunk], oy[chunk], scale[chunk])
         assert np.array_equal(cornered, many[2][chunk])
         free = ~cornered  # a cornered origin takes the single cast's path: its sides unused
         assert np.array_equal(n_sides[free], many[1][chunk][free])

@@ -7,7 +7,6 @@ rays along a static box side or through such a corner are re-asked of pymunk.
 
 from __future__ import annotations
 
-import bisect
 import math
 import os
 from dataclasses import dataclass
@@ -20,10 +19,9 @@ from .cache import SceneCache
 from .fan import Fan
 from .geometry import World
 from .reference import check_args, endpoints, endpoints_many, reference_cast
-from .scene import EDGE_NEAR, Scene, trace_rings
+from .scene import Scene, trace_rings
+from .sides import side_directions, side_lohi, sides_many
 
-# Rays within this angle [rad] of a box side line through the origin are left to pymunk.
-_SIDE_ANGLE = 1e-4
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
 REFERENCE_RAYS = 40
@@ -32,7 +30,6 @@ COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
-_FEW_ORIGINS = 32  # up to this many casts, side lines are looked up origin by origin
 _MAX_FILTER_ROWS = 4096  # query filters remembered (one per robot, usually)
 _NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
 _NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
@@ -126,7 +123,7 @@ class RayCaster:
         table, bound = self._cache.scene()  # first: it also checks the shapes for changes
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
         scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
-        sides, n_sides, cornered = self._sides_many(ox, oy, scale)
+        sides, n_sides, cornered = sides_many(self._cache, ox, oy, scale)
         # Origins at a shape (the start-inside rule) or a box corner: the single cast's path.
         query = self.space.point_query_nearest
         single = [i for i in range(k) if cornered[i] or query(
@@ -156,43 +153,6 @@ class RayCaster:
                                       flagged[row, :count])
         return [r if r is not None else np.empty(0) for r in out]
 
-    def _sides_many(self, ox: np.ndarray, oy: np.ndarray, scale: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`_side_directions` for many origins: side intervals (K, 2, 5) [rad], how many
-        each has, and which origins are near a vertical and a horizontal side line at once."""
-        k = ox.shape[0]
-        if k <= _FEW_ORIGINS:  # numpy's per-call cost dominates: the single cast's rule
-            sides = np.zeros((k, 2, 5))
-            n_sides = np.zeros(k, dtype=np.intp)
-            cornered = np.zeros(k, dtype=np.bool_)
-            for row, (x, y, c) in enumerate(zip(ox.tolist(), oy.tolist(), scale.tolist())):
-                directions = self._side_directions(x, y, c)
-                if directions is None:
-                    cornered[row] = True
-                elif directions:
-                    sides[row, :, :len(directions)] = _side_lohi(directions)
-                    n_sides[row] = len(directions)
-            return sides, n_sides, cornered
-        near, corner = 1e-7 * scale, EDGE_NEAR * scale
-        found = []
-        for lines, v in zip(self._cache.side_lines, (ox, oy)):
-            i = np.searchsorted(lines, v - corner)
-            close = i < lines.shape[0]
-            close[close] &= lines[i[close]] <= (v + corner)[close]
-            i = np.searchsorted(lines, v - near)
-            on = i < lines.shape[0]
-            on[on] &= lines[i[on]] <= (v + near)[on]
-            found.append((close, on & close))
-        (close_x, on_x), (close_y, on_y) = found
-        sides = np.zeros((k, 2, 5))
-        n_sides = np.zeros(k, dtype=np.intp)
-        for i in np.flatnonzero(on_x | on_y).tolist():
-            directions = ([-0.5 * math.pi, 0.5 * math.pi] if on_x[i] else []) + (
-                [-math.pi, 0.0, math.pi] if on_y[i] else [])
-            sides[i, :, :len(directions)] = _side_lohi(directions)
-            n_sides[i] = len(directions)
-        return sides, n_sides, close_x & close_y
-
     def begin_frame(self) -> None:
         """Bodies have moved: casts until the next call share one view of the scene (the
         simulation calls this once per tick before its LiDARs read)."""
@@ -218,7 +178,7 @@ class RayCaster:
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             fan = Fan(np.arctan2(sin, cos), ends)
             if job.directions:
-                lohi = _side_lohi(job.directions)
+                lohi = side_lohi(job.directions)
                 fan.flagged.append(fan.every.expand(*fan.every.ranges(lohi, None))[0])
             if n_keep <= _DENSE_SHAPES:
                 Scene(job.parts, job.keep, ox, oy, job.scale, rng, subset=job.dense).trace(
@@ -267,7 +227,7 @@ class RayCaster:
             # outside): Chipmunk's plane test may then pass at t = 0 or graze a vertex, and
             # the box test decides ray by ray whether it counts. Let pymunk answer.
             return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
-        directions = self._side_directions(ox, oy, scale)
+        directions = side_directions(self._cache, ox, oy, scale)
         if directions is None:
             # Next to a box corner that may be a flag: its direction is too uncertain.
             return reference_cast(self.space, (ox, oy), ang, rng, shape_filter)
@@ -313,7 +273,7 @@ class RayCaster:
             sides = np.zeros((k, 2, max(counts)))
             for row, job in zip(sides, jobs):
                 if job.directions:
-                    row[:, :len(job.directions)] = _side_lohi(job.directions)
+                    row[:, :len(job.directions)] = side_lohi(job.directions)
         else:
             n_sides = np.zeros(k, dtype=np.intp)
             sides = _NO_SIDES if k == 1 else np.zeros((k, 2, 0))
@@ -336,28 +296,6 @@ class RayCaster:
                 out.append(self._finish((job.ox, job.oy), job.filter, job.rng, ray_ends, row,
                                         flags[:count]))
         return out
-
-    def _side_directions(self, ox: float, oy: float, scale: float) -> list[float] | None:
-        """Directions [rad] of the rays that may run along a side line of a static bounding
-        box (flagged: pymunk answers them); None if the origin is within EDGE_NEAR * scale
-        of both a vertical and a horizontal side line (so perhaps of a flag), where no ray
-        can be trusted to the fast path.
-
-        A ray along a side line starts (within rounding) on the line and points along it;
-        pymunk's box test is then decided by rounding (see cache.corner_flags). The tolerances
-        are generous because flagged rays are exact anyway, only slower."""
-        near, corner = 1e-7 * scale, EDGE_NEAR * scale
-        directions: list[float] = []
-        close = 0
-        for sides, v, along in ((self._cache.side_x, ox, (-0.5 * math.pi, 0.5 * math.pi)),
-                                (self._cache.side_y, oy, (-math.pi, 0.0, math.pi))):
-            i = bisect.bisect_left(sides, v - corner)
-            if i < len(sides) and sides[i] <= v + corner:
-                close += 1
-                i = bisect.bisect_left(sides, v - near)
-                if i < len(sides) and sides[i] <= v + near:
-                    directions.extend(along)
-        return None if close == 2 else directions
 
 
 def _uniform(origins: list, angles: list, max_ranges: list
@@ -385,11 +323,6 @@ def _wrapped(ang: np.ndarray) -> np.ndarray:
     order sorted here is sorted there."""
     two_pi = 2.0 * math.pi
     return ang - two_pi * np.floor((ang + math.pi) / two_pi)
-
-
-def _side_lohi(directions: list[float]) -> np.ndarray:
-    """(2, k) angle intervals [rad] around side-line directions."""
-    return np.array(([a - _SIDE_ANGLE for a in directions], [a + _SIDE_ANGLE for a in directions]))
 
 
 def _load_kernel(compiled: bool | None) -> Callable[..., None] | None:
