@@ -1,6 +1,11 @@
 """The native vector env (lockstep, autoreset) and the PettingZoo multi-robot env."""
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -197,3 +202,32 @@ def test_envs_run_on_ros_map_scenarios(scenario, extra):
         vec_obs = envs.step(np.array([[0.5, 0.1], [0.5, 0.1]], np.float32))[0]
     np.testing.assert_array_equal(vec_obs[0], obs)
     assert obs[:36].min() < 1.0  # the map's walls are in sight
+
+
+VECTOR_SCRIPT = """
+import hashlib, numpy as np
+from pymunk_bot.config import load_scenario
+from pymunk_bot.envs import NavigationVectorEnv
+data = load_scenario(None).model_dump(exclude_unset=True)
+data["robots"][0]["pose"] = [4.0, 4.7, 0.0]  # the crate 1 m ahead: contacts between movers
+envs = NavigationVectorEnv(num_envs=3, scenario=data, lidar={"beams": 60})
+h = hashlib.sha256()
+obs, _ = envs.reset(seed=11)
+h.update(obs.tobytes())
+actions = np.random.default_rng(0).uniform(-0.2, 1, size=(40, 3, 2)).astype(np.float32)
+for a in actions:
+    obs, r, te, tr, info = envs.step(a)
+    h.update(obs.tobytes()); h.update(r.tobytes())
+print(h.hexdigest())
+"""
+
+
+def test_shared_space_worlds_are_identical_in_another_process():
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONHASHSEED": "321", "PYTHONPATH": str(root)}
+    out = subprocess.run([sys.executable, "-c", VECTOR_SCRIPT], cwd=root, env=env,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    here: dict = {}
+    exec(VECTOR_SCRIPT.replace("print(h.hexdigest())", "result = h.hexdigest()"), here)
+    assert out.stdout.strip() == here["result"]
