@@ -4,7 +4,7 @@
                         vectorization_mode="vector_entry_point")
 
 Sub-env i reset with seed s + i plays the episode a single env reset with that seed plays:
-exactly, as long as its robot pushes nothing (see docs/learning.md). Autoreset follows
+exactly, as long as no two moving bodies of its world touch (see docs/learning.md). Autoreset follows
 Gymnasium 1.x (NEXT_STEP by default: the step after an episode ends resets that slot, ignores
 its action and returns reward 0; SAME_STEP and DISABLED also work).
 """
@@ -37,7 +37,8 @@ class NavigationVectorEnv(VectorEnv):
     ``share_space`` (default): up to MAX_REPLICAS worlds share one pymunk Space and advance
     as one (:class:`~pymunk_bot.replicas.Replicas`), unless the scenario has pedestrians.
     False: each world in a space of its own (slower; a pushed crate then moves exactly as in a
-    single env, where sharing can change its last bits: see docs/learning.md)."""
+    single env, where sharing can change the last bits of contacts between moving bodies:
+    see docs/learning.md)."""
 
     metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
