@@ -144,8 +144,13 @@ class RayCaster:
                      self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang, ends,
                      sides, n_sides, np.empty((traced.shape[0], 0), dtype=np.intp), best,
                      flagged, got)
-        for row, i in enumerate(traced.tolist()):
-            count, start = int(got[row]), (float(ox[row]), float(oy[row]))
+        counts = got.tolist()  # read now: a cast below may reuse the tracer's scratch
+        ranges = best * rng[:, None]  # _finish's product, for the casts without flagged rays
+        for row, (i, count) in enumerate(zip(traced.tolist(), counts)):
+            if count == 0:
+                out[i] = ranges[row]
+                continue
+            start = (float(ox[row]), float(oy[row]))
             if count < 0:  # rays in no simple order, or too many flagged: the single cast
                 out[i] = self.cast(start, ang[row], float(rng[row]), filters[i])
             else:
@@ -304,7 +309,7 @@ def _uniform(origins: list, angles: list, max_ranges: list
     count above COMPILED_REFERENCE_RAYS and pass check_args' checks; else None."""
     try:
         xy = np.array(origins, dtype=np.float64)
-        ang = np.array(angles, dtype=np.float64)
+        ang = np.asarray(angles, dtype=np.float64)  # no copy when it is one already
         rng = np.array(max_ranges, dtype=np.float64)
     except (TypeError, ValueError):  # ragged or not numbers: the single casts say what is wrong
         return None
