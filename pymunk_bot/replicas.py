@@ -38,13 +38,13 @@ class Replicas:
                  source: str | None = None) -> None:
         if not 1 <= len(seeds) <= MAX_REPLICAS:
             raise ValueError(f"a shared space holds 1 to {MAX_REPLICAS} copies (got {len(seeds)})")
-        problem = shareable(config)
-        if problem:
-            raise NotShareable(f"copies of scenario '{config.name}' cannot share a space: "
-                               f"{problem}")
         self.ground = World.ground(config)
         self.sims = [Simulation._on_ground(config, seed, source, self.ground, r)
                      for r, seed in enumerate(seeds)]
+        for actor in self.sims[0].world.actors:
+            if not isinstance(actor, ScriptedMotion):  # pedestrians look around the whole space
+                raise NotShareable(f"copies of scenario '{config.name}' cannot share a space: "
+                                   f"its {type(actor).__name__} would meet the other copies")
         self.dt = self.sims[0].dt
         self.substeps = self.sims[0].substeps
         self._propulsion: Propulsion | None = None
@@ -105,12 +105,3 @@ class Replicas:
         self._driven = [sim for sim in self.sims if sim._controlled or sim.world.actors]
         self._busy = [sim for sim in self.sims if sim._sensors or sim._mapping or sim._localized
                       or sim._scores or sim._built.metrics]
-
-
-def shareable(config: ScenarioConfig) -> str:
-    """Why copies of ``config`` cannot share a space ('' if they can)."""
-    probe = Simulation(config)  # what a copy would hold, built once on its own
-    for actor in probe.world.actors:
-        if not isinstance(actor, ScriptedMotion):  # pedestrians look around the whole space
-            return f"its {type(actor).__name__} would meet the other copies"
-    return ""

@@ -181,12 +181,14 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
         for (lidar, time), true in zip(due, true_ranges):
             lidar.record(time, true)
         return
-    exact = [k for k, (lidar, _) in enumerate(due)
-             if lidar.config.noise_std == 0.0 and lidar.config.dropout == 0.0]
-    noisy = [k for k, (lidar, _) in enumerate(due) if lidar.config.noise_std > 0.0]
-    for k in set(range(len(due))) - set(exact) - set(noisy):  # dropout alone: one by one
-        lidar, time = due[k]
-        lidar.record(time, true_ranges[k])
+    exact, noisy = [], []
+    for k, (lidar, time) in enumerate(due):
+        if lidar.config.noise_std > 0.0:
+            noisy.append(k)
+        elif lidar.config.dropout == 0.0:
+            exact.append(k)
+        else:  # dropout alone: one by one
+            lidar.record(time, true_ranges[k])
     if exact:
         _record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
     if not noisy:

@@ -30,7 +30,7 @@ COMPILED_REFERENCE_RAYS = 6
 # Above this many shapes in range, trace in rings of growing distance (occlusion culling);
 # in small worlds the pair tests reject far shapes cheaper than the rings would.
 _DENSE_SHAPES = 160
-_MAX_FILTER_ROWS = 4096  # query filters remembered (one per robot, usually)
+_MAX_CACHED = 4096  # query filters (one per robot, usually) and scratch sizes remembered
 _NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
 _NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
 
@@ -73,7 +73,7 @@ class RayCaster:
         """(group, categories, mask) of a query filter, as the tracer takes them (uint64)."""
         row = self._filter_rows.get(f)
         if row is None:
-            if len(self._filter_rows) >= _MAX_FILTER_ROWS:
+            if len(self._filter_rows) >= _MAX_CACHED:
                 self._filter_rows.clear()
             row = self._filter_rows[f] = np.array((f.group, f.categories, f.mask), dtype=np.uint64)
         return row
@@ -83,7 +83,7 @@ class RayCaster:
         (read before the next call, so one pair serves every call of that size)."""
         found = self._scratch.get((k, n))
         if found is None:
-            if len(self._scratch) >= _MAX_FILTER_ROWS:
+            if len(self._scratch) >= _MAX_CACHED:
                 self._scratch.clear()
             found = self._scratch[(k, n)] = (np.empty((k, 4 * n + 64), dtype=np.intp),
                                              np.empty(k, dtype=np.intp))
@@ -142,8 +142,7 @@ class RayCaster:
         flagged, got = self._buffers(traced.shape[0], n)
         self._kernel(table.rows, table.count_array, table.owner, bound,
                      self._cache.shape_filters, table.rounded, ox, oy, scale, rng, f, ang, ends,
-                     sides, n_sides, np.empty((traced.shape[0], 0), dtype=np.intp), best,
-                     flagged, got)
+                     sides, n_sides, _no_order(traced.shape[0]), best, flagged, got)
         counts = got.tolist()  # read now: a cast below may reuse the tracer's scratch
         ranges = best * rng[:, None]  # _finish's product, for the casts without flagged rays
         for row, (i, count) in enumerate(zip(traced.tolist(), counts)):
@@ -286,9 +285,8 @@ class RayCaster:
         flagged, got = self._buffers(k, n)
         self._kernel(world.rows, world.count_array, world.owner, bound,
                      self._cache.shape_filters, world.rounded, ox, oy, scale, rng, filters,
-                     angles, ends, sides, n_sides, order[None] if order is not None else (
-                         _NO_ORDER if k == 1 else np.empty((k, 0), dtype=np.intp)),
-                     best, flagged, got)
+                     angles, ends, sides, n_sides,
+                     _no_order(k) if order is None else order[None], best, flagged, got)
         out = []
         for job, row, ray_ends, flags, count in zip(jobs, best, ends, flagged, got.tolist()):
             if count == -2:  # rays in no simple order: sort them, trace this cast again
@@ -321,6 +319,11 @@ def _uniform(origins: list, angles: list, max_ranges: list
             and (rng > 0.0).all()):
         return None
     return xy, ang, rng
+
+
+def _no_order(k: int) -> np.ndarray:
+    """The tracer's ray-order argument for k casts whose rays need no given order."""
+    return _NO_ORDER if k == 1 else np.empty((k, 0), dtype=np.intp)
 
 
 def _wrapped(ang: np.ndarray) -> np.ndarray:
