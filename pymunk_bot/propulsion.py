@@ -34,6 +34,12 @@ from .sensors.odometry import sinc_half, sinc_half_scalar
 # [m] (an almost straight path) it is aimed substep by substep instead.
 _MAX_ANCHOR = 1e6
 
+# pymunk routes every attribute write on a body through a Python __setattr__ (a typing
+# aid); calling the property setters directly skips it, halving the cost of a write.
+_SET_VELOCITY = vars(pymunk.Body)["velocity"].fset
+_SET_SPIN = vars(pymunk.Body)["angular_velocity"].fset
+_SET_ANGLE = vars(pymunk.Body)["angle"].fset
+
 _READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
@@ -49,27 +55,46 @@ def _origin_correction(cog: np.ndarray, angle: float, omega: float, h: float) ->
     return (-turn * ry - exact_x) / h, (turn * rx - exact_y) / h
 
 
+def _floats(twists: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
+    """Twists as lists of floats (robot by robot, numpy's scalars cost more than floats)."""
+    ux, uy, omega = twists
+    if isinstance(ux, np.ndarray):
+        return ux.tolist(), uy.tolist(), omega.tolist()
+    return twists
+
+
 class Propulsion:
     """Steers every robot's control body; ``groups`` pairs each drive group with the indices
-    (into ``bodies``) of its robots, in the group's order."""
+    (into ``bodies``) of its robots, in the group's order.
+
+    Copies of a scenario sharing a space (:mod:`pymunk_bot.replicas`) pass ``copies``:
+    ``groups`` then holds each copy's groups, and each copy is steered as its own simulation
+    would steer it, robot by robot. ``stacked``: the same robots in fewer, larger groups (see
+    :mod:`pymunk_bot.stacking`), each copy's group some rows of one of them; the copies' groups
+    are then advanced through these, one call for all copies."""
 
     def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body],
-                 controls: Sequence[pymunk.Body], groups: Sequence[tuple[Any, Sequence[int]]]) -> None:
+                 controls: Sequence[pymunk.Body], groups: Sequence[tuple[Any, Sequence[int]]],
+                 stacked: Sequence[tuple[Any, Sequence[int], Sequence[int]]] | None = None,
+                 copies: bool = False) -> None:
         self.space = space
         self.bodies, self.controls = list(bodies), list(controls)
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
-        self._members = [idx.tolist() for _, idx in self.groups]  # the same, as lists
+        # What the per-robot path advances: each group, or each stacked group with the first
+        # row of each copy's part (``stacked`` gives (group, robot indices, part starts)).
+        self._drives = ([_Drives(g, list(idx), np.asarray(starts, dtype=np.intp))
+                         for g, idx, starts in stacked] if stacked
+                        else [_Drives(g, idx.tolist(), None) for g, idx in self.groups])
         self.n = len(self.bodies)
-        self.batched = self.n >= SMALL_GROUP
+        self.batched = self.n >= SMALL_GROUP and not copies
         # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
         # moves the centre straight within a substep, so the origin's path needs a correction.
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
         self._offset = [k for k in range(self.n) if self.cog[k].any()]
         self._offset_set = set(self._offset)
-        if self.batched:
-            self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
-            self._rows = -1  # bodies the last index was built for
-            self._held_twists: np.ndarray | None = None  # (n, 3) twists held, or None
+        self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
+        self._rows = -1  # bodies the last index was built for
+        self._held_twists: np.ndarray | None = None  # (n, 3) twists held (batched), or None
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
@@ -84,12 +109,18 @@ class Propulsion:
         if self.batched:
             self._step_batched(h, substeps)
             return
-        # Groups settled before the step keep their twists through it: held, and coasted.
-        held: list[tuple[Any, list[int]]] = []
-        loose: list[tuple[Any, list[int]]] = []
-        for (group, _), members in zip(self.groups, self._members):
-            (held if substeps > 1 and group.settled() else loose).append((group, members))
-        steady = self._hold_groups(held, h, substeps)  # held, yet aimed every substep
+        # Groups (copies' parts) settled before the step keep their twists through it: held,
+        # and coasted.
+        held: list[tuple[_Drives, list[int]]] = []
+        loose: list[tuple[_Drives, list[int]]] = []
+        for drives in self._drives:
+            flags = drives.settled() if substeps > 1 else [False] * drives.units
+            calm = [u for u, settled in enumerate(flags) if settled]
+            if calm:
+                held.append((drives, calm))
+            if len(calm) < drives.units:
+                loose.append((drives, [u for u, settled in enumerate(flags) if not settled]))
+        steady = self._hold_units(held, h, substeps)  # held, yet aimed every substep
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
                 space.step(h)
@@ -98,26 +129,32 @@ class Propulsion:
             if sub:
                 for k, twist in steady:
                     self._aim(k, twist, h)
-            if loose:
-                for k, twist in self._twists(h, loose):
+            for drives, units in loose:
+                rows, members = drives.rows(units)
+                for k, twist in zip(members, zip(*_floats(drives.advance(h, rows)))):
                     self._aim(k, twist, h)
             space.step(h)
             left = substeps - 1 - sub
             if loose and left > 1:  # a group whose motors settled now holds for the rest
-                settled = [(group, members) for group, members in loose if group.settled()]
-                if settled:
-                    loose = [(group, members) for group, members in loose
-                             if not any(group is g for g, _ in settled)]
-                    steady += self._hold_groups(settled, h, left)
+                still: list[tuple[_Drives, list[int]]] = []
+                for drives, units in loose:
+                    flags = drives.settled()
+                    calm = [u for u in units if flags[u]]
+                    if calm:
+                        steady += self._hold_units([(drives, calm)], h, left)
+                    if len(calm) < len(units):
+                        still.append((drives, [u for u in units if not flags[u]]))
+                loose = still
 
-    def _hold_groups(self, groups: list[tuple[Any, list[int]]], h: float, substeps: int
-                     ) -> list[tuple[int, tuple[float, float, float]]]:
-        """Hold every robot of these settled groups for ``substeps`` substeps (their motors
-        coast through them); the robots that must be aimed every substep instead, with their
-        twists."""
+    def _hold_units(self, held: list[tuple["_Drives", list[int]]], h: float, substeps: int
+                    ) -> list[tuple[int, tuple[float, float, float]]]:
+        """Hold every robot of these settled groups (or copies' parts) for ``substeps``
+        substeps (their motors coast through them); the robots that must be aimed every
+        substep instead, with their twists."""
         steady: list[tuple[int, tuple[float, float, float]]] = []
-        for group, members in groups:
-            for k, twist in zip(members, zip(*group.coast(h, substeps))):
+        for drives, units in held:
+            rows, members = drives.rows(units)
+            for k, twist in zip(members, zip(*_floats(drives.coast(h, substeps, rows)))):
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
         return steady
@@ -255,22 +292,16 @@ class Propulsion:
         """Every robot body's position now, (n, 2) [m]: an array, or a list of (x, y) when few."""
         if not self.batched:
             return [b.position for b in self.bodies]
+        return self.position_array()
+
+    def position_array(self) -> np.ndarray:
+        """Every robot body's position now, (n, 2) [m], read in one call."""
         self._read.clear()
         batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._read)
         xy = np.frombuffer(self._read.float_buf()).reshape(-1, 2)
         if xy.shape[0] != self._rows:
             self._index(xy.shape[0])
         return xy[self._robot_rows]
-
-    @staticmethod
-    def _twists(h: float, groups: Sequence[tuple[Any, list[int]]]
-                ) -> list[tuple[int, tuple[float, float, float]]]:
-        """(robot, twist) of every robot of these groups (each with its robots' indices),
-        their motors advanced by ``h`` [s]."""
-        out: list[tuple[int, tuple[float, float, float]]] = []
-        for group, members in groups:
-            out.extend(zip(members, zip(*group.advance(h))))
-        return out
 
     def _aim(self, k: int, twist: tuple[float, float, float], h: float) -> None:
         """Robot k's control body velocity for the next substep (see the module docstring)."""
@@ -290,9 +321,9 @@ class Propulsion:
             vx, vy = vx + dvx, vy + dvy
         last = self._given[k]
         if vx != last[0] or vy != last[1]:
-            control.velocity = (vx, vy)
+            _SET_VELOCITY(control, (vx, vy))
         if omega != last[2]:
-            control.angular_velocity = omega
+            _SET_SPIN(control, omega)
         self._given[k] = (vx, vy, omega)
 
     def _hold(self, k: int, twist: tuple[float, float, float], h: float) -> bool:
@@ -319,9 +350,9 @@ class Propulsion:
             control = self.controls[k]
             last = self._given[k]
             if last[0] != 0.0 or last[1] != 0.0:
-                control.velocity = (0.0, 0.0)
+                _SET_VELOCITY(control, (0.0, 0.0))
             if omega != last[2]:
-                control.angular_velocity = omega
+                _SET_SPIN(control, omega)
             self._given[k] = (0.0, 0.0, omega)
             self.pivots[k].anchor_a = (ax, ay)
             self._anchored[k] = True
@@ -331,7 +362,7 @@ class Propulsion:
         # in free space they already do, to the last bit, and the write is skipped.
         heading = body.angle + (body.angular_velocity - omega) * h
         if heading != control.angle:
-            control.angle = heading
+            _SET_ANGLE(control, heading)
         return True
 
     def _index(self, rows: int) -> None:
@@ -346,3 +377,37 @@ class Propulsion:
         self._held_out = np.zeros((rows, 4))
         self._write_held.set_float_buf(self._held_out)
         self._rows = rows
+
+
+class _Drives:
+    """A drive group as the per-robot path advances it: whole, or (``starts``: stacked, see
+    :mod:`pymunk_bot.stacking`) as units, the rows of each copy's part from its start on."""
+
+    def __init__(self, group: Any, members: list[int], starts: np.ndarray | None) -> None:
+        self.group = group
+        self.members = members  # robot index of each row
+        self.starts = starts
+        self.units = 1 if starts is None else starts.shape[0]
+        if starts is not None:
+            ends = np.append(starts[1:], len(members))
+            self._unit_rows = [np.arange(a, b) for a, b in zip(starts.tolist(), ends.tolist())]
+
+    def settled(self) -> list[bool]:
+        """Per unit: its motors have reached their commands."""
+        if self.starts is None:
+            return [self.group.settled()]
+        return np.logical_and.reduceat(self.group.settled_rows(), self.starts).tolist()
+
+    def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int]]:
+        """The rows of these units (None: every row) and their robots."""
+        if len(units) == self.units:
+            return None, self.members
+        rows = np.concatenate([self._unit_rows[u] for u in units])
+        return rows, [self.members[r] for r in rows.tolist()]
+
+    def advance(self, h: float, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
+        return self.group.advance(h) if rows is None else self.group.advance(h, rows)
+
+    def coast(self, h: float, substeps: int, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
+        return (self.group.coast(h, substeps) if rows is None
+                else self.group.coast(h, substeps, rows))

@@ -24,6 +24,7 @@ from .config import ScenarioConfig
 from .physics import MAX_REPLICAS
 from .propulsion import Propulsion
 from .sim import Simulation, scan_all
+from .stacking import Stack
 from .world import World
 
 
@@ -48,6 +49,7 @@ class Replicas:
         self.dt = self.sims[0].dt
         self.substeps = self.sims[0].substeps
         self._propulsion: Propulsion | None = None
+        self._stack: Stack | None = None
         self._assemble()
 
     def reset(self, index: int, seed: int | None = None) -> None:
@@ -64,12 +66,14 @@ class Replicas:
         for sim in self._driven:  # the copies with controllers or actors
             sim._before_physics()
         propulsion.step(self.dt / self.substeps, self.substeps)
-        positions = propulsion.positions()
-        due: list[tuple[Any, float]] = []
-        for sim, (start, stop) in zip(sims, self._spans):
-            now = sim._bookkeep(positions[start:stop])
-            if sim._lidars:
-                due.extend((lidar, now) for lidar in sim._due_lidars(now))
+        if self._stack is not None:
+            nows = [sim._advance_clock() for sim in sims]
+            self._stack.bookkeep(propulsion.position_array(), nows)
+        else:
+            positions = propulsion.positions()
+            nows = [sim._bookkeep(positions[start:stop])
+                    for sim, (start, stop) in zip(sims, self._spans)]
+        due = [(lidar, now) for sim, now in zip(sims, nows) for lidar in sim._due_lidars(now)]
         caster = self.ground.ray_caster()
         caster.begin_frame()  # every copy's LiDARs see one scene
         scan_all(caster, due)
@@ -84,8 +88,12 @@ class Replicas:
                 observer(sim)
 
     def _assemble(self) -> None:
-        """One Propulsion for every copy's robots (rebuilt after a reset: a copy's bodies
-        are new), keeping what the old one knew about the bodies that stayed."""
+        """One Propulsion for every copy's robots and their bookkeeping stacked (both rebuilt
+        after a reset: a copy's bodies are new), keeping what the old Propulsion knew about
+        the bodies that stayed."""
+        if self._stack is not None:
+            self._stack.split()
+        self._stack = Stack.of(self.sims) if len(self.sims) > 1 else None
         bodies: list[pymunk.Body] = []
         controls: list[pymunk.Body] = []
         groups: list[tuple[Any, list[int]]] = []
@@ -98,7 +106,8 @@ class Replicas:
             for group, idx in sim._built.drive_groups:
                 groups.append((group, [start + i for i in idx]))
             spans.append((start, len(bodies)))
-        propulsion = Propulsion(self.ground.space, bodies, controls, groups)
+        propulsion = Propulsion(self.ground.space, bodies, controls, groups,
+                                self._stack.drive_groups if self._stack else None, copies=True)
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
         self._propulsion, self._spans = propulsion, spans

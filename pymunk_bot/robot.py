@@ -12,14 +12,20 @@ from .command import Command
 from .config.schema import RobotConfig
 from .drives.base import SMALL_GROUP
 from .readings import RobotSpec
+from .stacking import join_rows, split_rows
 
 
 class Fleet:
     """Every robot's per-tick bookkeeping: distance, goal, contact episodes. Arrays, or for a
     few robots lists of floats (numpy's per-call cost dominates there); both index by robot."""
 
+    ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
+            "distance_to_goal")
+
     def __init__(self, configs: list[RobotConfig]) -> None:
         n = len(configs)
+        self.configs = configs
+        self._whole: tuple[Fleet, int] | None = None  # (stack, first row) while stacked
         self.small = n < SMALL_GROUP
         self.xy: Any = [tuple(c.pose[:2]) for c in configs]  # [m]
         self.distance: Any = [0.0] * n  # true path length [m]
@@ -33,28 +39,63 @@ class Fleet:
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
-        self._targets = self._goal_targets()
+        self._refresh_targets()
         if not self.small:
             self.xy, self.distance = np.array(self.xy, dtype=float).reshape(n, 2), np.zeros(n)
         self.check_goals(np.array(self.xy, dtype=float).reshape(n, 2), 0.0)  # started inside: t = 0
 
+    @classmethod
+    def stacked(cls, parts: list["Fleet"]) -> "Fleet":
+        """The fleets of copies as one (see :mod:`pymunk_bot.stacking`); ``advance`` then
+        takes each robot's time [s] as an array."""
+        whole = cls([c for part in parts for c in part.configs])
+        join_rows(whole, parts, cls.ROWS)
+        offset = 0
+        for part in parts + [whole]:
+            part.small = False
+            part._watch_unreached()
+            if part is not whole:
+                part._whole = (whole, offset)
+                offset += part.goal.shape[0]
+        return whole
+
+    def split(self, parts: list["Fleet"]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_rows(self, parts, self.ROWS)
+        for part in parts:
+            part._whole = None
+            part._watch_unreached()
+
+    def _watch_unreached(self) -> None:
+        """Every goal not reached yet is pending."""
+        self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]) & np.isnan(self.time_to_goal))
+        self._refresh_targets()
+
     def watch_goal(self, i: int) -> None:
         self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
         self._pending = np.union1d(self._pending, [i])
-        self._targets = self._goal_targets()
+        self._refresh_targets()
+        if self._whole is not None:  # stacked: the stack checks the goals
+            whole, offset = self._whole
+            whole.watch_goal(offset + i)
 
-    def _goal_targets(self) -> list[tuple[int, float, float, float]]:
-        """(robot, goal x, goal y, squared tolerance) of every pending goal, as floats."""
-        return [(i, float(self.goal[i, 0]), float(self.goal[i, 1]), float(self.tolerance[i]) ** 2)
-                for i in self._pending.tolist()]
+    def _refresh_targets(self) -> None:
+        """The pending goals as the checks read them: (robot, goal x, goal y, squared
+        tolerance) as floats, and the goals and squared tolerances as arrays."""
+        p = self._pending
+        self._targets = [(i, float(self.goal[i, 0]), float(self.goal[i, 1]),
+                          float(self.tolerance[i]) ** 2) for i in p.tolist()]
+        self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
+        self._every_goal_pending = p.shape[0] == self.goal.shape[0]
 
-    def advance(self, xy: Any, time: float) -> None:
-        """Bookkeeping after a tick, from every robot's new position [m]: an (n, 2) array, or a
-        list of (x, y) for a small fleet."""
+    def advance(self, xy: Any, time: Any) -> None:
+        """Bookkeeping after a tick at ``time`` [s], from every robot's new position [m]: an
+        (n, 2) array, or a list of (x, y) for a small fleet."""
         if self.small:
             distance = self.distance
             for i, ((x, y), (x0, y0)) in enumerate(zip(xy, self.xy)):
-                distance[i] += math.hypot(x - x0, y - y0)
+                dx, dy = x - x0, y - y0
+                distance[i] += math.sqrt(dx * dx + dy * dy)  # as the arrays do, to the bit
         else:
             step = xy - self.xy
             self.distance += np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
@@ -76,18 +117,19 @@ class Fleet:
             self.time_to_goal[reached] = time
             self.distance_to_goal[reached] = np.asarray(self.distance, dtype=float)[reached]
             self._pending = np.setdiff1d(self._pending, reached)
-            self._targets = self._goal_targets()
+            self._refresh_targets()
 
-    def check_goals(self, xy: np.ndarray, time: float) -> None:
+    def check_goals(self, xy: np.ndarray, time: Any) -> None:
+        """Goals reached at ``time`` [s] (one for all, or an array with each robot's)."""
         p = self._pending
-        d = xy[p] - self.goal[p]
-        reached = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= self.tolerance[p] ** 2
+        d = (xy if self._every_goal_pending else xy[p]) - self._pending_goal
+        reached = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= self._pending_tolerance2
         if reached.any():
             done = p[reached]
-            self.time_to_goal[done] = time
+            self.time_to_goal[done] = time[done] if isinstance(time, np.ndarray) else time
             self.distance_to_goal[done] = np.asarray(self.distance, dtype=float)[done]
             self._pending = p[~reached]
-            self._targets = self._goal_targets()
+            self._refresh_targets()
 
 
 class Robot:

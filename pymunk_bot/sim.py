@@ -16,7 +16,7 @@ from .localization.base import LocalizerInputs
 from .readings import Observation
 from .robot import Robot
 from .sensors.lidar import record_all, requests_all
-from .sensors.schedule import Schedule, ScheduleArray
+from .sensors.schedule import TIME_TOLERANCE, Schedule, ScheduleArray
 from .world import World
 
 MAX_SEED = 2 ** 63 - 1
@@ -182,11 +182,16 @@ class Simulation:
     def _bookkeep(self, positions: Any) -> float:
         """After the physics: the clock, distance and goals from the robots' new positions,
         odometry from the encoders. Returns the time now [s]."""
-        self.steps += 1
-        now = self.world.time = self.steps * self.dt
+        now = self._advance_clock()
         self._built.fleet.advance(positions, now)
         for drive, odometry in self._odometry:
             odometry.update(drive.take_travel())
+        return now
+
+    def _advance_clock(self) -> float:
+        """One tick more; returns the time now [s]."""
+        self.steps += 1
+        now = self.world.time = self.steps * self.dt
         return now
 
     def _after_sensors(self, now: float) -> None:
@@ -228,7 +233,7 @@ class Simulation:
         # Schedules advance even while a robot is driven by hand, so a controller given back
         # resumes at its own rate instead of catching up on every period it missed.
         robots = self._robots
-        for k in self._control.due(now).tolist():
+        for k in self._control.due(now):
             robot = robots[self._controlled[k]]
             if not robot._override:
                 command = robot.controller.compute(self.observe(robot))
@@ -243,9 +248,10 @@ class Simulation:
 
     def _due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
-        if not self._lidars:
+        schedule = self._lidar_schedule
+        if now + TIME_TOLERANCE < schedule.earliest:  # most ticks (and no LiDAR: never due)
             return []
-        return [self._lidars[k] for k in self._lidar_schedule.due(now).tolist()]
+        return [self._lidars[k] for k in schedule.due(now)]
 
     def _read_other_sensors(self, now: float) -> None:
         for sensor in self._sensors:

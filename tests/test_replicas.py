@@ -112,3 +112,60 @@ def test_what_cannot_share_a_space_is_refused():
         Replicas(_lidar_default(), list(range(MAX_REPLICAS + 1)))
     with pytest.raises(RuntimeError, match="Replicas.step"):
         Replicas(_lidar_default(), [0]).sims[0].step()
+
+
+def _two_robot_fleet():
+    """Two diff robots (one with noisy, quantised odometry) that bump into pillars and walls
+    and reach goals at different times."""
+    noisy = {"wheel_noise_std": 0.02, "left_scale_error": 0.01, "track_width_error": -0.02,
+             "encoder_resolution": 0.001}
+    return parse_scenario({
+        "name": "pair", "world": {"size": [6.0, 4.0]},
+        "obstacles": [{"type": "circle", "center": [3.0, 2.0], "radius": 0.3},
+                      {"type": "box", "center": [4.5, 1.0], "size": [0.4, 0.4]}],
+        "robots": [{"name": "a", "pose": [1.0, 1.0, 0.0], "odometry": noisy,
+                    "goal": {"position": [1.5, 1.0], "tolerance": 0.3}},
+                   {"name": "b", "pose": [1.0, 3.0, 0.0],
+                    "goal": {"position": [1.6, 3.1], "tolerance": 0.4}}]}, "pair")
+
+
+def test_copies_bookkept_together_keep_every_robot_state_of_their_single_runs():
+    """The copies' fleets, drives and odometry are stacked into one each: distances, goal
+    times, collisions, odometry and its covariance still equal each copy's single run, across
+    a copy's reset and a goal set while running."""
+    config = _two_robot_fleet()
+    seeds = [5, 6, 7]
+    copies = Replicas(config, seeds)
+    assert copies._stack is not None  # bookkept together
+    alone = [Simulation(config, seed=s) for s in seeds]
+    rng = np.random.default_rng(4)
+    for period in range(120):
+        commands = rng.uniform([0.0, -2.0], [0.6, 2.0], size=(3, 2, 2))
+        for group in (copies.sims, alone):
+            for sim, pair in zip(group, commands):
+                for name, (v, omega) in zip("ab", pair):
+                    sim.robots[name].set_velocity(float(v), float(omega))
+        for _ in range(6):
+            copies.step()
+            for sim in alone:
+                sim.step()
+        if period == 40:
+            copies.reset(2, seed=70)
+            alone[2].reset(70)
+        if period == 60:  # a new goal where robot b is: reached on the next tick
+            here = (float(alone[0].robots["b"].pose[0]), float(alone[0].robots["b"].pose[1]))
+            for sim in (copies.sims[0], alone[0]):
+                sim.robots["b"].set_goal(here, tolerance=0.3)
+        for shared, single in zip(copies.sims, alone):
+            for name in "ab":
+                a, b = shared.robots[name], single.robots[name]
+                assert np.array_equal(a.pose, b.pose), (period, name)
+                assert np.array_equal(a.odometry.pose, b.odometry.pose), (period, name)
+                assert np.array_equal(a.odometry.covariance, b.odometry.covariance)
+                assert (a.distance, a.collisions, a.time_to_goal, a.distance_to_goal) == \
+                    (b.distance, b.collisions, b.time_to_goal, b.distance_to_goal), (period, name)
+    results = [s.result()["robots"] for s in copies.sims]
+    assert results == [s.result()["robots"] for s in alone]
+    assert sum(r["collisions"] for copy in results for r in copy.values()) >= 3
+    assert sum(r["goal_reached"] for copy in results for r in copy.values()) >= 3
+    assert copies.sims[0].robots["b"].time_to_goal == pytest.approx(6.1 + 1 / 60)  # next tick

@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import physics
 from ..command import Command
+from ..stacking import join_rows, split_rows
 from .base import SMALL_GROUP, DriveGroup, limit_step
 
 
@@ -26,6 +27,7 @@ class DiffDriveGroup(DriveGroup):
     """Every differential-drive robot of a world; commands are wheel speeds or a :class:`Command`."""
 
     name = "diff"
+    ROWS = ("target", "commanded", "turning", "_travel")  # the per-robot state
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -41,9 +43,24 @@ class DiffDriveGroup(DriveGroup):
         self.commanded: Any = zeros()  # acceleration-limited speeds sent to the motors [m/s]
         self.turning: Any = zeros()  # speeds the wheels turn at in this substep [m/s]
         self._travel: Any = zeros()  # wheel travel since take_travel [m]
+        # The same as floats: cheaper than numpy's scalars robot by robot.
         self._accel = self.max_accel.tolist()
         self._track = self.track.tolist()
+        self._max_wheel = self.max_wheel.tolist()
         self._twists: tuple[list[float], list[float], list[float]] | None = None  # of commanded
+
+    @classmethod
+    def stacked(cls, parts: list["DiffDriveGroup"]) -> "DiffDriveGroup":
+        """The groups of copies as one, on arrays (see :mod:`pymunk_bot.stacking`)."""
+        whole = cls([c for part in parts for c in part.configs])
+        join_rows(whole, parts, cls.ROWS)
+        for part in parts + [whole]:
+            part.small, part._twists = False, None
+        return whole
+
+    def split(self, parts: list["DiffDriveGroup"]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_rows(self, parts, self.ROWS)
 
     def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
@@ -52,7 +69,7 @@ class DiffDriveGroup(DriveGroup):
         if not (math.isfinite(left) and math.isfinite(right)):
             raise ValueError(f"wheel speeds must be finite (got {left}, {right})")
         peak = max(abs(left), abs(right))
-        limit = self.max_wheel[i]
+        limit = self._max_wheel[i]
         if peak > limit:
             scale = limit / peak
             left, right = left * scale, right * scale
@@ -63,7 +80,7 @@ class DiffDriveGroup(DriveGroup):
         if isinstance(command, Command):
             if command.vy != 0.0:
                 raise ValueError(f"a diff drive cannot move sideways (vy = {command.vy:g})")
-            self.set_wheel_speeds(i, *wheel_speeds(command.v, command.omega, self.track[i]))
+            self.set_wheel_speeds(i, *wheel_speeds(command.v, command.omega, self._track[i]))
         else:
             left, right = command
             self.set_wheel_speeds(i, left, right)
@@ -72,14 +89,29 @@ class DiffDriveGroup(DriveGroup):
         left, right = self.target[i]
         return Command(float(0.5 * (left + right)), float((right - left) / self.track[i]))
 
-    def advance(self, h: float) -> tuple[Any, Any, Any]:
+    def advance(self, h: float, rows: np.ndarray | None = None) -> tuple[Any, Any, Any]:
+        """See :meth:`DriveGroup.advance`; ``rows``: only these robots (a stacked group's
+        copies, see :mod:`pymunk_bot.stacking`), with the same arithmetic."""
         if self.small:
             return self._advance_each(h)
+        if rows is not None:
+            commanded = self.commanded[rows]
+            self.turning[rows] = commanded
+            self._travel[rows] += commanded * h
+            limit_step(commanded, self.target[rows], (self.max_accel[rows] * h)[:, None])
+            self.commanded[rows] = commanded
+            return self._twists_of(commanded, rows)
         self.turning[:] = self.commanded
         self._travel += self.turning * h
         limit_step(self.commanded, self.target, (self.max_accel * h)[:, None])
-        left, right = self.commanded[:, 0], self.commanded[:, 1]
-        return 0.5 * (left + right), np.zeros(self.n), (right - left) / self.track
+        return self._twists_of(self.commanded, None)
+
+    def _twists_of(self, commanded: np.ndarray, rows: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ux, uy, omega) of these commanded wheel speeds (of ``rows``, or of every robot)."""
+        left, right = commanded[:, 0], commanded[:, 1]
+        track = self.track if rows is None else self.track[rows]
+        return 0.5 * (left + right), np.zeros(left.shape[0]), (right - left) / track
 
     def _advance_each(self, h: float) -> tuple[list[float], list[float], list[float]]:
         """The same arithmetic robot by robot: cheaper than numpy for a few robots."""
@@ -108,8 +140,19 @@ class DiffDriveGroup(DriveGroup):
             return self.commanded == self.target  # lists of [left, right]: compared in C
         return bool(np.array_equal(self.commanded, self.target))
 
-    def coast(self, h: float, substeps: int) -> tuple[Any, Any, Any]:
+    def settled_rows(self) -> np.ndarray:
+        """:meth:`settled` robot by robot (on arrays: a stacked group)."""
+        return (self.commanded == self.target).all(axis=1)
+
+    def coast(self, h: float, substeps: int, rows: np.ndarray | None = None
+              ) -> tuple[Any, Any, Any]:
+        """See :meth:`DriveGroup.coast`; ``rows``: as in :meth:`advance`."""
         span = h * substeps  # [s] the wheels turn at their commanded speeds throughout
+        if rows is not None:
+            commanded = self.commanded[rows]
+            self.turning[rows] = commanded
+            self._travel[rows] += commanded * span
+            return self._twists_of(commanded, rows)
         if self.small:
             for wheels, turning, travel in zip(self.commanded, self.turning, self._travel):
                 turning[:] = wheels
@@ -120,16 +163,16 @@ class DiffDriveGroup(DriveGroup):
             return self._twists
         self.turning[:] = self.commanded
         self._travel += self.commanded * span
-        left, right = self.commanded[:, 0], self.commanded[:, 1]
-        return 0.5 * (left + right), np.zeros(self.n), (right - left) / self.track
+        return self._twists_of(self.commanded, None)
 
     def take_travel(self) -> Any:
         travel = self._travel
         if self.small:
             self._travel = [[0.0, 0.0] for _ in range(self.n)]
             return travel
-        self._travel = np.zeros((self.n, 2))
-        return travel
+        taken = travel.copy()
+        travel.fill(0.0)  # in place: a stacked group's parts keep viewing its rows
+        return taken
 
     def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         # Force for the fastest allowed change of speed plus turns (the centripetal

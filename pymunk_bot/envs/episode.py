@@ -104,17 +104,19 @@ class NavigationEpisode:
     def act(self, action: np.ndarray) -> None:
         self.task.act(action)
 
-    def finish(self, out: np.ndarray | None = None
+    def finish(self, out: np.ndarray | None = None, ranges: bool = True
                ) -> tuple[np.ndarray, float, bool, bool, dict]:
-        """(obs, reward, terminated, truncated, info) once the physics has advanced."""
+        """(obs, reward, terminated, truncated, info) once the physics has advanced;
+        ``ranges``: see :meth:`RobotTask.observe`."""
         if self.sim is None:
             raise RuntimeError("call reset() before finish()")
+        where = self.task.where()
         reward, terminated, info = self.task.outcome(self.control_period,
-                                                     self.terminate_on_collision)
+                                                     self.terminate_on_collision, where)
         time = self.sim.time
         truncated = not terminated and time >= self.time_limit - 1e-9
         info["time"] = time
         if terminated or truncated:
             info["result"] = robot_result(self.sim, self.robot_name)
             self.done = True
-        return self.task.observe(out), reward, terminated, truncated, info
+        return self.task.observe(out, where, ranges), reward, terminated, truncated, info

@@ -240,45 +240,68 @@ class RobotTask:
         x, y, theta = robot.odometry.pose.tolist()
         return x, y, theta
 
-    def goal_distance(self) -> float:
-        goal = self.goal()
-        x, y, _ = self.pose()
-        return math.hypot(goal[0] - x, goal[1] - y)
-
-    def observe(self, out: np.ndarray | None = None) -> np.ndarray:
-        """The observation vector (see the module docstring), written into ``out`` if given."""
-        obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
-        robot, b = self.bound(), self.beams
-        obs[:b] = robot.lidar.latest.ranges  # within [min_range, max_range]: no clipping needed
-        obs[:b] /= self.max_range
+    def where(self) -> tuple[float, float, float, float, float]:
+        """(x, y, theta) the task sees and the goal (x, y), read once [m, m, rad, m, m]."""
         x, y, theta = self.pose()
         gx, gy = self.goal()
+        return x, y, theta, gx, gy
+
+    def goal_distance(self) -> float:
+        x, y, _, gx, gy = self.where()
+        return math.hypot(gx - x, gy - y)
+
+    def observe(self, out: np.ndarray | None = None,
+                where: tuple[float, float, float, float, float] | None = None,
+                ranges: bool = True) -> np.ndarray:
+        """The observation vector (see the module docstring), written into ``out`` if given;
+        ``where``: :meth:`where`, if already read this step; ``ranges=False`` leaves the
+        LiDAR part of ``out`` to the caller (:meth:`fill_ranges` does it for many)."""
+        obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
+        robot, b = self.bound(), self.beams
+        if ranges or out is None:
+            self.fill_ranges(obs[None], [self])
+        x, y, theta, gx, gy = self.where() if where is None else where
         bearing = math.atan2(gy - y, gx - x) - theta
         body = robot.body
-        c, s = math.cos(body.angle), math.sin(body.angle)
+        angle = theta if self.pose_source == "ground_truth" else body.angle
+        c, s = math.cos(angle), math.sin(angle)
         vx, vy = body.velocity
-        tail = [math.hypot(gx - x, gy - y) / self.diagonal, math.cos(bearing), math.sin(bearing),
-                (c * vx + s * vy) / self.v_max, body.angular_velocity / self.omega_max]
+        # Contacts can push a robot past its own limits for a moment (and a goal can lie
+        # outside the arena): keep to the bounds. The bearing's cos and sin are within them.
+        tail = [min(1.0, math.hypot(gx - x, gy - y) / self.diagonal), math.cos(bearing),
+                math.sin(bearing), min(1.0, max(-1.0, (c * vx + s * vy) / self.v_max)),
+                min(1.0, max(-1.0, body.angular_velocity / self.omega_max))]
         if self.vy_max is not None:
-            tail.append((-s * vx + c * vy) / self.vy_max)
-        # Contacts can push a robot past its own limits for a moment: keep to the bounds.
-        tail = [min(1.0, max(-1.0, value)) for value in tail]
-        tail[0] = max(0.0, tail[0])
+            tail.append(min(1.0, max(-1.0, (-s * vx + c * vy) / self.vy_max)))
         obs[b:] = tail
         return obs
 
-    def outcome(self, elapsed: float, terminate_on_collision: bool = False
+    @staticmethod
+    def fill_ranges(obs: np.ndarray, tasks: list["RobotTask"]) -> None:
+        """The LiDAR part of each row of ``obs`` (float32), from its task's latest scan;
+        the tasks' beam counts and ranges agree."""
+        first = tasks[0]
+        b = first.beams
+        scans = [task.bound().lidar.latest.ranges for task in tasks]
+        obs[:, :b] = scans[0] if len(scans) == 1 else np.stack(scans)
+        obs[:, :b] /= first.max_range  # ranges lie in [min_range, max_range]: no clipping
+
+    def outcome(self, elapsed: float, terminate_on_collision: bool = False,
+                where: tuple[float, float, float, float, float] | None = None
                 ) -> tuple[float, bool, dict]:
-        """(reward, terminated, info) for the control step just taken (``elapsed`` seconds)."""
+        """(reward, terminated, info) for the control step just taken (``elapsed`` seconds);
+        ``where``: :meth:`where`, if already read this step."""
         robot, w = self.bound(), self.weights
-        distance = self.goal_distance()
-        new_collisions = robot.collisions - self._collisions
+        x, y, _, gx, gy = self.where() if where is None else where
+        distance = math.hypot(gx - x, gy - y)
+        collisions = robot.collisions
+        new_collisions = collisions - self._collisions
         reached = robot.goal_reached
         reward = (w.progress * (self._distance - distance) + w.collision * new_collisions
                   + w.time * elapsed + (w.success if reached else 0.0))
         self._distance = distance
-        self._collisions = robot.collisions
-        info = {"distance_to_goal": distance, "collisions": robot.collisions,
+        self._collisions = collisions
+        info = {"distance_to_goal": distance, "collisions": collisions,
                 "new_collisions": new_collisions, "goal_reached": reached,
                 "is_success": reached}
         return float(reward), bool(reached or (terminate_on_collision and new_collisions > 0)), info

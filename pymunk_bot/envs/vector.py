@@ -22,6 +22,7 @@ from ..physics import MAX_REPLICAS
 from ..replicas import NotShareable, Replicas
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
+from .task import RobotTask
 
 if TYPE_CHECKING:
     from ..sim import Simulation
@@ -124,18 +125,28 @@ class NavigationVectorEnv(VectorEnv):
             advance([sims[i] for i in stepping], steps)
         each: list[dict] = []
         final: list[tuple[int, dict]] = []
+        # The LiDAR parts of the observations in one pass, after (SAME_STEP keeps final_obs).
+        later = self.autoreset_mode != AutoresetMode.SAME_STEP
         for i in range(n):
             episode = self.episodes[i]
             if self._autoreset[i]:  # NEXT_STEP: this step is the reset
                 self._obs[i], info = episode.reset(self._rngs[i])
             else:
                 (self._obs[i], rewards[i], terminated[i], truncated[i],
-                 info) = episode.finish(self._obs[i])
+                 info) = episode.finish(self._obs[i], ranges=not later)
                 if self.autoreset_mode == AutoresetMode.SAME_STEP and (terminated[i] or
                                                                        truncated[i]):
                     final.append((i, {"final_obs": self._obs[i].copy(), "final_info": info}))
                     self._obs[i], info = episode.reset(self._rngs[i])
             each.append(info)
+        if later and stepping:
+            tasks = [self.episodes[i].task for i in stepping]
+            if len(stepping) == n:
+                RobotTask.fill_ranges(self._obs, tasks)
+            else:  # a copy of those rows (fancy indexing), written back
+                block = self._obs[stepping]
+                RobotTask.fill_ranges(block, tasks)
+                self._obs[stepping] = block
         infos = self._gather_infos(each)
         for i, info in final:
             infos = self._add_info(infos, info, i)
@@ -154,10 +165,11 @@ class NavigationVectorEnv(VectorEnv):
         n, infos = self.num_envs, {}
         scalars = (int, float, bool, np.bool_, np.integer, np.floating)
         for key, value in each[0].items():
-            kind = type(value)
-            if isinstance(value, scalars) and all(type(info.get(key)) is kind for info in each):
-                infos[key] = np.array([info[key] for info in each], dtype=kind)
-                infos[f"_{key}"] = np.ones(n, dtype=np.bool_)
+            if isinstance(value, scalars):
+                values = [info.get(key) for info in each]
+                if len(set(map(type, values))) == 1:  # one kind in every env
+                    infos[key] = np.array(values, dtype=type(value))
+                    infos[f"_{key}"] = np.ones(n, dtype=np.bool_)
         gathered = len(infos) // 2
         for i, info in enumerate(each):
             if len(info) > gathered:  # keys only some envs have (e.g. "result" at an end)

@@ -16,6 +16,8 @@ class EncoderBank:
     """Encoders of every robot of a group: ``scale`` (n, k), ``noise_var`` (n,) [m^2 per m],
     ``resolution`` (n,) [m per tick]; one generator per robot, drawn in wheel order."""
 
+    ROWS = ("_cumulative", "_ticks")  # the per-robot state
+
     def __init__(self, scale: np.ndarray, noise_var: np.ndarray, resolution: np.ndarray,
                  rngs: Sequence[np.random.Generator]) -> None:
         self.scale = np.asarray(scale, dtype=float)

@@ -69,6 +69,9 @@ class Lidar:
         angles = float(yaw) + beam_angles(config.beams, config.fov)
         angles.setflags(write=False)
         self._angles = angles
+        # The error model as floats, for record_all's arrays.
+        self._model = (float(config.noise_std), float(config.min_range),
+                       float(config.max_range), float(config.dropout))
         self.latest: LaserScan | None = None  # None until the first scan
 
     # ------------------------------------------------------------------ public API
@@ -183,9 +186,10 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
         return
     exact, noisy = [], []
     for k, (lidar, time) in enumerate(due):
-        if lidar.config.noise_std > 0.0:
+        noise_std, _, _, dropout = lidar._model
+        if noise_std > 0.0:
             noisy.append(k)
-        elif lidar.config.dropout == 0.0:
+        elif dropout == 0.0:
             exact.append(k)
         else:  # dropout alone: one by one
             lidar.record(time, true_ranges[k])
@@ -195,10 +199,8 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
         return
     lidars = [due[k][0] for k in noisy]
     true = np.stack([true_ranges[k] for k in noisy])
-    configs = [lidar.config for lidar in lidars]
-    std = np.array([c.noise_std for c in configs])[:, None]
-    low = np.array([c.min_range for c in configs])[:, None]
-    high = np.array([c.max_range for c in configs])[:, None]
+    model = np.array([lidar._model for lidar in lidars])
+    std, low, high = model[:, 0:1], model[:, 1:2], model[:, 2:3]
     ranges = np.empty_like(true)
     for row, lidar in zip(ranges, lidars):
         lidar._periodic_rng.standard_normal(out=row)
@@ -206,12 +208,14 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
     ranges += true
     np.maximum(ranges, low, out=ranges)
     np.minimum(ranges, high, out=ranges)
-    no_return = (true < low) | (true >= high)
-    for row, lidar in zip(no_return, lidars):
-        dropout = lidar.config.dropout
-        if dropout > 0.0:
-            row |= lidar._periodic_rng.random(row.shape[0]) < dropout
-    np.copyto(ranges, np.broadcast_to(high, ranges.shape), where=no_return)
+    no_return = true < low
+    no_return |= true >= high
+    if model[:, 3].any():
+        for row, lidar in zip(no_return, lidars):
+            dropout = lidar._model[3]
+            if dropout > 0.0:
+                row |= lidar._periodic_rng.random(row.shape[0]) < dropout
+    np.copyto(ranges, high, where=no_return)  # high broadcast along each row
     ranges.setflags(write=False)
     for row, k in zip(ranges, noisy):
         lidar, time = due[k]
@@ -220,12 +224,11 @@ def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndar
 
 def _record_exact(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
     """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
-    configs = [lidar.config for lidar, _ in due]
-    high = np.array([c.max_range for c in configs])[:, None]
-    low = np.array([c.min_range for c in configs])[:, None]
+    model = np.array([lidar._model for lidar, _ in due])
+    low, high = model[:, 1:2], model[:, 2:3]
     ranges = np.stack(true_ranges)
     np.minimum(ranges, high, out=ranges)
-    np.copyto(ranges, np.broadcast_to(high, ranges.shape), where=ranges < low)
+    np.copyto(ranges, high, where=ranges < low)
     ranges.setflags(write=False)
     for row, (lidar, time) in zip(ranges, due):
         lidar._keep(time, row)

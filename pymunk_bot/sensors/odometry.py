@@ -23,6 +23,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..drives.base import SMALL_GROUP
+from ..stacking import join_rows, split_rows
 from .encoders import EncoderBank
 
 
@@ -36,6 +37,8 @@ def sinc_half(x: np.ndarray) -> np.ndarray:
     """sin(x/2) / (x/2), elementwise: the chord of an arc over its length."""
     half = 0.5 * np.asarray(x, dtype=float)
     small = np.abs(half) < 1e-4
+    if not small.any():  # the same floats, without the selections
+        return np.sin(half) / half
     safe = np.where(small, 1.0, half)
     return np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
 
@@ -45,9 +48,12 @@ class DiffOdometryGroup:
     wheel travel. Random draws come from each robot's own generator, in a fixed order, so a
     robot's odometry does not depend on which other robots exist."""
 
+    ROWS = ("pose", "wheel_travel", "covariance")  # the per-robot state (and the encoders')
+
     def __init__(self, configs: Sequence[Any], start_poses: Sequence[Sequence[float]],
                  track_widths: Sequence[float], rngs: Sequence[np.random.Generator]) -> None:
         self.configs = list(configs)
+        self.track_widths = list(track_widths)  # [m] the true ones
         n = len(self.configs)
         self._rngs = list(rngs)
         self.pose: Any = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
@@ -69,6 +75,25 @@ class DiffOdometryGroup:
             self.wheel_travel = self.wheel_travel.tolist()
             self._scale_list = self.scale.tolist()
             self._track_list = self.believed_track.tolist()
+
+    @classmethod
+    def stacked(cls, parts: list["DiffOdometryGroup"]) -> "DiffOdometryGroup":
+        """The groups of copies as one, on arrays, drawing from the same generators (see
+        :mod:`pymunk_bot.stacking`)."""
+        configs = [c for part in parts for c in part.configs]
+        whole = cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
+                    [t for part in parts for t in part.track_widths],
+                    [rng for part in parts for rng in part._rngs])
+        join_rows(whole, parts, cls.ROWS)
+        join_rows(whole.encoders, [part.encoders for part in parts], EncoderBank.ROWS)
+        for part in parts + [whole]:
+            part.scalar = False
+        return whole
+
+    def split(self, parts: list["DiffOdometryGroup"]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_rows(self, parts, self.ROWS)
+        split_rows(self.encoders, [part.encoders for part in parts], EncoderBank.ROWS)
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""

@@ -49,8 +49,7 @@ class ScheduleArray:
         self.every_tick = np.array([s.period is None for s in schedules], dtype=bool)
         self.start = np.array([s.start for s in schedules], dtype=float)
         self.next = np.array([s._next for s in schedules], dtype=float)  # index k of the next due time
-        self._none = np.empty(0, dtype=np.intp)
-        self._earliest = self._first_due()
+        self.earliest = self._first_due()  # [s] nothing is due before this
 
     def _first_due(self) -> float:
         """The earliest time [s] anything is due (so most ticks need no array work)."""
@@ -60,19 +59,19 @@ class ScheduleArray:
             return np.inf
         return float((self.start + self.next * self.period).min())
 
-    def due(self, time: float) -> np.ndarray:
+    def due(self, time: float) -> list[int]:
         """Indices of the schedules due at ``time`` [s] (each then advances to its next due time)."""
-        if time + TIME_TOLERANCE < self._earliest:
-            return self._none
+        if time + TIME_TOLERANCE < self.earliest:  # most ticks: nothing due
+            return []
         if self._each is not None:  # a few: the schedules themselves are cheaper than numpy
             hits = [k for k, schedule in enumerate(self._each) if schedule.due(time)]
-            self._earliest = min((s.start + s._next * s.period if s.period is not None else -math.inf
+            self.earliest = min((s.start + s._next * s.period if s.period is not None else -math.inf
                                   for s in self._each), default=math.inf)
-            return np.array(hits, dtype=np.intp)
+            return hits
         elapsed = time - self.start + TIME_TOLERANCE
         due = self.every_tick | (elapsed >= self.next * np.where(self.every_tick, 0.0, self.period))
         index = np.flatnonzero(due)
         finite = index[~self.every_tick[index]]
         self.next[finite] = np.floor(elapsed[finite] / self.period[finite]) + 1
-        self._earliest = self._first_due()
-        return index
+        self.earliest = self._first_due()
+        return index.tolist()

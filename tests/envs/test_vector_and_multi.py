@@ -52,6 +52,38 @@ def test_slot_i_plays_the_single_env_episode_of_seed_plus_i():
             assert rewards[i] == reward
 
 
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_slots_play_single_env_episodes_across_autoresets(mode):
+    """Episodes end at different steps (some slots reset while others step): every slot's
+    observations and rewards are still its single env's, episode after episode."""
+    envs = NavigationVectorEnv(num_envs=3, scenario=short_task(duration=0.8),
+                               autoreset_mode=mode)
+    singles = [NavigationEnv(short_task(duration=0.8)) for _ in range(3)]
+    envs.reset(seed=3)
+    for i, env in enumerate(singles):
+        env.reset(seed=3 + i)
+    rng = np.random.default_rng(2)
+    ended = np.zeros(3, dtype=bool)
+    resets = 0
+    for _ in range(40):
+        actions = rng.uniform(-0.2, 1.0, size=(3, 2)).astype(np.float32)
+        obs, rewards, terminated, truncated, info = envs.step(actions)
+        for i, env in enumerate(singles):
+            if ended[i] and mode == AutoresetMode.NEXT_STEP:  # this step was slot i's reset
+                expected, reward = env.reset()[0], 0.0
+                resets += 1
+            else:
+                expected, reward, done, cut, _ = env.step(actions[i])
+                if mode == AutoresetMode.SAME_STEP and (done or cut):
+                    np.testing.assert_array_equal(info["final_obs"][i], expected)
+                    expected = env.reset()[0]
+                    resets += 1
+            np.testing.assert_array_equal(obs[i], expected)
+            assert rewards[i] == reward
+        ended = terminated | truncated
+    assert resets >= 4
+
+
 def test_next_step_autoreset_follows_gymnasium():
     envs = NavigationVectorEnv(num_envs=2, scenario=short_task(duration=1.0))
     envs.reset(seed=0)

@@ -1,0 +1,89 @@
+"""Copies of one scenario bookkept in one pass: the copies' fleets, drive groups and odometry
+stacked into one object each, whose arrays hold every copy's rows (copy 0's robots first).
+
+Each copy keeps its own objects, and its robots' handles still read them, but their per-robot
+fields become views of the stacked object's arrays, so a write on either side is seen by both.
+A class opts in with a ``stacked(parts)`` classmethod, which builds the whole from the parts'
+configs and joins their row fields with :func:`join_rows`; ``split(parts)`` gives each part
+arrays of its own again (before a copy is rebuilt).
+
+Per-tick work on the stack (coast, travel, odometry, distance and goals) does the arithmetic a
+copy's own objects do on their rows, operation for operation, so the floats are the same.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+
+def join_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
+    """Each of ``fields`` of ``whole`` becomes the parts' rows one after another, and each
+    part's field a view of its rows."""
+    for name in fields:
+        values = [np.asarray(getattr(part, name)) for part in parts]
+        joined = np.concatenate(values)
+        setattr(whole, name, joined)
+        start = 0
+        for part, value in zip(parts, values):
+            setattr(part, name, joined[start:start + value.shape[0]])
+            start += value.shape[0]
+
+
+def split_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
+    """Each part's ``fields`` back to arrays of its own, copied from its rows of ``whole``."""
+    for name in fields:
+        joined, start = getattr(whole, name), 0
+        for part in parts:
+            rows = len(getattr(part, name))
+            setattr(part, name, joined[start:start + rows].copy())
+            start += rows
+
+
+class Stack:
+    """The fleets, drive groups and odometry groups of ``sims`` (copies of one scenario), each
+    stacked into one; see :meth:`of`."""
+
+    def __init__(self, sims: Sequence[Any]) -> None:
+        self._fleets = [sim._built.fleet for sim in sims]
+        self.fleet = type(self._fleets[0]).stacked(self._fleets)
+        self.per_copy = len(sims[0]._robots)  # robots of each copy
+        slots = len(sims[0]._built.drive_groups)
+        self._drives = [[sim._built.drive_groups[j][0] for sim in sims] for j in range(slots)]
+        self._odometry = [[sim._built.odometry_groups[j][0] for sim in sims] for j in range(slots)]
+        # Each whole, with its robots' indices and the first row of each copy's part.
+        self.drive_groups: list[tuple[Any, list[int], list[int]]] = []
+        self.pairs: list[tuple[Any, Any]] = []  # (drive group, its odometry), stacked
+        for j, (drives, odometries) in enumerate(zip(self._drives, self._odometry)):
+            members = [copy * self.per_copy + i for copy, sim in enumerate(sims)
+                       for i in sim._built.drive_groups[j][1]]
+            starts = np.cumsum([0] + [part.n for part in drives[:-1]]).tolist()
+            whole = type(drives[0]).stacked(drives)
+            self.drive_groups.append((whole, members, starts))
+            self.pairs.append((whole, type(odometries[0]).stacked(odometries)))
+
+    @classmethod
+    def of(cls, sims: Sequence[Any]) -> "Stack | None":
+        """The stack of these copies, or None if some group cannot be stacked (it has no
+        ``stacked`` classmethod) or a copy has no robots."""
+        first = sims[0]._built
+        groups = [first.fleet] + [g for g, _ in first.drive_groups + first.odometry_groups]
+        if not first.robots or not all(hasattr(type(g), "stacked") for g in groups):
+            return None
+        return cls(sims)
+
+    def bookkeep(self, positions: np.ndarray, nows: list[float]) -> None:
+        """What each copy's ``Simulation._bookkeep`` does after the physics, for all copies:
+        distance and goals from the robots' positions (n, 2) [m] at each copy's time ``nows``
+        [s], and odometry from the encoders."""
+        times = np.repeat(nows, self.per_copy) if self.per_copy > 1 else np.array(nows)
+        self.fleet.advance(positions, times)
+        for drive, odometry in self.pairs:
+            odometry.update(drive.take_travel())
+
+    def split(self) -> None:
+        """Every copy's objects back on arrays of their own (the stack is not used after)."""
+        self.fleet.split(self._fleets)
+        for (drive, odometry), drives, odometries in zip(self.pairs, self._drives, self._odometry):
+            drive.split(drives)
+            odometry.split(odometries)
