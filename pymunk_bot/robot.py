@@ -98,7 +98,8 @@ class Fleet:
                 distance[i] += math.sqrt(dx * dx + dy * dy)  # as the arrays do, to the bit
         else:
             step = xy - self.xy
-            self.distance += np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
+            step *= step  # x^2 + y^2 below: a sum of two is the same float either way round
+            self.distance += np.sqrt(step.sum(axis=1))
         self.xy = xy
         if self._pending.shape[0]:
             if self.small:
@@ -123,7 +124,8 @@ class Fleet:
         """Goals reached at ``time`` [s] (one for all, or an array with each robot's)."""
         p = self._pending
         d = (xy if self._every_goal_pending else xy[p]) - self._pending_goal
-        reached = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= self._pending_tolerance2
+        d *= d
+        reached = d.sum(axis=1) <= self._pending_tolerance2
         if reached.any():
             done = p[reached]
             self.time_to_goal[done] = time[done] if isinstance(time, np.ndarray) else time

@@ -3,7 +3,8 @@
 1. one Navigation-v0 env (180-beam LiDAR, 10 Hz control) against the same loop written on
    bare pymunk: the same world and robot (its kinematic control body, pivot and gear joints),
    the same 180 beams cast with ``segment_query_first``, the same observation;
-2. the native vector env against N single envs (``gym.make``) stepped one after another;
+2. the native vector env against N single envs (``gym.make``) stepped one after another,
+   every robot on a steady arc, and with random actions;
 3. a sweep of 200 runs on the serial, process and Dask (local cluster) backends.
 
 Environment figures are CPU time of this process (``time.process_time``); sweep figures are
@@ -85,13 +86,14 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     return steps / (time.process_time() - started)
 
 
-def vector_vs_separate(num_envs: int = 16, steps: int = 10, repeats: int = 25
-                       ) -> tuple[float, float, float]:
+def vector_vs_separate(num_envs: int = 16, steps: int = 10, repeats: int = 25,
+                       random_actions: bool = False) -> tuple[float, float, float]:
     """(env steps per second of the native vector env, of ``num_envs`` gym.make envs stepped
     one after another, ratio of the two). Blocks of ``steps`` steps alternate between them,
     ``repeats`` times; the rates are medians over the blocks and the ratio is the median of
     each pair of neighbouring blocks' ratios (short pairs: the VM's speed drifts between
-    them less)."""
+    them less). Every robot drives a steady arc, or with ``random_actions`` a new uniform
+    random action every step (the same for both sides)."""
     import gymnasium as gym
 
     import pymunk_bot.envs  # noqa: F401
@@ -100,20 +102,22 @@ def vector_vs_separate(num_envs: int = 16, steps: int = 10, repeats: int = 25
     vec = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=num_envs,
                        vectorization_mode="vector_entry_point", **kwargs)
     vec.reset(seed=0)
-    actions = np.tile(ACTION, (num_envs, 1))
     envs = [gym.make("pymunk_bot/Navigation-v0", **kwargs) for _ in range(num_envs)]
     for i, env in enumerate(envs):
         env.reset(seed=i)
+    draw = np.random.default_rng(0)
     vector_rates, separate_rates = [], []
     for _ in range(repeats):
+        block = (draw.uniform(-1.0, 1.0, (steps, num_envs, 2)).astype(np.float32)
+                 if random_actions else np.tile(ACTION, (steps, num_envs, 1)))
         started = time.process_time()
-        for _ in range(steps):
+        for actions in block:
             vec.step(actions)
         vector_rates.append(num_envs * steps / (time.process_time() - started))
         started = time.process_time()
-        for _ in range(steps):
-            for env in envs:
-                env.step(ACTION)
+        for actions in block:
+            for env, action in zip(envs, actions):
+                env.step(action)
         separate_rates.append(num_envs * steps / (time.process_time() - started))
     ratios = [v / s for v, s in zip(vector_rates, separate_rates)]
     return (statistics.median(vector_rates), statistics.median(separate_rates),
@@ -186,12 +190,14 @@ def run(quick: bool = False) -> dict:
           f"ratio {env / bare:.2f}x (target >= {ENV_TARGET:g}x)")
     results: dict[str, Any] = {"env_steps_per_s": env, "bare_pymunk_steps_per_s": bare,
                                "env_ratio": env / bare}
-    for n in (16, 64):
-        vector, separate, ratio = vector_vs_separate(n, repeats=7 if quick else 25)
-        print(f"  {n} envs: vector env {vector:8.0f}   {n} separate envs {separate:8.0f}   "
-              f"ratio {ratio:.2f}x")
-        results[f"vector_{n}"] = (vector, separate)
-        results[f"vector_{n}_ratio"] = ratio
+    for n, random_actions in ((16, False), (64, False), (16, True)):
+        vector, separate, ratio = vector_vs_separate(n, repeats=7 if quick else 25,
+                                                     random_actions=random_actions)
+        key = f"vector_{n}" + ("_random" if random_actions else "")
+        print(f"  {n} envs{', random actions' if random_actions else ''}: vector env "
+              f"{vector:8.0f}   {n} separate envs {separate:8.0f}   ratio {ratio:.2f}x")
+        results[key] = (vector, separate)
+        results[f"{key}_ratio"] = ratio
     print(f"Sweep of {60 if quick else 200} runs (2 s simulated each), 2 workers "
           "(wall times include starting the workers)")
     sweep = sweep_backends(60 if quick else 200)
