@@ -145,6 +145,8 @@ class RayCaster:
                      sides, n_sides, _no_order(traced.shape[0]), best, flagged, got)
         counts = got.tolist()  # read now: a cast below may reuse the tracer's scratch
         ranges = best * rng[:, None]  # _finish's product, for the casts without flagged rays
+        if not single and not any(counts):  # the usual case: every cast traced, none flagged
+            return list(ranges)
         for row, (i, count) in enumerate(zip(traced.tolist(), counts)):
             if count == 0:
                 out[i] = ranges[row]
