@@ -90,6 +90,12 @@ class World:
             gone[body] = None
         self.space.remove(*gone)
         self._own.clear()
+        # Chipmunk fills a removed joint's slot with its last one, which can swap two joints
+        # of another copy; its solver applies joints in that order, so put every joint back
+        # in the order it was added (each copy's own build order, as in a space of its own).
+        kept = list(self.space.constraints)
+        self.space.remove(*kept)
+        self.space.add(*kept)
 
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
