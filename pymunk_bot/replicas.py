@@ -17,6 +17,7 @@ from __future__ import annotations
 import time as wallclock
 from typing import Any, Sequence
 
+import numpy as np
 import pymunk
 
 from .actors.motion import ScriptedMotion
@@ -56,6 +57,24 @@ class Replicas:
         """Rebuild copy ``index`` (with a new ``seed``); the other copies are untouched."""
         self.sims[index].reset(seed)
         self._assemble()
+
+    def set_velocities(self, robot: str, copies: Sequence[int], v: np.ndarray,
+                       omega: np.ndarray) -> None:
+        """``robots[robot].set_velocity(v[j], omega[j])`` in each copy ``copies[j]`` (arrays
+        [m/s], [rad/s]): one call for them all where their diff drives are stacked."""
+        sims = [self.sims[c] for c in copies]
+        stack = self._stack
+        if stack is not None and sims:
+            index = list(sims[0].robots).index(robot)
+            where = [stack.row_of[c * stack.per_copy + index] for c in copies]
+            whole = where[0][0]
+            if hasattr(whole, "set_velocities") and all(w is whole for w, _ in where):
+                whole.set_velocities(np.array([row for _, row in where]), v, omega)
+                for sim in sims:
+                    sim.robots[robot]._override = True  # as Robot.command takes over
+                return
+        for sim, v_j, omega_j in zip(sims, v.tolist(), omega.tolist()):
+            sim.robots[robot].set_velocity(v_j, omega_j)
 
     def step(self) -> None:
         """Advance every copy by one physics step of ``dt``: the tick of

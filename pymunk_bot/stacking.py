@@ -61,6 +61,9 @@ class Stack:
             whole = type(drives[0]).stacked(drives)
             self.drive_groups.append((whole, members, starts))
             self.pairs.append((whole, type(odometries[0]).stacked(odometries)))
+        # Robot (copy * per_copy + index in its copy) -> (its stacked drive group, its row).
+        self.row_of = {robot: (whole, row) for whole, members, _ in self.drive_groups
+                       for row, robot in enumerate(members)}
 
     @classmethod
     def of(cls, sims: Sequence[Any]) -> "Stack | None":

@@ -85,6 +85,22 @@ class DiffDriveGroup(DriveGroup):
             left, right = command
             self.set_wheel_speeds(i, left, right)
 
+    def set_velocities(self, rows: np.ndarray, v: np.ndarray, omega: np.ndarray) -> None:
+        """:meth:`set_command` with ``Command(v, omega)`` for these robots at once (arrays
+        [m/s], [rad/s]): the same wheel speeds, to the bit."""
+        if not (np.isfinite(v).all() and np.isfinite(omega).all()):
+            raise ValueError("commands must be finite")
+        half = 0.5 * omega * self.track[rows]  # wheel_speeds, on arrays
+        left, right = v - half, v + half
+        peak = np.maximum(np.abs(left), np.abs(right))
+        limit = self.max_wheel[rows]
+        over = peak > limit
+        if over.any():  # both scaled by one factor, as set_wheel_speeds does
+            scale = limit[over] / peak[over]
+            left[over] *= scale
+            right[over] *= scale
+        self.target[rows] = np.stack((left, right), axis=1)
+
     def command_of(self, i: int) -> Command:
         left, right = self.target[i]
         return Command(float(0.5 * (left + right)), float((right - left) / self.track[i]))

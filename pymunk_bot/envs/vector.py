@@ -58,6 +58,7 @@ class NavigationVectorEnv(VectorEnv):
         self.episodes = [first] + [NavigationEpisode(**kwargs) for _ in range(num_envs - 1)]
         for episode in self.episodes[1:]:
             episode.source = first.source
+        self._slots: list[list[int]] = []
         self._shards = self._share_spaces(first) if share_space and num_envs > 1 else []
         self.num_envs = num_envs
         self.render_mode = render_mode
@@ -110,9 +111,8 @@ class NavigationVectorEnv(VectorEnv):
         stepping = [i for i in range(n) if not self._autoreset[i]]
         checked = actions.astype(np.float64)
         if checked.shape[1] == self.episodes[0].task.action_size and np.isfinite(checked).all():
-            clipped = np.clip(checked, -1.0, 1.0).tolist()  # what each act() would clip to
-            for i in stepping:
-                self.episodes[i].task.command(clipped[i])
+            clipped = np.clip(checked, -1.0, 1.0)  # what each act() would clip to
+            self._command(clipped, stepping)
         else:  # the env that got a bad action says what is wrong with it
             for i in stepping:
                 self.episodes[i].act(actions[i])
@@ -159,6 +159,22 @@ class NavigationVectorEnv(VectorEnv):
         self._attach_renderers()
         return self._obs.copy(), rewards, terminated, truncated, infos
 
+    def _command(self, clipped: np.ndarray, stepping: list[int]) -> None:
+        """Each stepping slot's checked, clipped action to its robot: as ``task.command``
+        does slot by slot, one call per shared space for a diff drive's (v, omega)."""
+        task = self.episodes[0].task
+        if not self._shards or task.vy_max is not None:
+            rows = clipped.tolist()
+            for i in stepping:
+                self.episodes[i].task.command(rows[i])
+            return
+        moving = set(stepping)
+        for shard, slots in zip(self._shards, self._slots):
+            copies = [c for c, slot in enumerate(slots) if slot in moving]
+            chosen = [slots[c] for c in copies]
+            shard.set_velocities(task.name, copies, clipped[chosen, 0] * task.v_max,
+                                 clipped[chosen, 1] * task.omega_max)
+
     def _gather_infos(self, each: list[dict]) -> dict:
         """Gymnasium's dict of arrays (each key with its ``_key`` mask) from every env's info:
         what ``_add_info`` env by env gives, with the keys every env has in one array each."""
@@ -182,15 +198,16 @@ class NavigationVectorEnv(VectorEnv):
         allows it (no pedestrians); else none: each world keeps a space of its own."""
         n = len(self.episodes)
         count = -(-n // MAX_REPLICAS)
-        groups = [self.episodes[k * n // count:(k + 1) * n // count] for k in range(count)]
+        slots = [list(range(k * n // count, (k + 1) * n // count)) for k in range(count)]
         try:
             shards = [Replicas(first.config, [0] * len(members), first.source)
-                      for members in groups]
+                      for members in slots]
         except NotShareable:
             return []
-        for shard, members in zip(shards, groups):
-            for index, episode in enumerate(members):
-                episode.share(shard, index)
+        for shard, members in zip(shards, slots):
+            for index, slot in enumerate(members):
+                self.episodes[slot].share(shard, index)
+        self._slots = slots  # each shard's env slots, in copy order
         return shards
 
     def render(self) -> tuple[np.ndarray, ...] | None:
