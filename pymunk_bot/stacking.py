@@ -3,9 +3,10 @@ stacked into one object each, whose arrays hold every copy's rows (copy 0's robo
 
 Each copy keeps its own objects, and its robots' handles still read them, but their per-robot
 fields become views of the stacked object's arrays, so a write on either side is seen by both.
-A class opts in with a ``stacked(parts)`` classmethod, which builds the whole from the parts'
-configs and joins their row fields with :func:`join_rows`; ``split(parts)`` gives each part
-arrays of its own again (before a copy is rebuilt).
+A class opts in by naming its per-robot fields (``ROWS``) and giving a ``stacked(parts)``
+classmethod, which builds the whole from the parts' configs and joins their rows with
+:func:`join_rows`, and ``split(parts)``, which gives each part arrays of its own again (before
+a copy is rebuilt). Its methods must then change those fields in place, never rebind them.
 
 Per-tick work on the stack (coast, travel, odometry, distance and goals) does the arithmetic a
 copy's own objects do on their rows, operation for operation, so the floats are the same.
@@ -40,6 +41,18 @@ def split_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
             start += rows
 
 
+def join_odometry(whole: Any, parts: Sequence[Any]) -> None:
+    """:func:`join_rows` of an odometry group's ``ROWS`` and of its encoders' ``ROWS``."""
+    join_rows(whole, parts, whole.ROWS)
+    join_rows(whole.encoders, [part.encoders for part in parts], whole.encoders.ROWS)
+
+
+def split_odometry(whole: Any, parts: Sequence[Any]) -> None:
+    """:func:`split_rows` of an odometry group's ``ROWS`` and of its encoders' ``ROWS``."""
+    split_rows(whole, parts, whole.ROWS)
+    split_rows(whole.encoders, [part.encoders for part in parts], whole.encoders.ROWS)
+
+
 class Stack:
     """The fleets, drive groups and odometry groups of ``sims`` (copies of one scenario), each
     stacked into one; see :meth:`of`."""
@@ -67,11 +80,11 @@ class Stack:
 
     @classmethod
     def of(cls, sims: Sequence[Any]) -> "Stack | None":
-        """The stack of these copies, or None if some group cannot be stacked (it has no
-        ``stacked`` classmethod) or a copy has no robots."""
+        """The stack of these copies, or None if some group cannot be stacked (its class
+        names no ``ROWS``) or a copy has no robots."""
         first = sims[0]._built
         groups = [first.fleet] + [g for g, _ in first.drive_groups + first.odometry_groups]
-        if not first.robots or not all(hasattr(type(g), "stacked") for g in groups):
+        if not first.robots or not all(getattr(type(g), "ROWS", ()) for g in groups):
             return None
         return cls(sims)
 

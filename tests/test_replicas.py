@@ -171,13 +171,27 @@ def test_copies_bookkept_together_keep_every_robot_state_of_their_single_runs():
     assert copies.sims[0].robots["b"].time_to_goal == pytest.approx(6.1 + 1 / 60)  # next tick
 
 
-def test_copies_stay_exact_across_other_copies_resets():
-    """Rebuilding one copy takes its joints out of the shared space; the others' joints keep
-    the order the solver applies them in (a car-like robot and its planner here), so every
-    copy still plays its single run to the bit."""
-    config = load_scenario("parking")
+NOISY_ODOMETRY = {
+    "parking": {"wheel_noise_std": 0.02, "encoder_resolution": 0.001, "steer_noise_std": 0.01,
+                "steer_resolution": 0.002, "steer_offset": 0.01, "wheelbase_error": 0.02},
+    "omni_aisle": {"wheel_noise_std": 0.02, "scale_errors": [0.01, -0.01],
+                   "encoder_resolution": 0.001, "wheel_distance_error": 0.02},
+}
+
+
+@pytest.mark.parametrize("scenario", sorted(NOISY_ODOMETRY))
+def test_car_and_omni_copies_stay_exact_across_other_copies_resets(scenario):
+    """Car-like and omni copies (planners driving them, noisy odometry) are stacked too; a
+    copy's rebuild takes its joints out of the shared space and the others' keep the order
+    the solver applies them in: every copy still plays its single run to the bit."""
+    data = load_scenario(scenario).model_dump(exclude_unset=True)
+    for robot in data["robots"]:
+        robot["odometry"] = NOISY_ODOMETRY[scenario]
+        robot["localization"] = {"type": "ground_truth"}  # its planner: no replans on drift
+    config = parse_scenario(data, scenario)
     seeds = [1, 2, 3]
     copies = Replicas(config, seeds)
+    assert copies._stack is not None
     alone = [Simulation(config, seed=s) for s in seeds]
     for tick in range(360):
         copies.step()
@@ -189,5 +203,9 @@ def test_copies_stay_exact_across_other_copies_resets():
             alone[k].reset(tick)
     for shared, single in zip(copies.sims, alone):
         for name in shared.robots:
-            assert np.array_equal(shared.robots[name].pose, single.robots[name].pose)
+            a, b = shared.robots[name], single.robots[name]
+            assert np.array_equal(a.pose, b.pose)
+            assert np.array_equal(a.odometry.pose, b.odometry.pose)
+            assert np.array_equal(a.odometry.covariance, b.odometry.covariance)
+            assert a.odometry.covariance.any()  # the noise model ran
     assert [s.result()["robots"] for s in copies.sims] == [s.result()["robots"] for s in alone]

@@ -24,6 +24,8 @@ class AckermannDriveGroup(DriveGroup):
     """Every car-like robot of a world."""
 
     name = "ackermann"
+    ROWS = ("target_speed", "target_steer", "speed", "steer", "driven_speed", "driven_steer",
+            "_travel")
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -87,8 +89,9 @@ class AckermannDriveGroup(DriveGroup):
         return self.speed.copy(), np.zeros(self.n), omega
 
     def take_travel(self) -> np.ndarray:
-        travel, self._travel = self._travel, np.zeros((self.n, 3))
-        return travel
+        taken = self._travel.copy()
+        self._travel.fill(0.0)  # in place: see ROWS
+        return taken
 
     # ------------------------------------------------------------------ set-up
     def min_turn_radius(self, i: int) -> float:

@@ -14,6 +14,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..command import Command
+from ..stacking import join_rows, split_rows
 
 # Below this many robots, drives and the tick work robot by robot in plain Python: numpy's
 # per-call overhead costs more than it saves for a handful of robots.
@@ -25,10 +26,31 @@ class DriveGroup:
 
     name = ""
     holonomic = False  # True: accepts a lateral speed vy
+    # The per-robot state, each a field with a row per robot, changed only in place: copies of
+    # a scenario sharing a space then keep it stacked (see pymunk_bot.stacking). Empty: a
+    # group of its own per copy.
+    ROWS: tuple[str, ...] = ()
 
     def __init__(self, configs: Sequence[Any]) -> None:
         self.configs = list(configs)
         self.n = len(self.configs)
+
+    # ------------------------------------------------------------------ stacking
+    @classmethod
+    def stacked(cls, parts: list[Any]) -> Any:
+        """The groups of copies as one group whose ``ROWS`` hold every part's rows, each
+        part's ``ROWS`` viewing its own (see :mod:`pymunk_bot.stacking`)."""
+        whole = cls([c for part in parts for c in part.configs])
+        join_rows(whole, parts, cls.ROWS)
+        return whole
+
+    def split(self, parts: list[Any]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_rows(self, parts, self.ROWS)
+
+    def settled_rows(self) -> np.ndarray:
+        """:meth:`settled` robot by robot (a stacked group's); never, unless a drive can tell."""
+        return np.zeros(self.n, dtype=np.bool_)
 
     # ------------------------------------------------------------------ commands
     def set_command(self, i: int, command: Any) -> None:

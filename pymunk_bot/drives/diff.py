@@ -13,7 +13,6 @@ import numpy as np
 
 from .. import physics
 from ..command import Command
-from ..stacking import join_rows, split_rows
 from .base import SMALL_GROUP, DriveGroup, limit_step
 
 
@@ -50,17 +49,12 @@ class DiffDriveGroup(DriveGroup):
         self._twists: tuple[list[float], list[float], list[float]] | None = None  # of commanded
 
     @classmethod
-    def stacked(cls, parts: list["DiffDriveGroup"]) -> "DiffDriveGroup":
-        """The groups of copies as one, on arrays (see :mod:`pymunk_bot.stacking`)."""
-        whole = cls([c for part in parts for c in part.configs])
-        join_rows(whole, parts, cls.ROWS)
+    def stacked(cls, parts: list[Any]) -> "DiffDriveGroup":
+        """See :meth:`DriveGroup.stacked`: every part then works on arrays."""
+        whole = super().stacked(parts)
         for part in parts + [whole]:
             part.small, part._twists = False, None
         return whole
-
-    def split(self, parts: list["DiffDriveGroup"]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_rows(self, parts, self.ROWS)
 
     def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed

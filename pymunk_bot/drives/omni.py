@@ -39,6 +39,7 @@ class OmniDriveGroup(DriveGroup):
 
     name = "omni"
     holonomic = True
+    ROWS = ("target", "current", "_travel")
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -77,8 +78,9 @@ class OmniDriveGroup(DriveGroup):
         return c[:, 0].copy(), c[:, 1].copy(), c[:, 2].copy()
 
     def take_travel(self) -> np.ndarray:
-        travel, self._travel = self._travel, np.zeros((self.n, 4))
-        return travel
+        taken = self._travel.copy()
+        self._travel.fill(0.0)  # in place: see ROWS
+        return taken
 
     def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         reach = of_robot(self.configs[i]).bounding_radius

@@ -23,7 +23,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..drives.base import SMALL_GROUP
-from ..stacking import join_rows, split_rows
+from ..stacking import join_odometry, split_odometry
 from .encoders import EncoderBank
 
 
@@ -84,16 +84,14 @@ class DiffOdometryGroup:
         whole = cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
                     [t for part in parts for t in part.track_widths],
                     [rng for part in parts for rng in part._rngs])
-        join_rows(whole, parts, cls.ROWS)
-        join_rows(whole.encoders, [part.encoders for part in parts], EncoderBank.ROWS)
+        join_odometry(whole, parts)
         for part in parts + [whole]:
             part.scalar = False
         return whole
 
     def split(self, parts: list["DiffOdometryGroup"]) -> None:
         """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_rows(self, parts, self.ROWS)
-        split_rows(self.encoders, [part.encoders for part in parts], EncoderBank.ROWS)
+        split_odometry(self, parts)
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""

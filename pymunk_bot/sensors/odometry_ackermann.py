@@ -15,6 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..stacking import join_odometry, split_odometry
 from .encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
@@ -22,9 +23,12 @@ class AckermannOdometryGroup:
     """Dead reckoning of every car of a world; ``update`` takes the drive's travel rows
     (rear-left [m], rear-right [m], integral of tan(delta) ds [m])."""
 
+    ROWS = ("pose", "wheel_travel", "steering", "covariance")  # per robot (and the encoders')
+
     def __init__(self, configs: Sequence[Any], wheelbase: np.ndarray, track: np.ndarray,
                  rngs: Sequence[np.random.Generator]) -> None:
         self.configs = list(configs)
+        self._geometry = (np.asarray(wheelbase, dtype=float), np.asarray(track, dtype=float))
         odo = [c.odometry for c in self.configs]
         n = len(odo)
         self._rngs = list(rngs)
@@ -45,6 +49,21 @@ class AckermannOdometryGroup:
         self.steering = np.zeros(n)  # the steering sensor's last reading [rad]
         self.covariance = np.zeros((n, 3, 3))
 
+    @classmethod
+    def stacked(cls, parts: list["AckermannOdometryGroup"]) -> "AckermannOdometryGroup":
+        """The groups of copies as one, drawing from the same generators (see
+        :mod:`pymunk_bot.stacking`)."""
+        whole = cls([c for part in parts for c in part.configs],
+                    np.concatenate([part._geometry[0] for part in parts]),
+                    np.concatenate([part._geometry[1] for part in parts]),
+                    [rng for part in parts for rng in part._rngs])
+        join_odometry(whole, parts)
+        return whole
+
+    def split(self, parts: list["AckermannOdometryGroup"]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_odometry(self, parts)
+
     def update(self, travel: Any) -> None:
         travel = np.asarray(travel, dtype=float)
         true_ds = 0.5 * (travel[:, 0] + travel[:, 1])
@@ -54,7 +73,7 @@ class AckermannOdometryGroup:
         q = self.steer_resolution > 0
         if q.any():
             steer[q] = np.round(steer[q] / self.steer_resolution[q]) * self.steer_resolution[q]
-        self.steering = np.where(moving, steer, self.steering)
+        np.copyto(self.steering, steer, where=moving)  # in place: see ROWS
         wheels = self.encoders.measure(travel[:, :2])
         self.wheel_travel += wheels
         ds = 0.5 * (wheels[:, 0] + wheels[:, 1])

@@ -12,15 +12,20 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..drives.omni import wheel_matrix
+from ..stacking import join_odometry, split_odometry
 from .encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
 class OmniOdometryGroup:
     """Dead reckoning of every omni robot of a world; ``update`` takes (n, 4) rim travel [m]."""
 
+    ROWS = ("pose", "wheel_travel", "covariance")  # the per-robot state (and the encoders')
+
     def __init__(self, configs: Sequence[Any], wheels: np.ndarray,
                  rngs: Sequence[np.random.Generator]) -> None:
         self.configs = list(configs)
+        self._wheels = np.asarray(wheels)  # the drive's true wheel matrices
+        self._rngs = list(rngs)
         n = len(self.configs)
         self.pose = np.array([c.pose for c in self.configs], dtype=float).reshape(n, 3)
         self.used = np.array([4 if c.wheels == "mecanum" else 3 for c in self.configs])
@@ -38,6 +43,20 @@ class OmniOdometryGroup:
             self.inverse[i, :, :k] = np.linalg.pinv(believed[i, :k])
         self.wheel_travel = np.zeros((n, 4))  # measured rim travel [m]
         self.covariance = np.zeros((n, 3, 3))
+
+    @classmethod
+    def stacked(cls, parts: list["OmniOdometryGroup"]) -> "OmniOdometryGroup":
+        """The groups of copies as one, drawing from the same generators (see
+        :mod:`pymunk_bot.stacking`)."""
+        whole = cls([c for part in parts for c in part.configs],
+                    np.concatenate([part._wheels for part in parts]),
+                    [rng for part in parts for rng in part._rngs])
+        join_odometry(whole, parts)
+        return whole
+
+    def split(self, parts: list["OmniOdometryGroup"]) -> None:
+        """Undo :meth:`stacked`: each part on arrays of its own."""
+        split_odometry(self, parts)
 
     def update(self, travel: Any) -> None:
         wheels = self.encoders.measure(np.asarray(travel, dtype=float))
