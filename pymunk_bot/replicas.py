@@ -55,7 +55,7 @@ class Replicas:
 
     def reset(self, index: int, seed: int | None = None) -> None:
         """Rebuild copy ``index`` (with a new ``seed``); the other copies are untouched."""
-        self.sims[index].reset(seed)
+        self.sims[index]._reset(seed)
         self._assemble()
 
     def set_velocities(self, robot: str, copies: Sequence[int], v: np.ndarray,

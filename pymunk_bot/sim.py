@@ -220,6 +220,12 @@ class Simulation:
 
         Observers stay attached; those with an ``on_reset(sim)`` method are told.
         """
+        if self._ground is not None:
+            raise RuntimeError("a copy on a shared ground resets with its "
+                               "Replicas.reset(index, seed)")
+        self._reset(seed)
+
+    def _reset(self, seed: int | None) -> None:
         if seed is not None:
             self.seed = check_seed(seed)
         self._build()

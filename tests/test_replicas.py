@@ -112,6 +112,8 @@ def test_what_cannot_share_a_space_is_refused():
         Replicas(_lidar_default(), list(range(MAX_REPLICAS + 1)))
     with pytest.raises(RuntimeError, match="Replicas.step"):
         Replicas(_lidar_default(), [0]).sims[0].step()
+    with pytest.raises(RuntimeError, match="Replicas.reset"):  # its stack would miss it
+        Replicas(_lidar_default(), [0, 1]).sims[1].reset(5)
 
 
 def _two_robot_fleet():
