@@ -294,6 +294,11 @@ class Propulsion:
             return [b.position for b in self.bodies]
         return self.position_array()
 
+    def motion_array(self) -> np.ndarray:
+        """Every robot body's (angle [rad], vx, vy [m/s], omega [rad/s]) now, (n, 4), read in
+        one call."""
+        return self._read_state()[self._robot_rows]
+
     def position_array(self) -> np.ndarray:
         """Every robot body's position now, (n, 2) [m], read in one call."""
         self._read.clear()

@@ -76,6 +76,32 @@ class Replicas:
         for sim, v_j, omega_j in zip(sims, v.tolist(), omega.tolist()):
             sim.robots[robot].set_velocity(v_j, omega_j)
 
+    def robot_states(self, robot: str, copies: Sequence[int]) -> dict[str, np.ndarray]:
+        """Robot ``robot`` of each copy in ``copies``, read at once: ``x``, ``y`` [m],
+        ``theta`` [rad], ``vx``, ``vy`` [m/s] (world frame), ``omega`` [rad/s], ``goal_x``,
+        ``goal_y`` [m] (NaN: none), ``collisions``, ``reached`` (goal reached) and ``time``
+        (each copy's clock [s]); the same floats the robots' handles give one by one."""
+        propulsion = self._propulsion
+        assert propulsion is not None
+        index = list(self.sims[0].robots).index(robot)
+        per_copy = len(self.sims[0].robots)
+        rows = np.array([c * per_copy + index for c in copies], dtype=np.intp)
+        xy = propulsion.position_array()[rows]
+        motion = propulsion.motion_array()[rows]
+        if self._stack is not None:  # every copy's fleet in one
+            fleet = self._stack.fleet
+            goal, collisions = fleet.goal[rows], fleet.collisions[rows]
+            reached = ~np.isnan(fleet.time_to_goal[rows])
+        else:
+            fleets = [self.sims[c]._built.fleet for c in copies]
+            goal = np.array([f.goal[index] for f in fleets]).reshape(-1, 2)
+            collisions = np.array([f.collisions[index] for f in fleets], dtype=np.int64)
+            reached = ~np.isnan([f.time_to_goal[index] for f in fleets])
+        return {"x": xy[:, 0], "y": xy[:, 1], "theta": motion[:, 0], "vx": motion[:, 1],
+                "vy": motion[:, 2], "omega": motion[:, 3], "goal_x": goal[:, 0],
+                "goal_y": goal[:, 1], "collisions": collisions, "reached": reached,
+                "time": np.array([self.sims[c].time for c in copies])}
+
     def step(self) -> None:
         """Advance every copy by one physics step of ``dt``: the tick of
         :meth:`Simulation.step <pymunk_bot.sim.Simulation.step>` for all of them at once."""

@@ -248,7 +248,7 @@ class RobotTask:
 
     def goal_distance(self) -> float:
         x, y, _, gx, gy = self.where()
-        return math.hypot(gx - x, gy - y)
+        return _length(gx - x, gy - y)
 
     def observe(self, out: np.ndarray | None = None,
                 where: tuple[float, float, float, float, float] | None = None,
@@ -268,7 +268,7 @@ class RobotTask:
         vx, vy = body.velocity
         # Contacts can push a robot past its own limits for a moment (and a goal can lie
         # outside the arena): keep to the bounds. The bearing's cos and sin are within them.
-        tail = [min(1.0, math.hypot(gx - x, gy - y) / self.diagonal), math.cos(bearing),
+        tail = [min(1.0, _length(gx - x, gy - y) / self.diagonal), math.cos(bearing),
                 math.sin(bearing), min(1.0, max(-1.0, (c * vx + s * vy) / self.v_max)),
                 min(1.0, max(-1.0, body.angular_velocity / self.omega_max))]
         if self.vy_max is not None:
@@ -293,7 +293,7 @@ class RobotTask:
         ``where``: :meth:`where`, if already read this step."""
         robot, w = self.bound(), self.weights
         x, y, _, gx, gy = self.where() if where is None else where
-        distance = math.hypot(gx - x, gy - y)
+        distance = _length(gx - x, gy - y)
         collisions = robot.collisions
         new_collisions = collisions - self._collisions
         reached = robot.goal_reached
@@ -305,6 +305,52 @@ class RobotTask:
                 "new_collisions": new_collisions, "goal_reached": reached,
                 "is_success": reached}
         return float(reward), bool(reached or (terminate_on_collision and new_collisions > 0)), info
+
+
+def _length(dx: float, dy: float) -> float:
+    """|(dx, dy)| [m], as :func:`outcomes` computes it on arrays (math.hypot rounds
+    differently)."""
+    return math.sqrt(dx * dx + dy * dy)
+
+
+def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: float,
+             terminate_on_collision: bool, obs: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """:meth:`RobotTask.outcome` and the pose part of :meth:`RobotTask.observe` for many
+    tasks of one scenario at once (ground-truth pose, no lateral speed), from their robots'
+    states (``Replicas.robot_states``): (rewards, terminated, info arrays), each row of
+    ``obs`` given its tail. The same floats as task by task."""
+    first, w = tasks[0], tasks[0].weights
+    dx, dy = states["goal_x"] - states["x"], states["goal_y"] - states["y"]
+    distance = np.sqrt(dx * dx + dy * dy)
+    collisions, reached = states["collisions"], states["reached"]
+    new_collisions = collisions - np.array([task._collisions for task in tasks], dtype=np.int64)
+    before = np.array([task._distance for task in tasks])
+    rewards = (w.progress * (before - distance) + w.collision * new_collisions
+               + w.time * elapsed + np.where(reached, w.success, 0.0))
+    terminated = reached | (terminate_on_collision & (new_collisions > 0))
+    for task, d, c in zip(tasks, distance.tolist(), collisions.tolist()):
+        task._distance, task._collisions = d, c
+    # The bearing and heading through math, robot by robot, as observe takes them.
+    theta = states["theta"]
+    trig = np.array([(math.cos(b), math.sin(b), math.cos(t), math.sin(t))
+                     for b, t in zip(_bearings(dy, dx, theta), theta.tolist())]).reshape(-1, 4)
+    c, s = trig[:, 2], trig[:, 3]
+    tail = obs[:, first.beams:]
+    tail[:, 0] = np.minimum(1.0, distance / first.diagonal)
+    tail[:, 1], tail[:, 2] = trig[:, 0], trig[:, 1]
+    forward = (c * states["vx"] + s * states["vy"]) / first.v_max
+    tail[:, 3] = np.minimum(1.0, np.maximum(-1.0, forward))
+    tail[:, 4] = np.minimum(1.0, np.maximum(-1.0, states["omega"] / first.omega_max))
+    info = {"distance_to_goal": distance, "collisions": collisions,
+            "new_collisions": new_collisions, "goal_reached": reached,
+            "is_success": reached.copy()}
+    return rewards, terminated, info
+
+
+def _bearings(dy: np.ndarray, dx: np.ndarray, theta: np.ndarray) -> list[float]:
+    """Goal bearings in the robot frame [rad], through math.atan2 as observe takes them."""
+    return [math.atan2(y, x) - t for y, x, t in zip(dy.tolist(), dx.tolist(), theta.tolist())]
 
 
 def robot_result(sim, name: str) -> dict:

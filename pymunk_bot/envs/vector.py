@@ -22,7 +22,7 @@ from ..physics import MAX_REPLICAS
 from ..replicas import NotShareable, Replicas
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
-from .task import RobotTask
+from .task import RobotTask, outcomes, robot_result
 
 if TYPE_CHECKING:
     from ..sim import Simulation
@@ -60,6 +60,10 @@ class NavigationVectorEnv(VectorEnv):
             episode.source = first.source
         self._slots: list[list[int]] = []
         self._shards = self._share_spaces(first) if share_space and num_envs > 1 else []
+        # Step results read in one call per shared space where the task allows it.
+        self._together = bool(self._shards) and all(s._stack is not None for s in self._shards) \
+            and first.task.pose_source == "ground_truth" and first.task.vy_max is None \
+            and self.autoreset_mode != AutoresetMode.SAME_STEP
         self.num_envs = num_envs
         self.render_mode = render_mode
         self.single_observation_space, self.single_action_space = make_spaces(first.task)
@@ -123,6 +127,67 @@ class NavigationVectorEnv(VectorEnv):
                     shard.step()
         else:
             advance([sims[i] for i in stepping], steps)
+        if self._together:
+            infos = self._finish_together(stepping, rewards, terminated, truncated)
+            for i in np.flatnonzero(self._autoreset).tolist():  # NEXT_STEP: this step resets
+                self._obs[i], info = self.episodes[i].reset(self._rngs[i])
+                infos = self._add_info(infos, info, i)
+        else:
+            infos = self._finish_each(stepping, rewards, terminated, truncated)
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
+            self._autoreset = terminated | truncated
+        elif self.autoreset_mode == AutoresetMode.DISABLED:
+            self._autoreset[:] = False
+            for k in np.flatnonzero(terminated | truncated):
+                self.episodes[k].done = True
+        self._attach_renderers()
+        return self._obs.copy(), rewards, terminated, truncated, infos
+
+    def _finish_together(self, stepping: list[int], rewards: np.ndarray,
+                         terminated: np.ndarray, truncated: np.ndarray) -> dict:
+        """What ``_finish_each`` does for the stepping slots, their robots read in one call
+        per shared space and the task's arithmetic done on arrays (``outcomes``)."""
+        first, n = self.episodes[0], self.num_envs
+        moving = set(stepping)
+        parts = []
+        for shard, slots in zip(self._shards, self._slots):
+            copies = [c for c, slot in enumerate(slots) if slot in moving]
+            if copies:
+                parts.append(shard.robot_states(first.task.name, copies))
+        infos: dict = {}
+        if not parts:
+            return infos
+        states = parts[0] if len(parts) == 1 else {
+            key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+        tasks = [self.episodes[i].task for i in stepping]
+        every = len(stepping) == n
+        block = self._obs if every else self._obs[stepping]  # fancy indexing: a copy
+        rewards[stepping], terminated[stepping], info = outcomes(
+            tasks, states, first.control_period, first.terminate_on_collision, block)
+        RobotTask.fill_ranges(block, tasks)
+        if not every:
+            self._obs[stepping] = block
+        info["time"] = states["time"]
+        truncated[stepping] = ~terminated[stepping] & (states["time"] >= first.time_limit - 1e-9)
+        mask = np.zeros(n, dtype=np.bool_)
+        mask[stepping] = True
+        for key, values in info.items():
+            infos[key] = np.zeros(n, dtype=values.dtype)
+            infos[key][stepping] = values
+            infos[f"_{key}"] = mask.copy()
+        for i in stepping:
+            if terminated[i] or truncated[i]:
+                episode = self.episodes[i]
+                assert episode.sim is not None
+                infos = self._add_info(infos, {"result": robot_result(episode.sim,
+                                                                      episode.robot_name)}, i)
+                episode.done = True
+        return infos
+
+    def _finish_each(self, stepping: list[int], rewards: np.ndarray, terminated: np.ndarray,
+                     truncated: np.ndarray) -> dict:
+        """Every slot's step result (or, NEXT_STEP, its reset) slot by slot: their infos."""
+        n = self.num_envs
         each: list[dict] = []
         final: list[tuple[int, dict]] = []
         # The LiDAR parts of the observations in one pass, after (SAME_STEP keeps final_obs).
@@ -150,14 +215,7 @@ class NavigationVectorEnv(VectorEnv):
         infos = self._gather_infos(each)
         for i, info in final:
             infos = self._add_info(infos, info, i)
-        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
-            self._autoreset = terminated | truncated
-        elif self.autoreset_mode == AutoresetMode.DISABLED:
-            self._autoreset[:] = False
-            for k in np.flatnonzero(terminated | truncated):
-                self.episodes[k].done = True
-        self._attach_renderers()
-        return self._obs.copy(), rewards, terminated, truncated, infos
+        return infos
 
     def _command(self, clipped: np.ndarray, stepping: list[int]) -> None:
         """Each stepping slot's checked, clipped action to its robot: as ``task.command``

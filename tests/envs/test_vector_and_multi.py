@@ -73,7 +73,16 @@ def test_slots_play_single_env_episodes_across_autoresets(mode):
                 expected, reward = env.reset()[0], 0.0
                 resets += 1
             else:
-                expected, reward, done, cut, _ = env.step(actions[i])
+                expected, reward, done, cut, single_info = env.step(actions[i])
+                assert (done, cut) == (terminated[i], truncated[i])
+                # SAME_STEP: an ended slot's info is its reset's, the step's is final_info.
+                step_info = (info["final_info"] if mode == AutoresetMode.SAME_STEP
+                             and (done or cut) else info)
+                for key in ("distance_to_goal", "collisions", "new_collisions", "time"):
+                    assert step_info[key][i] == single_info[key] and step_info[f"_{key}"][i]
+                if done or cut:  # gymnasium nests a dict's fields as arrays
+                    for key, value in single_info["result"].items():
+                        assert step_info["result"][key][i] == value, key
                 if mode == AutoresetMode.SAME_STEP and (done or cut):
                     np.testing.assert_array_equal(info["final_obs"][i], expected)
                     expected = env.reset()[0]
