@@ -28,6 +28,7 @@ import pymunk
 import pymunk.batch as batch
 
 from .drives.base import SMALL_GROUP
+from .stacking import DriveUnits
 from .sensors.odometry import sinc_half, sinc_half_scalar
 
 # A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
@@ -82,9 +83,9 @@ class Propulsion:
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         # What the per-robot path advances: each group, or each stacked group with the first
         # row of each copy's part (``stacked`` gives (group, robot indices, part starts)).
-        self._drives = ([_Drives(g, list(idx), np.asarray(starts, dtype=np.intp))
+        self._drives = ([DriveUnits(g, list(idx), np.asarray(starts, dtype=np.intp))
                          for g, idx, starts in stacked] if stacked
-                        else [_Drives(g, idx.tolist(), None) for g, idx in self.groups])
+                        else [DriveUnits(g, idx.tolist(), None) for g, idx in self.groups])
         self.n = len(self.bodies)
         self.batched = self.n >= SMALL_GROUP and not copies
         # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
@@ -111,8 +112,8 @@ class Propulsion:
             return
         # Groups (copies' parts) settled before the step keep their twists through it: held,
         # and coasted.
-        held: list[tuple[_Drives, list[int]]] = []
-        loose: list[tuple[_Drives, list[int]]] = []
+        held: list[tuple[DriveUnits, list[int]]] = []
+        loose: list[tuple[DriveUnits, list[int]]] = []
         for drives in self._drives:
             flags = drives.settled() if substeps > 1 else [False] * drives.units
             calm = [u for u, settled in enumerate(flags) if settled]
@@ -136,7 +137,7 @@ class Propulsion:
             space.step(h)
             left = substeps - 1 - sub
             if loose and left > 1:  # a group whose motors settled now holds for the rest
-                still: list[tuple[_Drives, list[int]]] = []
+                still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
                     flags = drives.settled()
                     calm = [u for u in units if flags[u]]
@@ -146,7 +147,7 @@ class Propulsion:
                         still.append((drives, [u for u in units if not flags[u]]))
                 loose = still
 
-    def _hold_units(self, held: list[tuple["_Drives", list[int]]], h: float, substeps: int
+    def _hold_units(self, held: list[tuple[DriveUnits, list[int]]], h: float, substeps: int
                     ) -> list[tuple[int, tuple[float, float, float]]]:
         """Hold every robot of these settled groups (or copies' parts) for ``substeps``
         substeps (their motors coast through them); the robots that must be aimed every
@@ -383,36 +384,3 @@ class Propulsion:
         self._write_held.set_float_buf(self._held_out)
         self._rows = rows
 
-
-class _Drives:
-    """A drive group as the per-robot path advances it: whole, or (``starts``: stacked, see
-    :mod:`pymunk_bot.stacking`) as units, the rows of each copy's part from its start on."""
-
-    def __init__(self, group: Any, members: list[int], starts: np.ndarray | None) -> None:
-        self.group = group
-        self.members = members  # robot index of each row
-        self.starts = starts
-        self.units = 1 if starts is None else starts.shape[0]
-        if starts is not None:
-            ends = np.append(starts[1:], len(members))
-            self._unit_rows = [np.arange(a, b) for a, b in zip(starts.tolist(), ends.tolist())]
-
-    def settled(self) -> list[bool]:
-        """Per unit: its motors have reached their commands."""
-        if self.starts is None:
-            return [self.group.settled()]
-        return np.logical_and.reduceat(self.group.settled_rows(), self.starts).tolist()
-
-    def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int]]:
-        """The rows of these units (None: every row) and their robots."""
-        if len(units) == self.units:
-            return None, self.members
-        rows = np.concatenate([self._unit_rows[u] for u in units])
-        return rows, [self.members[r] for r in rows.tolist()]
-
-    def advance(self, h: float, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
-        return self.group.advance(h) if rows is None else self.group.advance(h, rows)
-
-    def coast(self, h: float, substeps: int, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
-        return (self.group.coast(h, substeps) if rows is None
-                else self.group.coast(h, substeps, rows))

@@ -103,3 +103,39 @@ class Stack:
         for (drive, odometry), drives, odometries in zip(self.pairs, self._drives, self._odometry):
             drive.split(drives)
             odometry.split(odometries)
+
+
+class DriveUnits:
+    """A drive group as ``Propulsion``'s per-robot path advances it: whole (one unit), or
+    (``starts``: stacked) as units, the rows of each copy's part from its start on."""
+
+    def __init__(self, group: Any, members: list[int], starts: np.ndarray | None) -> None:
+        self.group = group
+        self.members = members  # robot index of each row
+        self.starts = starts
+        self.units = 1 if starts is None else starts.shape[0]
+        if starts is not None:
+            ends = np.append(starts[1:], len(members))
+            self._unit_rows = [np.arange(a, b) for a, b in zip(starts.tolist(), ends.tolist())]
+
+    def settled(self) -> list[bool]:
+        """Per unit: its motors have reached their commands."""
+        if self.starts is None:
+            return [self.group.settled()]
+        return np.logical_and.reduceat(self.group.settled_rows(), self.starts).tolist()
+
+    def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int]]:
+        """The rows of these units (None: every row) and their robots."""
+        if len(units) == self.units:
+            return None, self.members
+        rows = np.concatenate([self._unit_rows[u] for u in units])
+        return rows, [self.members[r] for r in rows.tolist()]
+
+    def advance(self, h: float, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
+        """The group's ``advance``, of these rows only (None: every robot)."""
+        return self.group.advance(h) if rows is None else self.group.advance(h, rows)
+
+    def coast(self, h: float, substeps: int, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
+        """The group's ``coast``, of these rows only (None: every robot)."""
+        return (self.group.coast(h, substeps) if rows is None
+                else self.group.coast(h, substeps, rows))
