@@ -58,6 +58,11 @@ class Replicas:
         self.sims[index]._reset(seed)
         self._assemble()
 
+    @property
+    def stacked(self) -> bool:
+        """Whether the copies' bookkeeping is stacked (see :mod:`pymunk_bot.stacking`)."""
+        return self._stack is not None
+
     def set_velocities(self, robot: str, copies: Sequence[int], v: np.ndarray,
                        omega: np.ndarray) -> None:
         """``robots[robot].set_velocity(v[j], omega[j])`` in each copy ``copies[j]`` (arrays
@@ -80,23 +85,19 @@ class Replicas:
         """Robot ``robot`` of each copy in ``copies``, read at once: ``x``, ``y`` [m],
         ``theta`` [rad], ``vx``, ``vy`` [m/s] (world frame), ``omega`` [rad/s], ``goal_x``,
         ``goal_y`` [m] (NaN: none), ``collisions``, ``reached`` (goal reached) and ``time``
-        (each copy's clock [s]); the same floats the robots' handles give one by one."""
-        propulsion = self._propulsion
-        assert propulsion is not None
+        (each copy's clock [s]); the same floats the robots' handles give one by one. Needs
+        the copies' bookkeeping stacked (``stacked``)."""
+        propulsion, stack = self._propulsion, self._stack
+        if propulsion is None or stack is None:
+            raise RuntimeError("robot_states reads stacked copies: this scenario's groups "
+                               "do not stack")
         index = list(self.sims[0].robots).index(robot)
-        per_copy = len(self.sims[0].robots)
-        rows = np.array([c * per_copy + index for c in copies], dtype=np.intp)
+        rows = np.array([c * stack.per_copy + index for c in copies], dtype=np.intp)
         xy = propulsion.position_array()[rows]
         motion = propulsion.motion_array()[rows]
-        if self._stack is not None:  # every copy's fleet in one
-            fleet = self._stack.fleet
-            goal, collisions = fleet.goal[rows], fleet.collisions[rows]
-            reached = ~np.isnan(fleet.time_to_goal[rows])
-        else:
-            fleets = [self.sims[c]._built.fleet for c in copies]
-            goal = np.array([f.goal[index] for f in fleets]).reshape(-1, 2)
-            collisions = np.array([f.collisions[index] for f in fleets], dtype=np.int64)
-            reached = ~np.isnan([f.time_to_goal[index] for f in fleets])
+        fleet = stack.fleet  # every copy's fleet in one
+        goal, collisions = fleet.goal[rows], fleet.collisions[rows]
+        reached = ~np.isnan(fleet.time_to_goal[rows])
         return {"x": xy[:, 0], "y": xy[:, 1], "theta": motion[:, 0], "vx": motion[:, 1],
                 "vy": motion[:, 2], "omega": motion[:, 3], "goal_x": goal[:, 0],
                 "goal_y": goal[:, 1], "collisions": collisions, "reached": reached,

@@ -92,7 +92,7 @@ class Stack:
         """What each copy's ``Simulation._bookkeep`` does after the physics, for all copies:
         distance and goals from the robots' positions (n, 2) [m] at each copy's time ``nows``
         [s], and odometry from the encoders."""
-        times = np.repeat(nows, self.per_copy) if self.per_copy > 1 else np.array(nows)
+        times = np.repeat(nows, self.per_copy)  # each robot its copy's time
         self.fleet.advance(positions, times)
         for drive, odometry in self.pairs:
             odometry.update(drive.take_travel())

@@ -61,7 +61,7 @@ class NavigationVectorEnv(VectorEnv):
         self._slots: list[list[int]] = []
         self._shards = self._share_spaces(first) if share_space and num_envs > 1 else []
         # Step results read in one call per shared space where the task allows it.
-        self._together = bool(self._shards) and all(s._stack is not None for s in self._shards) \
+        self._together = bool(self._shards) and all(s.stacked for s in self._shards) \
             and first.task.pose_source == "ground_truth" and first.task.vy_max is None \
             and self.autoreset_mode != AutoresetMode.SAME_STEP
         self.num_envs = num_envs
@@ -113,10 +113,11 @@ class NavigationVectorEnv(VectorEnv):
         terminated = np.zeros(n, dtype=np.bool_)
         truncated = np.zeros(n, dtype=np.bool_)
         stepping = [i for i in range(n) if not self._autoreset[i]]
+        shared = self._stepping_copies(stepping)
         checked = actions.astype(np.float64)
         if checked.shape[1] == self.episodes[0].task.action_size and np.isfinite(checked).all():
             clipped = np.clip(checked, -1.0, 1.0)  # what each act() would clip to
-            self._command(clipped, stepping)
+            self._command(clipped, stepping, shared)
         else:  # the env that got a bad action says what is wrong with it
             for i in stepping:
                 self.episodes[i].act(actions[i])
@@ -128,7 +129,7 @@ class NavigationVectorEnv(VectorEnv):
         else:
             advance([sims[i] for i in stepping], steps)
         if self._together:
-            infos = self._finish_together(stepping, rewards, terminated, truncated)
+            infos = self._finish_together(stepping, shared, rewards, terminated, truncated)
             for i in np.flatnonzero(self._autoreset).tolist():  # NEXT_STEP: this step resets
                 self._obs[i], info = self.episodes[i].reset(self._rngs[i])
                 infos = self._add_info(infos, info, i)
@@ -143,17 +144,15 @@ class NavigationVectorEnv(VectorEnv):
         self._attach_renderers()
         return self._obs.copy(), rewards, terminated, truncated, infos
 
-    def _finish_together(self, stepping: list[int], rewards: np.ndarray,
-                         terminated: np.ndarray, truncated: np.ndarray) -> dict:
+    def _finish_together(self, stepping: list[int],
+                         shared: list[tuple[Replicas, list[int], list[int]]],
+                         rewards: np.ndarray, terminated: np.ndarray,
+                         truncated: np.ndarray) -> dict:
         """What ``_finish_each`` does for the stepping slots, their robots read in one call
         per shared space and the task's arithmetic done on arrays (``outcomes``)."""
         first, n = self.episodes[0], self.num_envs
-        moving = set(stepping)
-        parts = []
-        for shard, slots in zip(self._shards, self._slots):
-            copies = [c for c, slot in enumerate(slots) if slot in moving]
-            if copies:
-                parts.append(shard.robot_states(first.task.name, copies))
+        parts = [shard.robot_states(first.task.name, copies)
+                 for shard, copies, _ in shared if copies]
         infos: dict = {}
         if not parts:
             return infos
@@ -217,7 +216,8 @@ class NavigationVectorEnv(VectorEnv):
             infos = self._add_info(infos, info, i)
         return infos
 
-    def _command(self, clipped: np.ndarray, stepping: list[int]) -> None:
+    def _command(self, clipped: np.ndarray, stepping: list[int],
+                 shared: list[tuple[Replicas, list[int], list[int]]]) -> None:
         """Each stepping slot's checked, clipped action to its robot: as ``task.command``
         does slot by slot, one call per shared space for a diff drive's (v, omega)."""
         task = self.episodes[0].task
@@ -226,12 +226,19 @@ class NavigationVectorEnv(VectorEnv):
             for i in stepping:
                 self.episodes[i].task.command(rows[i])
             return
-        moving = set(stepping)
-        for shard, slots in zip(self._shards, self._slots):
-            copies = [c for c, slot in enumerate(slots) if slot in moving]
-            chosen = [slots[c] for c in copies]
+        for shard, copies, chosen in shared:
             shard.set_velocities(task.name, copies, clipped[chosen, 0] * task.v_max,
                                  clipped[chosen, 1] * task.omega_max)
+
+    def _stepping_copies(self, stepping: list[int]) -> list[tuple[Replicas, list[int], list[int]]]:
+        """Per shared space: the copies whose slots are stepping, and those slots (none
+        without shared spaces)."""
+        moving = set(stepping)
+        out = []
+        for shard, slots in zip(self._shards, self._slots):
+            copies = [c for c, slot in enumerate(slots) if slot in moving]
+            out.append((shard, copies, [slots[c] for c in copies]))
+        return out
 
     def _gather_infos(self, each: list[dict]) -> dict:
         """Gymnasium's dict of arrays (each key with its ``_key`` mask) from every env's info:
