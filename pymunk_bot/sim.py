@@ -11,6 +11,7 @@ import numpy as np
 
 from .build import Built, build
 from .config import ScenarioConfig, load_scenario
+from .config.checks import check_seed
 from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .readings import Observation
@@ -18,17 +19,6 @@ from .robot import Robot
 from .sensors.lidar import record_all, requests_all
 from .sensors.schedule import TIME_TOLERANCE, Schedule, ScheduleArray
 from .world import World
-
-MAX_SEED = 2 ** 63 - 1
-
-
-def check_seed(seed: Any) -> int:
-    """A seed is a whole number in [0, 2**63): anything else is a ValueError saying so."""
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
-        raise ValueError(f"seed must be a whole number >= 0 (got {seed!r})")
-    if not 0 <= int(seed) <= MAX_SEED:
-        raise ValueError(f"seed must be in [0, 2**63 - 1] (got {seed})")
-    return int(seed)
 
 
 def scan_all(caster: Any, due: list[tuple[Any, float]]) -> None:
@@ -80,7 +70,7 @@ class Simulation:
                  source: str | None = None) -> None:
         self.config = config
         self.source = source or f"scenario '{config.name}'"  # names the file in errors
-        self.seed = check_seed(config.seed if seed is None else seed)
+        self.seed: int = check_seed(config.seed if seed is None else seed) or 0
         self.robots: dict[str, Robot] = {}
         self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
         self._build()
@@ -227,7 +217,7 @@ class Simulation:
 
     def _reset(self, seed: int | None) -> None:
         if seed is not None:
-            self.seed = check_seed(seed)
+            self.seed = check_seed(seed) or 0
         self._build()
         for observer in self.observers:
             on_reset = getattr(observer, "on_reset", None)

@@ -142,7 +142,7 @@ def test_class_path_resolves_next_to_the_scenario_from_any_folder(tmp_path):
 def test_pymunk_bot_test_without_arguments_outside_the_repository(tmp_path, capsys,
                                                                    monkeypatch):
     monkeypatch.chdir(tmp_path)
-    from pymunk_bot import scenario_tests
+    from pymunk_bot.cli import test as scenario_tests
 
     ran = []
     monkeypatch.setattr(scenario_tests, "run_all", lambda paths, **kw: ran.extend(paths) or [])

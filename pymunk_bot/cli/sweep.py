@@ -5,13 +5,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import ScenarioError
+from ..errors import ScenarioError
 
 EXIT_OK, EXIT_SOME_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 3
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from .sweep import BACKENDS
+    from ..sweep import BACKENDS
 
     sweep = subparsers.add_parser(
         "sweep", help="run a scenario over a grid of parameter values and seeds",
@@ -44,7 +44,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import BackendUnavailable, SweepInterrupted, format_table, parse_assignment, \
+    from ..sweep import BackendUnavailable, SweepInterrupted, format_table, parse_assignment, \
         parse_seeds, plot_summary, run_sweep, summarize
 
     grid: dict[str, list] = {}
@@ -86,6 +86,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:  # pragma: no cover - `pymunk-bot sweep`
-    from .cli import main as cli_main
+    from .main import main as cli_main
 
     return cli_main(["sweep", *(argv if argv is not None else sys.argv[1:])])

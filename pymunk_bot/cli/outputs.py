@@ -1,6 +1,6 @@
 """The command-line side of the views: `run --record/--log`, `plot` and `replay`.
 
-cli.py defines the options; the work is here so that cli.py stays a thin dispatcher. Output
+main.py defines the options; the work is here so that main.py stays a thin dispatcher. Output
 paths are checked before anything runs, so a typo costs no simulation time. Nothing here
 imports pygame or matplotlib at module level.
 """
@@ -16,8 +16,8 @@ from ..errors import ScenarioError
 from ..results import writable_problem
 
 if TYPE_CHECKING:
-    from ..cli_foxglove import FoxgloveOutputs
-    from ..cli_localization import MapOutput
+    from .foxglove import FoxgloveOutputs
+    from .map_output import MapOutput
     from ..runlog import RunLogger
 
 VIDEO_FORMATS = (".mp4", ".gif")
@@ -95,7 +95,7 @@ class RunOutputs:
 
     def record_run(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
-        from . import ViewerUnavailable, record_video
+        from ..viewer import ViewerUnavailable, record_video
 
         if self.record is None:
             raise RuntimeError("record_run needs the video path (--record)")
@@ -125,7 +125,7 @@ class RunOutputs:
 
 def prepare_outputs(args, sim) -> RunOutputs:
     """Check --record/--fps/--size/--log before the run and start the logger."""
-    from ..cli_localization import prepare_map_output
+    from .map_output import prepare_map_output
 
     outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size,
                          map_out=prepare_map_output(args, sim))
@@ -135,7 +135,7 @@ def prepare_outputs(args, sim) -> RunOutputs:
         outputs.log_path = check_output("--log", Path(args.log), LOG_FORMATS)
         if outputs.log_path.suffix.lower() == ".npz":
             outputs.logger = RunLogger().attach(sim)
-    from ..cli_foxglove import prepare_foxglove
+    from .foxglove import prepare_foxglove
 
     outputs.foxglove = prepare_foxglove(args, sim, outputs.log_path)  # .mcap, --foxglove
     return outputs
@@ -165,12 +165,12 @@ def cmd_plot(args) -> int:
 def cmd_replay(args, display_available: bool) -> int:
     """`pymunk-bot replay LOG [--record VIDEO]`: play a run log in the window or to a video."""
     from ..foxglove.reader import load_any as load_log  # .npz or .mcap
-    from . import ViewerUnavailable
+    from ..viewer import ViewerUnavailable
 
     record = _check_video_options(args)
     log = load_log(args.log)
     if record is not None:
-        from . import record_video
+        from ..viewer import record_video
 
         frames = record_video(log, record, None, fps=args.fps, size=args.size, progress=True)
         print(f"wrote {record} ({frames} frames)")
@@ -179,7 +179,7 @@ def cmd_replay(args, display_available: bool) -> int:
         raise ScenarioError("replay", "", "no display available for the window; render the "
                                           "log to a video instead (--record run.mp4)")
     try:
-        from . import replay_window
+        from ..viewer import replay_window
 
         replay_window(log)
     except ViewerUnavailable as exc:

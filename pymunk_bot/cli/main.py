@@ -1,4 +1,4 @@
-"""The `pymunk-bot` command line: run, validate, list, plot, replay, bench."""
+"""The `pymunk-bot` command line: the parser, `run`, `validate`, `list`, `plot`, `replay`, `bench`."""
 from __future__ import annotations
 
 import argparse
@@ -10,43 +10,9 @@ import traceback
 import warnings
 from pathlib import Path
 
-from .errors import ControllerError, ScenarioError, ScenarioWarning
-
-# 0 ran and every expectation held; 1 an expectation failed, could not be decided, or a
-# controller failed (or raised); 2 bad input; 3 an internal error (a bug: traceback shown).
-EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR = 0, 1, 2, 3
-MAX_SEED = 2**63 - 1
-MAX_DURATION = 86_400.0  # [s] simulated, as the scenario's own world.duration
-
-
-def _seed(text: str) -> int:
-    """argparse type: an integer in [0, 2**63 - 1]."""
-    try:
-        value = int(text, 10)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 0 (got '{text}')") from None
-    if not 0 <= value <= MAX_SEED:
-        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1] (got {value})")
-    return value
-
-
-def _duration(text: str) -> float:
-    """argparse type: simulated seconds, finite, in (0, MAX_DURATION]."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds (got '{text}')") from None
-    if not (math.isfinite(value) and 0 < value <= MAX_DURATION):
-        raise argparse.ArgumentTypeError(f"must be > 0 and <= {MAX_DURATION:g} s (got '{text}')")
-    return value
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse that exits with status 2 and one line on bad arguments (its default too)."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"error: {message} (see `{self.prog} --help`)\n")
-
+from ..errors import ControllerError, ScenarioError, ScenarioWarning
+from .arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_INTERNAL_ERROR, EXIT_OK, \
+    Parser, duration_seconds, seed_number
 
 def _display_available() -> bool:
     if os.environ.get("SDL_VIDEODRIVER") in ("dummy", "offscreen"):
@@ -56,16 +22,16 @@ def _display_available() -> bool:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .config import load_scenario
-    from .results import writable_problem
-    from .sim import Simulation
+    from ..config import load_scenario
+    from ..results import writable_problem
+    from ..sim import Simulation
 
     if args.out is not None and (problem := writable_problem(args.out)) is not None:
         raise ScenarioError("--out", "", problem)  # before anything runs
     config = load_scenario(args.scenario)
     sim = Simulation(config, seed=args.seed, source=args.scenario)
     duration = args.duration if args.duration is not None else config.world.duration
-    from .viewer.commands import prepare_outputs
+    from .outputs import prepare_outputs
 
     outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
     try:
@@ -75,11 +41,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -> int:
-    from .results import write_json
+    from ..results import write_json
 
     interactive = not args.headless and outputs.record is None and _display_available()
     if interactive:
-        from .viewer import ViewerUnavailable, run_window
+        from ..viewer import ViewerUnavailable, run_window
 
         try:
             run_window(sim, duration)
@@ -124,7 +90,7 @@ def _print_summary(result: dict, verdict_lines: list[str]) -> None:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from .config import load_scenario
+    from ..config import load_scenario
 
     status = EXIT_OK
     for spec in args.scenarios:
@@ -139,7 +105,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from .config import load_scenario, shipped_scenarios
+    from ..config import load_scenario, shipped_scenarios
 
     for name, path in shipped_scenarios().items():
         try:
@@ -151,26 +117,26 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .viewer.commands import cmd_plot
+    from .outputs import cmd_plot
 
     return cmd_plot(args)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from .viewer.commands import cmd_replay
+    from .outputs import cmd_replay
 
     return cmd_replay(args, _display_available())
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .benchmarks import run_all
+    from ..benchmarks import run_all
 
     run_all(quick=args.quick, only=args.only)
     return EXIT_OK
 
 
 def _frame_size(text: str) -> tuple[int, int]:
-    from .viewer.commands import parse_size
+    from .outputs import parse_size
 
     try:
         return parse_size(text)
@@ -187,26 +153,26 @@ def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> Non
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from .. import __version__
 
-    parser = _Parser(prog="pymunk-bot", description=__doc__)
+    parser = Parser(prog="pymunk-bot", description=__doc__)
     parser.add_argument("--version", action="version", version=f"pymunk-bot {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     run = sub.add_parser("run", help="run a scenario (window if a display is available)")
     run.add_argument("scenario", nargs="?", help="path or shipped name (default: built-in)")
     run.add_argument("--headless", action="store_true", help="no window, full speed")
-    run.add_argument("--duration", type=_duration,
+    run.add_argument("--duration", type=duration_seconds,
                      help="simulated seconds (default: the scenario's)")
-    run.add_argument("--seed", type=_seed, help="override the scenario's seed (an integer >= 0)")
+    run.add_argument("--seed", type=seed_number, help="override the scenario's seed (an integer >= 0)")
     run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
     _add_video_options(run, "render the run offscreen to a video (.mp4 or .gif); no window")
     run.add_argument("--log", type=Path, metavar="RUN.npz|RUN.mcap",
                      help="save poses, odometry, commands and LiDAR scans over time (.mcap: "
                           "Foxglove schemas, see docs/foxglove.md)")
-    from .cli_foxglove import add_parser as add_convert_parser, add_run_options
+    from .foxglove import add_parser as add_convert_parser, add_run_options
 
     add_run_options(run)  # --foxglove --port --host --speed
-    from .cli_localization import add_run_options as add_map_options
+    from .map_output import add_run_options as add_map_options
 
     add_map_options(run)  # --map-out --map-robot
     run.set_defaults(func=_cmd_run)
@@ -230,18 +196,18 @@ def build_parser() -> argparse.ArgumentParser:
     listing.set_defaults(func=_cmd_list)
     bench = sub.add_parser("bench", help="measure simulation and LiDAR speed")
     bench.add_argument("--quick", action="store_true", help="fewer repeats")
-    from .benchmarks import SECTIONS  # only names: the sections import lazily
+    from ..benchmarks import SECTIONS  # only names: the sections import lazily
     bench.add_argument("--only", action="append", choices=list(SECTIONS), metavar="NAME",
                        help=f"run only this section (repeatable): {', '.join(SECTIONS)}")
     bench.set_defaults(func=_cmd_bench)
-    from .scenario_tests import add_parser as add_test_parser  # `pymunk-bot test`
+    from .test import add_parser as add_test_parser  # `pymunk-bot test`
 
     add_test_parser(sub)
     add_convert_parser(sub)  # `pymunk-bot convert`
-    from .cli_maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
+    from .maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
 
     add_map_parsers(sub)
-    from .cli_sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
+    from .sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
 
     add_sweep_parser(sub)
     return parser

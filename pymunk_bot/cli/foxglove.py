@@ -1,5 +1,5 @@
 """The Foxglove side of the command line: ``run --log run.mcap``, ``run --foxglove`` and
-``pymunk-bot convert``. cli.py and viewer/commands.py only hook these in."""
+``pymunk-bot convert``. main.py and outputs.py only hook these in."""
 from __future__ import annotations
 
 import argparse
@@ -7,14 +7,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import ScenarioError
+from ..errors import ScenarioError
 
 LOG_FORMATS = (".npz", ".mcap")
 
 
 def add_run_options(run: argparse.ArgumentParser) -> None:
     """``--foxglove [--port] [--host] [--speed]`` on ``run``."""
-    from .foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+    from ..foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
 
     group = run.add_argument_group("live view in Foxglove")
     group.add_argument("--foxglove", action="store_true",
@@ -36,7 +36,7 @@ def add_parser(sub) -> None:
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    from .viewer.commands import check_output
+    from .outputs import check_output
 
     source, target = Path(args.source), Path(args.target)
     if source.suffix.lower() not in LOG_FORMATS:
@@ -44,7 +44,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
     check_output("target", target, LOG_FORMATS)
     if target.suffix.lower() == ".mcap" or source.suffix.lower() == ".mcap":
         _require_all("convert")
-    from .foxglove.convert import convert
+    from ..foxglove.convert import convert
 
     log = convert(source, target)
     print(f"wrote {target} ({len(log.time) - 1} steps, {log.time[-1]:.2f} s)")
@@ -52,7 +52,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _require_all(option: str) -> None:
-    from .foxglove import require
+    from ..foxglove import require
 
     for module in ("foxglove", "mcap", "mcap_protobuf"):
         require(module, option)
@@ -72,7 +72,7 @@ class FoxgloveOutputs:
         if self.server is None:
             sim.run(duration)
             return
-        from .foxglove.live import run_paced
+        from ..foxglove.live import run_paced
 
         run_paced(sim, duration, self.speed)
 
@@ -107,10 +107,10 @@ def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None
     _require_all("--foxglove" if live else "--log")
     import foxglove
 
-    from .foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
-    from .foxglove.live import LiveServer, check_speed
-    from .foxglove.mcap_log import McapLogger
-    from .foxglove.publisher import Publisher, SimPublisher
+    from ..foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+    from ..foxglove.live import LiveServer, check_speed
+    from ..foxglove.mcap_log import McapLogger
+    from ..foxglove.publisher import Publisher, SimPublisher
 
     speed = 1.0 if args.speed is None else args.speed
     outputs = FoxgloveOutputs(speed=check_speed(speed) if live else 1.0)

@@ -1,0 +1,56 @@
+"""Argument types and the parser class shared by every subcommand: one rule per kind of value."""
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..config.checks import check_seed
+
+# 0 ran and every expectation held; 1 an expectation failed, could not be decided, or a
+# controller failed (or raised); 2 bad input; 3 an internal error (a bug: traceback shown).
+EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR = 0, 1, 2, 3
+MAX_DURATION = 86_400.0  # [s] simulated, as the scenario's own world.duration
+MAX_JOBS = 256  # parallel processes
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that exits with status 2 and one line on bad arguments (its default too)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"error: {message} (see `{self.prog} --help`)\n")
+
+
+def seed_number(text: str) -> int:
+    """argparse type: one seed, a whole number in [0, 2**63 - 1] (the API's rule, check_seed)."""
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 0 (got '{text}')") from None
+    try:
+        seed = check_seed(value)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("seed ")) from None
+    assert seed is not None
+    return seed
+
+
+def duration_seconds(text: str) -> float:
+    """argparse type: simulated seconds, finite, in (0, MAX_DURATION]."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds (got '{text}')") from None
+    if not (math.isfinite(value) and 0 < value <= MAX_DURATION):
+        raise argparse.ArgumentTypeError(f"must be > 0 and <= {MAX_DURATION:g} s (got '{text}')")
+    return value
+
+
+def jobs_count(text: str) -> int:
+    """argparse type: 1..MAX_JOBS processes."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
+    if not 1 <= value <= MAX_JOBS:
+        raise argparse.ArgumentTypeError(f"must be in 1..{MAX_JOBS} (got {value})")
+    return value
