@@ -24,6 +24,7 @@ from .metrics import RobotMetrics
 from .obstacles import footprint_shapes
 from .planning.map import MapInfo
 from .plugins import controllers, drives, localizers
+from .plugins import odometry as odometry_kinds
 from .propulsion import Propulsion
 from .readings import RobotSpec
 from .robot import Fleet, Robot
@@ -102,7 +103,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
     odometry_rngs = world_rng.spawn(n)
     odometry_groups = []
     for group, idx in drive_groups:
-        odometry = group.make_odometry([odometry_rngs[i] for i in idx])
+        odometry = _make_odometry(group, [odometry_rngs[i] for i in idx])
         for j, i in enumerate(idx):
             ordered[i].odometry = odometry.handle(j)
         odometry_groups.append((odometry, idx))
@@ -138,6 +139,14 @@ def build(config: ScenarioConfig, seed: int, source: str,
         if robot.metrics.active:
             built.metrics.append(robot.metrics)
     return built
+
+
+def _make_odometry(group: Any, rngs: list[np.random.Generator]) -> Any:
+    """The drive group's odometry: the one registered under its drive's name, else its own."""
+    kind = group.configs[0].drive
+    if kind in odometry_kinds:
+        return odometry_kinds.get(kind)(group, rngs)
+    return group.make_odometry(rngs)
 
 
 def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id: int) -> None:

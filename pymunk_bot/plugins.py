@@ -1,6 +1,7 @@
 """The extension points and what fills them: the built-ins, then third-party plugins.
 
-Five registries: ``drives``, ``obstacles``, ``sensors``, ``controllers``, ``localizers``. Each
+Six registries: ``drives``, ``odometry`` (each drive kind's dead reckoning, under the drive's
+name), ``obstacles``, ``sensors``, ``controllers``, ``localizers``. Each
 entry is a factory (or a ``"module:attr"`` string, imported on first use, which keeps
 ``import pymunk_bot`` light) plus the pydantic model of its YAML section.
 
@@ -17,6 +18,9 @@ from .registry import Registry
 ENTRY_POINT_GROUP = "pymunk_bot.plugins"
 
 drives: Registry = Registry("drive")
+# A drive kind's odometry: (drive group, one generator per robot) -> odometry group. Drives do
+# not import sensors; the two meet here, by the drive's name.
+odometry: Registry = Registry("odometry")
 obstacles: Registry = Registry("obstacle type")
 sensors: Registry = Registry("sensor")
 controllers: Registry = Registry("controller")
@@ -27,7 +31,7 @@ _loaded = False
 
 def state() -> tuple[int, ...]:
     """Changes whenever any registry does (assembled schemas compare it)."""
-    return tuple(r.version for r in (drives, obstacles, sensors, controllers, localizers))
+    return tuple(r.version for r in (drives, odometry, obstacles, sensors, controllers, localizers))
 
 
 def load() -> None:
@@ -73,6 +77,9 @@ def _register_builtins() -> None:
     drives.add("ackermann", "pymunk_bot.drives.ackermann:AckermannDriveGroup",
                d.AckermannRobotConfig)
     drives.add("omni", "pymunk_bot.drives.omni:OmniDriveGroup", d.OmniRobotConfig)
+    odometry.add("diff", "pymunk_bot.sensors.odometry:of_diff_drive")
+    odometry.add("ackermann", "pymunk_bot.sensors.odometry_ackermann:of_ackermann_drive")
+    odometry.add("omni", "pymunk_bot.sensors.odometry_omni:of_omni_drive")
     obstacle_models: tuple[tuple[str, type], ...] = (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
                         ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle))
     for name, model in obstacle_models:

@@ -26,6 +26,7 @@ import numpy as np
 import pymunk
 
 from .. import physics
+from ..config.motion import MAX_SPEED_FACTOR
 from ..obstacles import Obstacle
 
 STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
@@ -37,7 +38,6 @@ KEEP_RIGHT = 0.5
 # The 1995 paper measures distances between centres, for people of about this radius [m]; a
 # bigger body (a robot, a large walker) is felt from farther by its excess size.
 NOMINAL_RADIUS = 0.25
-MAX_SPEED_FACTOR = 1.3  # speed cap relative to the desired speed
 WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
 PEDESTRIAN_FRICTION = 0.3
 SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are left out (< 1 %)

@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
 
+from .class_path import check_class_path
 from .types import (
     MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, NonNegativeFloat, PositiveFloat,
     PositiveInt, PositiveShort, Rate, Section, Short, Speed, Vec2,
@@ -140,8 +141,6 @@ _CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
 def _importable(value: str, info: ValidationInfo) -> str:
     if not _CLASS_PATH.match(value):
         raise ValueError(f"must be 'package.module:ClassName' (got {value!r})")
-    from ..controllers.python import check_class_path  # lazy: config must not need controllers
-
     check_class_path(value, (info.context or {}).get("base_dir"))  # runs no user code
     return value
 

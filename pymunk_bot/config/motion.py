@@ -13,6 +13,8 @@ from .types import Float, Length, Mass, NonNegativeFloat, PositiveFloat, Section
 MAX_PATH_POINTS = 256
 MAX_SCRIPTED_SPEED = 20.0  # [m/s]
 MAX_WALKING_SPEED = 5.0  # [m/s]
+# A walker's speed cap relative to its desired speed (the substep rule bounds walkers by it).
+MAX_SPEED_FACTOR = 1.3
 
 Mode = Literal["loop", "pingpong", "once"]
 

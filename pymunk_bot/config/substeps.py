@@ -60,7 +60,7 @@ def map_half_widths(scenario: ScenarioConfig) -> list[float]:
 def mover_speed(obstacle) -> float:
     """Fastest a scripted obstacle or a pedestrian moves [m/s] (0 for the others)."""
     if getattr(obstacle, "type", "") == "pedestrian":
-        from ..actors.pedestrians import MAX_SPEED_FACTOR
+        from .motion import MAX_SPEED_FACTOR
         return MAX_SPEED_FACTOR * (obstacle.speed + 3.0 * obstacle.speed_std)
     motion = getattr(obstacle, "motion", None)
     if motion is None:

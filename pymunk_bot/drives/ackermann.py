@@ -115,10 +115,6 @@ class AckermannDriveGroup(DriveGroup):
                          holonomic=False, min_turn_radius=self.min_turn_radius(i),
                          footprint=of_robot(c))
 
-    def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
-        from ..sensors.odometry_ackermann import AckermannOdometryGroup
-        return AckermannOdometryGroup(self.configs, self.wheelbase, self.track, rngs)
-
     def handle(self, i: int) -> "AckermannDrive":
         return AckermannDrive(self, i)
 

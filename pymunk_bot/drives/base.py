@@ -95,7 +95,9 @@ class DriveGroup:
     def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
         """This drive's odometry for every robot of the group: an object with ``update(travel)``
         (the array :meth:`take_travel` returns) and ``handle(i)`` (``robot.odometry``: ``pose``,
-        ``covariance``)."""
+        ``covariance``). A drive whose odometry is registered under its name in
+        ``plugins.odometry`` (the built-ins) is given that one instead; this is the other way a
+        plugin drive may bring its own."""
         raise NotImplementedError
 
     def handle(self, i: int) -> Any:

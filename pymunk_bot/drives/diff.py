@@ -198,12 +198,6 @@ class DiffDriveGroup(DriveGroup):
     def max_speed(self, i: int) -> float:
         return float(self.max_wheel[i])
 
-    def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
-        """Wheel-encoder odometry for every robot of the group (one generator each)."""
-        from ..sensors.odometry import DiffOdometryGroup
-        return DiffOdometryGroup([c.odometry for c in self.configs], [c.pose for c in self.configs],
-                                 self.track.tolist(), rngs)
-
     def handle(self, i: int) -> "DiffDrive":
         return DiffDrive(self, i)
 

@@ -97,10 +97,6 @@ class OmniDriveGroup(DriveGroup):
                          max_omega=float(self.max_w[i]), holonomic=True,
                          footprint=of_robot(c))
 
-    def make_odometry(self, rngs: Sequence[np.random.Generator]) -> Any:
-        from ..sensors.odometry_omni import OmniOdometryGroup
-        return OmniOdometryGroup(self.configs, self.wheels, rngs)
-
     def handle(self, i: int) -> "OmniDrive":
         return OmniDrive(self, i)
 

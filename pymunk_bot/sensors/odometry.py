@@ -184,3 +184,10 @@ class Odometry:
         travel = np.zeros((len(self._group.configs), 2))
         travel[self._i] = (left_travel, right_travel)
         self._group.update(travel.tolist() if self._group.scalar else travel)
+
+
+def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each): what
+    ``plugins.odometry`` pairs with the drive of the same name."""
+    return DiffOdometryGroup([c.odometry for c in group.configs], [c.pose for c in group.configs],
+                             group.track.tolist(), rngs)

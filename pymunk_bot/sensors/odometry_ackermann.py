@@ -106,3 +106,9 @@ class AckermannOdometryGroup:
 
     def handle(self, i: int) -> OdometryHandle:
         return OdometryHandle(self, i)
+
+
+def of_ackermann_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each): what
+    ``plugins.odometry`` pairs with the drive of the same name."""
+    return AckermannOdometryGroup(group.configs, group.wheelbase, group.track, rngs)

@@ -84,3 +84,9 @@ class OmniOdometryGroup:
 
     def handle(self, i: int) -> OdometryHandle:
         return OdometryHandle(self, i)
+
+
+def of_omni_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each): what
+    ``plugins.odometry`` pairs with the drive of the same name."""
+    return OmniOdometryGroup(group.configs, group.wheels, rngs)
