@@ -29,7 +29,7 @@ import pymunk.batch as batch
 
 from .drives.base import SMALL_GROUP
 from .stacking import DriveUnits
-from .sensors.odometry import sinc_half, sinc_half_scalar
+from .arcs import sinc_half, sinc_half_scalar
 
 # A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
 # [m] (an almost straight path) it is aimed substep by substep instead.

@@ -127,7 +127,7 @@ def _fuzz(quick: bool) -> list[Verdict]:
     return [(f"{files} mutated scenarios: 0 tracebacks, 0 hangs, 0 bad messages", not any(bad.values()))]
 
 
-# name -> (title, section); the order they run in
+# name -> (title, section); the order they run in (names.py lists the names for the CLI)
 SECTIONS: dict[str, tuple[str, Callable[[bool], list[Verdict]]]] = {
     "simulation": ("Simulation speed", _simulation),
     "lidar": ("LiDAR ray casting", _lidar),

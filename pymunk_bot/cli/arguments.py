@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from ..config.checks import check_seed
+from ..errors import ScenarioError
+from ..results import writable_problem
 
 # 0 ran and every expectation held; 1 an expectation failed, could not be decided, or a
 # controller failed (or raised); 2 bad input; 3 an internal error (a bug: traceback shown).
@@ -54,3 +57,15 @@ def jobs_count(text: str) -> int:
     if not 1 <= value <= MAX_JOBS:
         raise argparse.ArgumentTypeError(f"must be in 1..{MAX_JOBS} (got {value})")
     return value
+
+
+def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:
+    """``path`` if it can be written as one of ``formats``; else a one-line ScenarioError."""
+    if path.suffix.lower() not in formats:
+        got = f"'{path.suffix}'" if path.suffix else "no extension"
+        raise ScenarioError(option, "", f"{path}: unsupported file type ({got}); use "
+                                        f"{' or '.join(formats)}")
+    problem = writable_problem(path)
+    if problem is not None:
+        raise ScenarioError(option, "", problem)
+    return path

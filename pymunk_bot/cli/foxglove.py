@@ -36,7 +36,7 @@ def add_parser(sub) -> None:
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    from .outputs import check_output
+    from .arguments import check_output
 
     source, target = Path(args.source), Path(args.target)
     if source.suffix.lower() not in LOG_FORMATS:

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import ScenarioError
-from ..results import writable_problem
+from .arguments import check_output
 
 if TYPE_CHECKING:
     from .foxglove import FoxgloveOutputs
@@ -24,18 +24,6 @@ VIDEO_FORMATS = (".mp4", ".gif")
 LOG_FORMATS = (".npz", ".mcap")
 PLOT_FORMATS = (".png", ".pdf", ".svg")
 MAX_FPS = 240.0  # [Hz]
-
-
-def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:
-    """``path`` if it can be written as one of ``formats``; else a one-line ScenarioError."""
-    if path.suffix.lower() not in formats:
-        got = f"'{path.suffix}'" if path.suffix else "no extension"
-        raise ScenarioError(option, "", f"{path}: unsupported file type ({got}); use "
-                                        f"{' or '.join(formats)}")
-    problem = writable_problem(path)
-    if problem is not None:
-        raise ScenarioError(option, "", problem)
-    return path
 
 
 def parse_size(text: str) -> tuple[int, int]:

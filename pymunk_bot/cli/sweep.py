@@ -84,8 +84,3 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"plot in {plot}")
     return EXIT_OK if passed == len(rows) else EXIT_SOME_FAILED
 
-
-def main(argv: list[str] | None = None) -> int:  # pragma: no cover - `pymunk-bot sweep`
-    from .main import main as cli_main
-
-    return cli_main(["sweep", *(argv if argv is not None else sys.argv[1:])])

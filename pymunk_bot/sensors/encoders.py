@@ -79,7 +79,7 @@ def integrate_twist(pose: np.ndarray, dx: np.ndarray, dy: np.ndarray,
                     dtheta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move poses (n, 3) in place by body-frame increments along exact arcs; returns
     (cos, sin) of the mid-step heading and the chord factor, for covariance propagation."""
-    from .odometry import sinc_half
+    from ..arcs import sinc_half
     chord = sinc_half(dtheta)
     heading = pose[:, 2] + 0.5 * dtheta
     c, s = np.cos(heading), np.sin(heading)

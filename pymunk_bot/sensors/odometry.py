@@ -22,25 +22,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..arcs import sinc_half, sinc_half_scalar
 from ..drives.base import SMALL_GROUP
 from ..stacking import join_odometry, split_odometry
 from .encoders import EncoderBank
-
-
-def sinc_half_scalar(x: float) -> float:
-    """sin(x/2) / (x/2) for one float: the chord of an arc over its length."""
-    half = 0.5 * x
-    return 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
-
-
-def sinc_half(x: np.ndarray) -> np.ndarray:
-    """sin(x/2) / (x/2), elementwise: the chord of an arc over its length."""
-    half = 0.5 * np.asarray(x, dtype=float)
-    small = np.abs(half) < 1e-4
-    if not small.any():  # the same floats, without the selections
-        return np.sin(half) / half
-    safe = np.where(small, 1.0, half)
-    return np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
 
 
 class DiffOdometryGroup:

@@ -13,8 +13,7 @@ from pathlib import Path
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 
-class ViewerUnavailable(RuntimeError):
-    """The window cannot open here; ``str()`` says why in one line."""
+from .unavailable import ViewerUnavailable
 
 
 def run_window(sim, duration: float | None = None) -> None:

@@ -21,8 +21,7 @@ from .fan import TWO_PI
 from .geometry import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN, World
 from .kernels import circle_pairs, edge_pairs, segment_pairs
 from .reference import check_args, endpoints
-from .caster import _DENSE_SHAPES
-from .scene import EDGE_NEAR, _EDGE_MARGIN
+from .scene import DENSE_SHAPES, EDGE_NEAR, _EDGE_MARGIN
 
 if TYPE_CHECKING:
     from .caster import RayCaster
@@ -107,7 +106,7 @@ def _trace(caster: "RayCaster", table: World, bounds: np.ndarray,
     dy = bounds[1][None, :] - oy[:, None]
     gap = np.sqrt(dx * dx + dy * dy) - bounds[2][None, :]
     seen = keep & (gap <= (rng + slack)[:, None])
-    crowded = np.flatnonzero(seen.sum(axis=1) > _DENSE_SHAPES)
+    crowded = np.flatnonzero(seen.sum(axis=1) > DENSE_SHAPES)
     if crowded.shape[0]:  # the single cast culls occluded shapes in rings: cheaper there
         return {}, set(crowded.tolist())
     k_idx, p_idx = np.nonzero(seen[:, table.owner])

@@ -19,7 +19,7 @@ from .cache import SceneCache
 from .fan import Fan
 from .geometry import World
 from .reference import check_args, endpoints, endpoints_many, reference_cast
-from .scene import Scene, trace_rings
+from .scene import DENSE_SHAPES, Scene, trace_rings
 from .sides import side_directions, side_lohi, sides_many
 
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
@@ -27,9 +27,6 @@ from .sides import side_directions, side_lohi, sides_many
 REFERENCE_RAYS = 40
 # The same for the compiled tracer: its fixed cost per cast (about 20 us) buys ~6 of pymunk's rays.
 COMPILED_REFERENCE_RAYS = 6
-# Above this many shapes in range, trace in rings of growing distance (occlusion culling);
-# in small worlds the pair tests reject far shapes cheaper than the rings would.
-_DENSE_SHAPES = 160
 _MAX_CACHED = 4096  # query filters (one per robot, usually) and scratch sizes remembered
 _NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
 _NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
@@ -186,11 +183,11 @@ class RayCaster:
             if job.directions:
                 lohi = side_lohi(job.directions)
                 fan.flagged.append(fan.every.expand(*fan.every.ranges(lohi, None))[0])
-            if n_keep <= _DENSE_SHAPES:
+            if n_keep <= DENSE_SHAPES:
                 Scene(job.parts, job.keep, ox, oy, job.scale, rng, subset=job.dense).trace(
                     fan, fan.every, best)
             else:
-                assert job.rings is not None  # set with dense, which n_keep > _DENSE_SHAPES implies
+                assert job.rings is not None  # set with dense, which n_keep > DENSE_SHAPES implies
                 trace_rings(job.parts, job.bound, job.keep, n_keep, job.rings, fan, best,
                             (ox, oy, rng, job.scale))
         return self._finish((ox, oy), job.filter, rng, ends, best,
@@ -211,7 +208,7 @@ class RayCaster:
         scale = 1.0 + abs(ox) + abs(oy) + rng
         slack = 1e-9 * scale
         # The compiled tracer culls shapes out of range itself, for less than numpy's cost.
-        dense = n_keep > _DENSE_SHAPES and not compiled
+        dense = n_keep > DENSE_SHAPES and not compiled
         rings = None
         if dense:  # cull by distance; in small worlds the pair tests reject far shapes anyway
             dx, dy = bound[0] - ox, bound[1] - oy

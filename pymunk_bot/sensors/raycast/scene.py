@@ -16,6 +16,9 @@ from .kernels import circle_pairs, edge_pairs, segment_pairs
 # Candidate rays of a sharp polygon edge: its end points' directions widened by this margin
 # [rad], or every ray when the origin is within EDGE_NEAR * scale of the edge's plane.
 _EDGE_MARGIN = 1e-7
+# Above this many shapes in range, trace in rings of growing distance (occlusion culling);
+# in small worlds the pair tests reject far shapes cheaper than the rings would.
+DENSE_SHAPES = 160
 EDGE_NEAR = 1e-5
 # Trace in rings of growing distance (occlusion culling): about _RING_SHAPES shapes in the
 # first ring, each next ring _RING_GROWTH times farther.
