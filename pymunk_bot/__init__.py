@@ -11,8 +11,7 @@ dependencies (the scenario schema is built when the first scenario is read).
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .command import Command
@@ -28,9 +27,22 @@ __all__ = sorted(_EXPORTS)
 __version__ = "0.2.0"
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _EXPORTS:
+        import importlib
+
         value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The public names (and the submodules imported so far), not this file's helpers."""
+    import types
+
+    modules = [k for k, v in globals().items() if isinstance(v, types.ModuleType)]
+    return sorted({*__all__, "__version__", "__doc__", *modules})
+
+
+del TYPE_CHECKING, annotations  # helpers of this file, not part of the package's namespace

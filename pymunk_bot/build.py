@@ -16,9 +16,11 @@ import pymunk
 from . import physics
 from .actors import make_actors
 from .config.schema import ScenarioConfig
+from .config.substeps import mover_speed
 from .errors import ScenarioError
 from .footprint import of_robot
 from .localization.base import LocalizerContext
+from .localization.config import LOCALIZER_MAP_RESOLUTION
 from .maps.grid import OccupancyGrid
 from .metrics import RobotMetrics
 from .obstacles import footprint_shapes
@@ -26,13 +28,13 @@ from .planning.map import MapInfo
 from .plugins import controllers, drives, localizers
 from .plugins import odometry as odometry_kinds
 from .propulsion import Propulsion
+from .substep_gate import Mover, reach_of
 from .readings import RobotSpec
 from .robot import Fleet, Robot
 from .sensors.attach import attach_sensors
 from .sensors.schedule import Schedule
 from .world import World
 
-LOCALIZER_MAP_RESOLUTION = 0.05  # [m] of the prebuilt occupancy grid localizers are given
 
 
 @dataclass
@@ -48,6 +50,7 @@ class Built:
     control_schedules: list[Schedule | None]
     maps: "MapSource"
     metrics: list[RobotMetrics] = field(default_factory=list)  # the robots that measure any
+    movers: list[Mover] = field(default_factory=list)  # what moves (adaptive substeps)
 
 
 class MapSource:
@@ -82,6 +85,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
     (actor_rng,) = rng.spawn(1)  # pedestrians (spawned last: earlier streams stay as they were)
     world = World(config) if world is None else world
     fleet = Fleet(list(config.robots))
+    fleet.extent = config.world.extent  # goals set from code must lie in the arena
     n = len(config.robots)
     robots: dict[str, Robot] = {}
     by_drive: dict[str, list[int]] = {}
@@ -94,7 +98,8 @@ def build(config: ScenarioConfig, seed: int, source: str,
         for j, i in enumerate(idx):
             rc = config.robots[i]
             robot = handles.get(rc.name) or Robot(rc.name)
-            robot._bind(fleet, i, group, j)
+            robot.bind(fleet, i, group, j)
+            robot.on_moved = world.disturb
             _make_body(robot, rc, world, group, j, group_id=i + 1)
             robot.drive = group.handle(j)
             robots[rc.name] = robot
@@ -138,7 +143,25 @@ def build(config: ScenarioConfig, seed: int, source: str,
             track_clearance=expectation is not None and expectation.min_clearance is not None)
         if robot.metrics.active:
             built.metrics.append(robot.metrics)
+    if world.adaptive:
+        built.movers = _movers(world, ordered)
     return built
+
+
+def _movers(world: World, robots: list[Robot]) -> list[Mover]:
+    """Every body that moves, with how far its shapes reach and how fast it can go: a robot as
+    fast as its drive allows, a pedestrian or scripted obstacle as its config allows, a crate
+    (None) only as fast as contacts push it."""
+    movers = [Mover(r.body, reach_of(r.body), r.config.top_speed(), world.replica)
+              for r in robots]
+    for obstacle in world.obstacles:
+        body = obstacle.body
+        if body.body_type == pymunk.Body.STATIC:
+            continue
+        speed = mover_speed(obstacle.config)
+        pushed_only = body.body_type == pymunk.Body.DYNAMIC and speed == 0.0
+        movers.append(Mover(body, reach_of(body), None if pushed_only else speed, world.replica))
+    return movers
 
 
 def _make_odometry(group: Any, rngs: list[np.random.Generator]) -> Any:
@@ -184,13 +207,8 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     world.space.add(body, *shapes, control, pivot, gear)
     robot.body, robot.shape, robot.control = body, shape, control
     robot.shapes = shapes
-    fleet, i = robot._fleet, robot._i
-
-    def count() -> None:
-        fleet.collisions[i] += 1
-
     for piece in shapes:
-        world.count_contacts(piece, count)
+        world.count_contacts(piece, robot.count_collision)
 
 
 def _make_controller(robot: Robot, index: int, maps: MapSource, source: str) -> Any:
@@ -218,7 +236,8 @@ def _make_localizer(robot: Robot, index: int, maps: MapSource, source: str,
     context = LocalizerContext(
         robot=robot.spec, start_pose=np.array(robot.config.pose, dtype=float), rng=rng,
         arena=config.world.arena, map=maps.grid() if needs_map else None,
-        lidar_offset=lidar.offset if lidar is not None else (0.0, 0.0, 0.0))
+        lidar_offset=lidar.offset if lidar is not None else (0.0, 0.0, 0.0),
+        origin=config.world.extent[:2])
     kwargs: dict[str, Any] = {}
     if section.type == "ground_truth":
         kwargs["truth"] = lambda: robot.pose

@@ -1,6 +1,8 @@
 """The one error type users see for bad input: file, key path and problem on one line."""
 from __future__ import annotations
 
+from typing import Any
+
 
 class ScenarioError(Exception):
     """Bad scenario input. ``str()`` is the one-line message the CLI prints (exit status 2)."""
@@ -12,7 +14,7 @@ class ScenarioError(Exception):
         self.line = line
         super().__init__(self.format())
 
-    def __reduce__(self):  # pickles whole, so it crosses process and cluster boundaries
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:  # pickles whole: crosses processes
         return (type(self), (self.source, self.path, self.problem, self.line))
 
     def format(self) -> str:
@@ -38,3 +40,6 @@ class ControllerError(Exception):
         self.where = where
         self.problem = problem
         super().__init__(f"{where}: {problem}")
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:  # a sweep's worker reports it whole
+        return (type(self), (self.where, self.problem))

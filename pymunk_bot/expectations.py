@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ class Check:
         return text
 
 
-def _fmt(value) -> object:
+def _fmt(value: object) -> object:
     return round(value, 4) if isinstance(value, float) else value
 
 
@@ -42,8 +43,9 @@ def evaluate(expectations: dict, robots: dict) -> list[Check]:
     for name, exp in expectations.items():
         robot = robots[name]
 
-        def add(key, passed, expected, actual, by=None, unit=""):
-            miss = None if passed or by is None else _fmt(float(by))
+        def add(key: str, passed: bool, expected: Any, actual: Any, by: float | None = None,
+                unit: str = "") -> None:
+            miss = None if passed or by is None else round(float(by), 4)
             checks.append(Check(name, key, bool(passed), expected, _fmt(actual), miss, unit))
 
         if exp.goal_reached is not None:

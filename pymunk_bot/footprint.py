@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -48,7 +48,7 @@ class Footprint:
         r = self.radius / math.cos(math.pi / CIRCLE_SIDES)
         return np.column_stack([self.center[0] + r * np.cos(k), self.center[1] + r * np.sin(k)])
 
-    def at(self, pose) -> np.ndarray:
+    def at(self, pose: Sequence[float] | np.ndarray) -> np.ndarray:
         """The outline placed at a world pose (x, y, theta) [m]."""
         return transform(self.outline(), pose)
 
@@ -108,7 +108,7 @@ def drawn_outline(footprint: "Footprint | None") -> np.ndarray | None:
     return footprint.outline()
 
 
-def transform(points: np.ndarray, pose) -> np.ndarray:
+def transform(points: np.ndarray, pose: Sequence[float] | np.ndarray) -> np.ndarray:
     """Robot-frame points [m] -> world frame at ``pose`` (x, y, theta)."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     return points @ np.array([[c, s], [-s, c]]) + (pose[0], pose[1])

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 import pymunk
 
+from .footprint import Footprint
 from .geometry import point_in_polygon
 
 CLEARANCE_HORIZON = 10.0  # [m]; clearances beyond this read as this
@@ -57,7 +58,7 @@ class RobotMetrics:
 OUTLINE_SPACING = 0.02  # [m] between the outline points a footprint's clearance is measured at
 
 
-def outline_samples(footprint) -> list[tuple[float, float]] | None:
+def outline_samples(footprint: Footprint) -> list[tuple[float, float]] | None:
     """Points every OUTLINE_SPACING along a footprint's outline (robot frame), or None for a
     disc about the pose point (measured exactly from its centre)."""
     if footprint.points is None and footprint.center == (0.0, 0.0):

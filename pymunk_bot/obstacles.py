@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -9,6 +10,7 @@ from pymunk import autogeometry
 
 from . import geometry as geo
 from . import physics
+from .footprint import Footprint
 from .config.schema import BoxObstacle, CircleObstacle, WallObstacle
 
 
@@ -39,7 +41,7 @@ def convex_pieces(points: np.ndarray) -> list[np.ndarray]:
     return [np.array([(v.x, v.y) for v in piece[:-1]]) for piece in pieces]
 
 
-def _local_outlines(config) -> tuple[np.ndarray, float, list[np.ndarray]]:
+def _local_outlines(config: Any) -> tuple[np.ndarray, float, list[np.ndarray]]:
     """(centre, angle, convex outlines relative to the centre) of a polygonal obstacle."""
     if isinstance(config, BoxObstacle):
         return np.asarray(config.center), config.angle, [geo.box_corners((0, 0), config.size)]
@@ -51,7 +53,7 @@ def _local_outlines(config) -> tuple[np.ndarray, float, list[np.ndarray]]:
     return centre, 0.0, [piece - centre for piece in convex_pieces(points)]
 
 
-def build_obstacle(space: pymunk.Space, config) -> Obstacle:
+def build_obstacle(space: pymunk.Space, config: Any) -> Obstacle:
     """Add one obstacle to the space."""
     scripted = getattr(config, "motion", None) is not None
     movable = getattr(config, "movable", False) or scripted
@@ -97,7 +99,7 @@ def build_obstacle(space: pymunk.Space, config) -> Obstacle:
     return Obstacle(config, body, shapes)
 
 
-def footprint_shapes(body: pymunk.Body, footprint, mass: float) -> list[pymunk.Shape]:
+def footprint_shapes(body: pymunk.Body, footprint: Footprint, mass: float) -> list[pymunk.Shape]:
     """A robot footprint's shapes on ``body`` (concave outlines as convex pieces), with
     ``mass`` [kg] spread by area, so pymunk puts the centre of gravity at the centroid."""
     if footprint.points is None:

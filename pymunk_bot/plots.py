@@ -111,11 +111,14 @@ def draw_map(ax, log: RunLog, robot: str | None = None) -> None:
     """Obstacles (final positions, movable ones also at the start), true paths and odometry."""
     _, Circle, Polygon = _matplotlib()
     width, height = log.size
-    ax.add_patch(Polygon([(0, 0), (width, 0), (width, height), (0, height)], closed=True,
-                         facecolor=pal.hex_colour(pal.FLOOR), edgecolor="none", zorder=0))
-    for g in log.fixed_shapes():
-        if not g.wall:
-            _shape_patch(ax, g.placed((0.0, 0.0, 0.0)), pal.hex_colour(pal.STATIC), Circle, Polygon)
+    x0, y0 = log.origin  # a ROS map's origin; (0, 0) for a box arena
+    ax.add_patch(Polygon([(x0, y0), (x0 + width, y0), (x0 + width, y0 + height), (x0, y0 + height)],
+                         closed=True, facecolor=pal.hex_colour(pal.FLOOR), edgecolor="none",
+                         zorder=0))
+    for g in log.fixed_shapes():  # walls too: a map's walls lie inside the arena
+        colour = pal.hex_colour(pal.WALL if g.wall else pal.STATIC)
+        _shape_patch(ax, g.placed((0.0, 0.0, 0.0)), colour, Circle, Polygon,
+                     edge=colour if g.wall else None)
     for k, shapes in enumerate(log.movable_shapes()):
         for g in shapes:
             _shape_patch(ax, g.placed(log.obstacle_pose[0, k]), "none", Circle, Polygon,
@@ -137,8 +140,8 @@ def draw_map(ax, log: RunLog, robot: str | None = None) -> None:
         seen = {tuple(np.round(g, 9)) for g in goals if not np.isnan(g).any()}
         for gx, gy in sorted(seen):
             ax.plot(gx, gy, marker="x", ms=9, mew=2, color=colour, zorder=5)
-    ax.set_xlim(0, width)
-    ax.set_ylim(0, height)
+    ax.set_xlim(x0, x0 + width)
+    ax.set_ylim(y0, y0 + height)
     ax.set_aspect("equal")
     ax.set_facecolor(pal.hex_colour(pal.WALL))
     ax.set_xlabel("x [m]")

@@ -104,18 +104,23 @@ class Propulsion:
         self._held: list[tuple[float, float, float] | None] = [None] * self.n  # twist held
         self._anchored = [False] * self.n  # the pivot's anchor is off the control body's centre
 
-    def step(self, h: float, substeps: int) -> None:
-        """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s]."""
+    def step(self, h: float, substeps: int, h_next: float | None = None) -> None:
+        """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s];
+        ``h_next``: the next tick's substep [s], when it differs (the velocities solved in this
+        tick's last substep move the robots through the next tick's first, so that substep is
+        aimed for it)."""
         space = self.space
+        h_last = h if h_next is None else h_next
         if self.batched:
-            self._step_batched(h, substeps)
+            self._step_batched(h, substeps, h_last)
             return
         # Groups (copies' parts) settled before the step keep their twists through it: held,
-        # and coasted.
+        # and coasted (not in a tick before another substep length: every substep is aimed).
         held: list[tuple[DriveUnits, list[int]]] = []
         loose: list[tuple[DriveUnits, list[int]]] = []
         for drives in self._drives:
-            flags = drives.settled() if substeps > 1 else [False] * drives.units
+            flags = (drives.settled() if substeps > 1 and h_last == h
+                     else [False] * drives.units)
             calm = [u for u, settled in enumerate(flags) if settled]
             if calm:
                 held.append((drives, calm))
@@ -127,16 +132,17 @@ class Propulsion:
                 space.step(h)
             return
         for sub in range(substeps):
+            after = h_last if sub == substeps - 1 else h  # the substep this aim moves
             if sub:
                 for k, twist in steady:
-                    self._aim(k, twist, h)
+                    self._aim(k, twist, h, after)
             for drives, units in loose:
                 rows, members = drives.rows(units)
                 for k, twist in zip(members, zip(*_floats(drives.advance(h, rows)))):
-                    self._aim(k, twist, h)
+                    self._aim(k, twist, h, after)
             space.step(h)
             left = substeps - 1 - sub
-            if loose and left > 1:  # a group whose motors settled now holds for the rest
+            if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
                 still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
                     flags = drives.settled()
@@ -160,11 +166,12 @@ class Propulsion:
                     steady.append((k, twist))
         return steady
 
-    def _step_batched(self, h: float, substeps: int) -> None:
+    def _step_batched(self, h: float, substeps: int, h_last: float) -> None:
         """``step`` for many robots: held as a whole fleet when every group has settled,
-        else aimed every substep; bodies read and written through ``pymunk.batch``."""
+        else aimed every substep (the last for ``h_last``); bodies read and written through
+        ``pymunk.batch``."""
         space = self.space
-        if substeps > 1 and all(group.settled() for group, _ in self.groups):
+        if substeps > 1 and h_last == h and all(group.settled() for group, _ in self.groups):
             twists = self._gather(lambda group: group.coast(h, substeps))
             if self._hold_all(twists, h):
                 for _ in range(substeps):
@@ -172,12 +179,12 @@ class Propulsion:
                 return
             self._release_anchors()
             for _ in range(substeps):  # an almost straight arc: aimed, at constant twists
-                self._aim_all(twists, h)
+                self._aim_all(twists, h, h)
                 space.step(h)
             return
         self._release_anchors()
-        for _ in range(substeps):
-            self.substep(h)
+        for sub in range(substeps):
+            self.substep(h, h_last if sub == substeps - 1 else h)
             space.step(h)
 
     def _gather(self, twists_of: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -263,18 +270,20 @@ class Propulsion:
             self._index(state.shape[0])
         return state
 
-    def substep(self, h: float) -> None:
-        """Advance every drive by one substep of ``h`` [s] and set the control velocities
-        (the batched path: many robots, read and written through ``pymunk.batch``)."""
-        self._aim_all(self._gather(lambda group: group.advance(h)), h)
+    def substep(self, h: float, h_next: float) -> None:
+        """Advance every drive by one substep of ``h`` [s] and set the control velocities for
+        the next substep, of ``h_next`` [s] (the batched path: many robots, read and written
+        through ``pymunk.batch``)."""
+        self._aim_all(self._gather(lambda group: group.advance(h)), h, h_next)
 
-    def _aim_all(self, twists: tuple[np.ndarray, np.ndarray, np.ndarray], h: float) -> None:
+    def _aim_all(self, twists: tuple[np.ndarray, np.ndarray, np.ndarray], h: float,
+                 h_next: float) -> None:
         """The batched :meth:`_aim`: every control body's velocity for the next substep."""
         ux, uy, omega = twists
         state = self._read_state()
         robot, control = self._robot_rows, self._control_rows
-        heading = state[robot, 0] + state[robot, 3] * h + (0.5 * h) * omega
-        chord = sinc_half(omega * h)
+        heading = state[robot, 0] + state[robot, 3] * h + (0.5 * h_next) * omega
+        chord = sinc_half(omega * h_next)
         c, s = np.cos(heading), np.sin(heading)
         out = self._out
         out[:, :2] = state[:, 1:3]
@@ -284,7 +293,7 @@ class Propulsion:
         out[control, 2] = omega
         for k in self._offset:
             dvx, dvy = _origin_correction(self.cog[k], state[robot[k], 0] + state[robot[k], 3] * h,
-                                          omega[k], h)
+                                          omega[k], h_next)
             out[control[k], 0] += dvx
             out[control[k], 1] += dvy
         batch.set_space_bodies(self.space, _WRITE, self._write)
@@ -309,21 +318,22 @@ class Propulsion:
             self._index(xy.shape[0])
         return xy[self._robot_rows]
 
-    def _aim(self, k: int, twist: tuple[float, float, float], h: float) -> None:
-        """Robot k's control body velocity for the next substep (see the module docstring)."""
+    def _aim(self, k: int, twist: tuple[float, float, float], h: float, h_next: float) -> None:
+        """Robot k's control body velocity for the next substep, of ``h_next`` [s], after this
+        one of ``h`` (see the module docstring)."""
         ux, uy, omega = twist
         body, control = self.bodies[k], self.controls[k]
         if self._anchored[k]:  # from holding: the anchor back to the centre
             self.pivots[k].anchor_a = (0.0, 0.0)
             self._anchored[k] = False
         self._held[k] = None
-        heading = body.angle + body.angular_velocity * h + 0.5 * omega * h
-        chord = sinc_half_scalar(omega * h)
+        heading = body.angle + body.angular_velocity * h + 0.5 * omega * h_next
+        chord = sinc_half_scalar(omega * h_next)
         c, s = math.cos(heading), math.sin(heading)
         vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
         if k in self._offset_set:  # the pose point is not the centre of gravity
             dvx, dvy = _origin_correction(self.cog[k], body.angle + body.angular_velocity * h,
-                                          omega, h)
+                                          omega, h_next)
             vx, vy = vx + dvx, vy + dvy
         last = self._given[k]
         if vx != last[0] or vy != last[1]:
@@ -338,7 +348,7 @@ class Propulsion:
         one). A robot driving straight needs one aim for the step: True."""
         ux, uy, omega = twist
         if omega == 0.0:
-            self._aim(k, twist, h)  # a constant velocity: one aim lasts the step
+            self._aim(k, twist, h, h)  # a constant velocity: one aim lasts the step
             return True
         if self._held[k] != twist:
             # The chord velocity in the robot frame at the start of a substep's solve ...
@@ -351,7 +361,7 @@ class Propulsion:
             # ... is omega x anchor, so the anchor is w turned back a quarter turn, / omega.
             ax, ay = wy / omega, -wx / omega
             if not (abs(ax) <= _MAX_ANCHOR and abs(ay) <= _MAX_ANCHOR):
-                self._aim(k, twist, h)
+                self._aim(k, twist, h, h)
                 return False
             control = self.controls[k]
             last = self._given[k]

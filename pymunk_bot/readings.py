@@ -53,12 +53,13 @@ class Observation:
     """
 
     __slots__ = ("time", "pose", "odometry", "goal", "goal_tolerance", "robot", "scan",
-                 "_extra", "_read_extra")
+                 "_extra", "_read_extra", "localized")
 
     def __init__(self, time: float, pose: np.ndarray, odometry: np.ndarray,
                  goal: tuple[float, float] | None, goal_tolerance: float, robot: RobotSpec,
                  scan: LaserScan | None = None, extra: dict[str, Any] | None = None,
-                 read_extra: Callable[[], dict[str, Any]] | None = None) -> None:
+                 read_extra: Callable[[], dict[str, Any]] | None = None,
+                 localized: bool = True) -> None:
         self.time = time  # simulated time [s]
         self.pose = pose  # the localizer's estimate [x, y, theta] (odometry by default)
         self.odometry = odometry  # odometry estimate [x, y, theta]
@@ -68,6 +69,7 @@ class Observation:
         self.scan = scan
         self._extra = extra
         self._read_extra = read_extra
+        self.localized = localized  # False: the estimate is not yet trustworthy (Localizer.localized)
 
     @property
     def extra(self) -> dict[str, Any]:

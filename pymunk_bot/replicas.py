@@ -14,7 +14,6 @@ in one call.
 """
 from __future__ import annotations
 
-import time as wallclock
 from typing import Any, Sequence
 
 import numpy as np
@@ -24,7 +23,7 @@ from .actors.motion import ScriptedMotion
 from .config import ScenarioConfig
 from .physics import MAX_REPLICAS
 from .propulsion import Propulsion
-from .sim import Simulation, scan_all
+from .sim import Simulation
 from .stacking import Stack
 from .world import World
 
@@ -41,7 +40,7 @@ class Replicas:
         if not 1 <= len(seeds) <= MAX_REPLICAS:
             raise ValueError(f"a shared space holds 1 to {MAX_REPLICAS} copies (got {len(seeds)})")
         self.ground = World.ground(config)
-        self.sims = [Simulation._on_ground(config, seed, source, self.ground, r)
+        self.sims = [Simulation(config, seed, source, ground=self.ground, replica=r)
                      for r, seed in enumerate(seeds)]
         for actor in self.sims[0].world.actors:
             if not isinstance(actor, ScriptedMotion):  # pedestrians look around the whole space
@@ -55,7 +54,7 @@ class Replicas:
 
     def reset(self, index: int, seed: int | None = None) -> None:
         """Rebuild copy ``index`` (with a new ``seed``); the other copies are untouched."""
-        self.sims[index]._reset(seed)
+        self.sims[index].reset_copy(seed)
         self._assemble()
 
     @property
@@ -76,7 +75,7 @@ class Replicas:
             if hasattr(whole, "set_velocities") and all(w is whole for w, _ in where):
                 whole.set_velocities(np.array([row for _, row in where]), v, omega)
                 for sim in sims:
-                    sim.robots[robot]._override = True  # as Robot.command takes over
+                    sim.robots[robot].take_over()  # as Robot.command does
                 return
         for sim, v_j, omega_j in zip(sims, v.tolist(), omega.tolist()):
             sim.robots[robot].set_velocity(v_j, omega_j)
@@ -106,32 +105,8 @@ class Replicas:
     def step(self) -> None:
         """Advance every copy by one physics step of ``dt``: the tick of
         :meth:`Simulation.step <pymunk_bot.sim.Simulation.step>` for all of them at once."""
-        started = wallclock.perf_counter()
-        sims, propulsion = self.sims, self._propulsion
-        assert propulsion is not None
-        for sim in self._driven:  # the copies with controllers or actors
-            sim._before_physics()
-        propulsion.step(self.dt / self.substeps, self.substeps)
-        if self._stack is not None:
-            nows = [sim._advance_clock() for sim in sims]
-            self._stack.bookkeep(propulsion.position_array(), nows)
-        else:
-            positions = propulsion.positions()
-            nows = [sim._bookkeep(positions[start:stop])
-                    for sim, (start, stop) in zip(sims, self._spans)]
-        due = [(lidar, now) for sim, now in zip(sims, nows) for lidar in sim._due_lidars(now)]
-        caster = self.ground.ray_caster()
-        caster.begin_frame()  # every copy's LiDARs see one scene
-        scan_all(caster, due)
-        for sim in self._busy:  # the copies with more to do after their LiDARs
-            now = sim.time
-            sim._read_other_sensors(now)
-            sim._after_sensors(now)
-        share = (wallclock.perf_counter() - started) / len(sims)
-        for sim in sims:
-            sim.wall_time += share
-            for observer in sim.observers:
-                observer(sim)
+        assert self._propulsion is not None
+        Simulation.step_together(self._plan, self._propulsion, self._stack, self._spans)
 
     def _assemble(self) -> None:
         """One Propulsion for every copy's robots and their bookkeeping stacked (both rebuilt
@@ -146,10 +121,10 @@ class Replicas:
         spans: list[tuple[int, int]] = []
         for sim in self.sims:
             start = len(bodies)
-            for robot in sim._robots:
+            for robot in sim.robots.values():
                 bodies.append(robot.body)
                 controls.append(robot.control)
-            for group, idx in sim._built.drive_groups:
+            for group, idx in sim.built.drive_groups:
                 groups.append((group, [start + i for i in idx]))
             spans.append((start, len(bodies)))
         propulsion = Propulsion(self.ground.space, bodies, controls, groups,
@@ -157,6 +132,4 @@ class Replicas:
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
         self._propulsion, self._spans = propulsion, spans
-        self._driven = [sim for sim in self.sims if sim._controlled or sim.world.actors]
-        self._busy = [sim for sim in self.sims if sim._sensors or sim._mapping or sim._localized
-                      or sim._scores or sim._built.metrics]
+        self._plan = Simulation.plan(self.sims, self.ground)

@@ -3,7 +3,8 @@ and pymunk bodies; a reset rebinds the same handle to the rebuilt state, so it s
 from __future__ import annotations
 
 import math
-from typing import Any
+import numbers
+from typing import Any, Callable
 
 import numpy as np
 import pymunk
@@ -15,12 +16,37 @@ from .readings import RobotSpec
 from .stacking import join_rows, split_rows
 
 
+def real_number(name: str, value: Any) -> float:
+    """``value`` as a finite float; TypeError for text or booleans (as the scenario's YAML
+    refuses them), ValueError for NaN and infinities. ``name`` is the argument in messages."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number (got {type(value).__name__} {value!r:.40})")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite (got {number})")
+    return number
+
+
+class RobotsByName(dict):
+    """``sim.robots``: the robots by name; a missing name says which names there are."""
+
+    def __missing__(self, name: Any) -> Any:
+        import difflib
+
+        known = ", ".join(map(repr, self)) or "none"
+        near = difflib.get_close_matches(str(name), [str(k) for k in self], n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise KeyError(f"no robot named {name!r:.80}{hint}; the robots are: {known:.400}")
+
+
 class Fleet:
     """Every robot's per-tick bookkeeping: distance, goal, contact episodes. Arrays, or for a
     few robots lists of floats (numpy's per-call cost dominates there); both index by robot."""
 
     ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
             "distance_to_goal")
+    # (x0, y0, x1, y1) [m] of the arena, for checking goals set from code (build sets it)
+    extent: tuple[float, float, float, float] | None = None
 
     def __init__(self, configs: list[RobotConfig]) -> None:
         n = len(configs)
@@ -155,11 +181,15 @@ class Robot:
     localizer: Any
     metrics: Any
 
+    # Called when the robot is moved outside the physics (a teleport); build sets it.
+    on_moved: Callable[[], None] | None = None
+
     def __init__(self, name: str) -> None:
         self.name = name
 
-    def _bind(self, fleet: Fleet, index: int, drive_group: Any, drive_index: int) -> None:
-        """Point this handle at freshly built state (build and reset call this)."""
+    def bind(self, fleet: Fleet, index: int, drive_group: Any, drive_index: int) -> None:
+        """Point this handle at freshly built state: row ``index`` of ``fleet`` and robot
+        ``drive_index`` of ``drive_group`` (build calls this, at every reset too)."""
         name = self.name
         self.__dict__.clear()
         self.name = name
@@ -233,12 +263,11 @@ class Robot:
         return not math.isnan(self._fleet.time_to_goal.item(self._i))
 
     def set_goal(self, position: tuple[float, float], tolerance: float | None = None) -> None:
-        """A new task goal (e.g. a click in the viewer); the controller drives there too."""
-        x, y = float(position[0]), float(position[1])
-        if not (math.isfinite(x) and math.isfinite(y)):
-            raise ValueError(f"goal must be finite (got {position!r})")
-        if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
-            raise ValueError(f"tolerance must be a finite number > 0 (got {tolerance!r})")
+        """A new task goal (e.g. a click in the viewer); the controller drives there too.
+        TypeError for text, ValueError for a point outside the arena or a bad ``tolerance``."""
+        x, y = self._point_in_arena("goal", position)
+        if tolerance is not None and real_number("tolerance", tolerance) <= 0:
+            raise ValueError(f"tolerance must be > 0 m (got {tolerance!r})")
         fleet, i = self._fleet, self._i
         fleet.goal[i] = (x, y)
         if tolerance is not None:
@@ -249,10 +278,40 @@ class Robot:
     def set_nav_goal(self, position: tuple[float, float]) -> None:
         """Send the controller somewhere (e.g. a click in the viewer) without changing the task:
         expectations still judge the scenario's goal."""
-        x, y = float(position[0]), float(position[1])
-        if not (math.isfinite(x) and math.isfinite(y)):
-            raise ValueError(f"goal must be finite (got {position!r})")
-        self.nav_goal = (x, y)
+        self.nav_goal = self._point_in_arena("goal", position)
+
+    def _point_in_arena(self, name: str, position: Any) -> tuple[float, float]:
+        """(x, y) [m] of a point given from code: two finite numbers inside the arena."""
+        if isinstance(position, (str, bytes)) or len(position) != 2:
+            raise TypeError(f"{name} must be (x, y) in metres (got {position!r:.60})")
+        x, y = real_number(f"{name}[0]", position[0]), real_number(f"{name}[1]", position[1])
+        extent = self._fleet.extent
+        if extent is not None:
+            x0, y0, x1, y1 = extent
+            if not (x0 <= x <= x1 and y0 <= y <= y1):
+                raise ValueError(f"{name} ({x:g}, {y:g}) is outside the arena "
+                                 f"[{x0:g}, {x1:g}] x [{y0:g}, {y1:g}] m")
+        return x, y
+
+    def teleport(self, x: float, y: float, theta: float) -> None:
+        """Move the robot to (x [m], y [m], theta [rad]) at once and stop it: a kidnapping. Its
+        odometry is not told (it goes on from where it was), nor its localizer; contacts
+        re-solve at the next step if it lands touching something. ValueError outside the arena."""
+        x, y = self._point_in_arena("teleport", (x, y))
+        theta = real_number("theta", theta)
+        if self.on_moved is not None:
+            self.on_moved()  # adaptive substeps look anew before a tick may skip them
+        for body in (self.body, self.control):
+            body.position = (x, y)
+            body.angle = theta
+            body.velocity = (0.0, 0.0)
+            body.angular_velocity = 0.0
+            if body.space is not None:
+                body.space.reindex_shapes_for_body(body)
+        fleet = self._fleet  # the jump is no distance travelled (a copy: xy may be shared)
+        xy = fleet.xy.copy() if isinstance(fleet.xy, np.ndarray) else list(fleet.xy)
+        xy[self._i] = (x, y)
+        fleet.xy = xy
 
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""
@@ -261,13 +320,16 @@ class Robot:
     # ------------------------------------------------------------------ commands
     def set_velocity(self, v: float, omega: float, vy: float = 0.0) -> None:
         """Drive at body-frame forward speed ``v`` [m/s], yaw rate ``omega`` [rad/s] and lateral
-        speed ``vy`` [m/s] (omni drives only) until :meth:`clear_command`; the controller waits."""
-        self.command(Command(float(v), float(omega), float(vy)))
+        speed ``vy`` [m/s] (omni drives only) until :meth:`clear_command`; the controller waits.
+        TypeError for text (``"0.5"``), as the scenario's YAML refuses it."""
+        self.command(Command(real_number("v", v), real_number("omega", omega),
+                             real_number("vy", vy)))
 
     def set_wheel_speeds(self, left: float, right: float) -> None:
         """Diff drive: these wheel speeds [m/s] until :meth:`clear_command`; the controller waits."""
         if not hasattr(self._drive_group, "set_wheel_speeds"):
             raise ValueError(f"a {self.config.drive} drive has no wheel speeds; use set_velocity")
+        left, right = real_number("left", left), real_number("right", right)
         self._drive_group.set_wheel_speeds(self._di, left, right)  # raises before taking over
         self._override = True
 
@@ -279,6 +341,21 @@ class Robot:
     def clear_command(self) -> None:
         """Give the robot back to its controller."""
         self._override = False
+
+    def take_over(self) -> None:
+        """A command set for this robot's drive outside its handle (the vector env's batched
+        commands) holds it, as :meth:`command` does; the controller waits."""
+        self._override = True
+
+    def follow(self, command: Any) -> None:
+        """The controller's ``command``: driven with it unless a command set by hand holds the
+        robot (the controller's schedule runs on either way)."""
+        if not self._override:
+            self._drive_group.set_command(self._di, command)
+
+    def count_collision(self) -> None:
+        """A contact episode of this robot began (the world's contact handler calls this)."""
+        self._fleet.collisions[self._i] += 1
 
     clear_wheel_speeds = clear_command  # the name before every drive took body velocities
 

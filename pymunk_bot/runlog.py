@@ -132,9 +132,7 @@ class RunLogger:
 
     def attach(self, sim) -> "RunLogger":
         """Start logging ``sim`` from its present state and observe its every step."""
-        self.on_reset(sim)
-        if self not in sim.observers:
-            sim.observers.append(self)
+        sim.attach(self)  # on_reset now, then every step
         return self
 
     def on_reset(self, sim) -> None:

@@ -4,20 +4,25 @@ from __future__ import annotations
 import math
 import numbers
 import time as wallclock
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
+import pymunk
 
 from .build import Built, build
 from .config import ScenarioConfig, load_scenario
 from .config.checks import check_seed
+from .events import EventSchedule
 from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
+from .propulsion import Propulsion
 from .readings import Observation
-from .robot import Robot
+from .robot import Robot, RobotsByName
 from .sensors.lidar import record_all, requests_all
 from .sensors.schedule import TIME_TOLERANCE, Schedule, ScheduleArray
+from .substep_gate import SubstepGate
 from .world import World
 
 
@@ -28,6 +33,19 @@ def scan_all(caster: Any, due: list[tuple[Any, float]]) -> None:
     elif due:
         lidar, now = due[0]
         lidar.record(now, lidar.true_ranges())
+
+
+@dataclass(frozen=True)
+class TickPlan:
+    """Runs that tick together (one, or copies sharing a Space), and which of them have work
+    in each phase: controllers or actors before the physics, sensors and localizers after it,
+    LiDARs at all."""
+
+    sims: tuple["Simulation", ...]
+    acting: tuple["Simulation", ...]
+    reading: tuple["Simulation", ...]
+    lidars: bool
+    gate: SubstepGate | None  # adaptive substeps (world.substeps: adaptive), else None
 
 
 class LocalizationScore:
@@ -51,39 +69,25 @@ class LocalizationScore:
 class Simulation:
     """A scenario in motion. Build it from a file, a dict or a config; reset rebuilds from the seed.
 
-    One tick (:meth:`step`):
-    1. controllers whose period has come read their observation and set a command;
-    2. actors (moving obstacles, pedestrians) set their motion;
-    3. ``substeps`` times: every drive advances and steers its control body, then pymunk steps;
-    4. bookkeeping: distance, goals, odometry from the encoders;
-    5. sensors whose period has come read the world (every body has moved);
-    6. localizers fold in odometry and scans;
-    7. metrics that an expectation needs; then the observers (loggers, recorders, views).
+    One tick (:meth:`step`) runs in the order :meth:`step_together` gives.
+
+    ``ground`` and ``replica``: this run is copy ``replica`` of its scenario on a ground shared
+    with other copies (:class:`~pymunk_bot.replicas.Replicas` builds, steps and resets these).
     """
 
     world: World
     _robots: list[Robot]
-    _ground: World | None = None  # the shared ground this run is a copy on (replicas), if any
-    _replica: int | None = None
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
-                 source: str | None = None) -> None:
+                 source: str | None = None, *, ground: World | None = None,
+                 replica: int | None = None) -> None:
         self.config = config
         self.source = source or f"scenario '{config.name}'"  # names the file in errors
         self.seed: int = check_seed(config.seed if seed is None else seed) or 0
-        self.robots: dict[str, Robot] = {}
+        self.robots: dict[str, Robot] = RobotsByName()  # a missing name lists the robots
         self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
+        self._ground, self._replica = ground, replica
         self._build()
-
-    @classmethod
-    def _on_ground(cls, config: ScenarioConfig, seed: int, source: str | None, ground: World,
-                   replica: int) -> "Simulation":
-        """Copy ``replica`` of ``config`` on a shared ground (see :mod:`pymunk_bot.replicas`,
-        which steps it: its own :meth:`step` would step every copy's physics)."""
-        sim = cls.__new__(cls)
-        sim._ground, sim._replica = ground, replica
-        sim.__init__(config, seed, source)  # type: ignore[misc]
-        return sim
 
     @classmethod
     def from_file(cls, path: str | Path | None = None, seed: int | None = None) -> "Simulation":
@@ -124,6 +128,7 @@ class Simulation:
                          if s is not r.lidar and not getattr(s, "passive", False)]
         self._localized = [r for r in self._robots if not getattr(r.localizer, "passive", False)]
         self._mapping = [r for r in self._robots if r.mapper is not None and r.lidar is not None]
+        self._events = EventSchedule(self.config.events)
         # Robots whose scenario names a localizer are scored against the truth (result JSON's
         # "localization" block), sampled at their controller's rate (10 Hz without one).
         self._scores = {}
@@ -134,10 +139,16 @@ class Simulation:
         for robot in self._localized:  # the first estimate folds in the readings taken at t = 0
             robot.localizer.update(self._localizer_inputs(robot, 0.0))
         self._score(0.0)
+        # What this run does around the physics, so a tick skips the phases it has no work in.
+        self._acts = bool(self._controlled or self.world.actors or self.config.events)
+        self._reads = bool(self._sensors or self._mapping or self._localized or self._scores
+                           or built.metrics)
+        self._plan = Simulation.plan((self,), self.world)
 
     # ------------------------------------------------------------------ state
     @property
-    def space(self):
+    def space(self) -> pymunk.Space:
+        """The pymunk Space of this run (shared with other copies on a shared ground)."""
         return self.world.space
 
     @property
@@ -145,26 +156,105 @@ class Simulation:
         """Simulated time [s] (steps * dt, so it never drifts)."""
         return self.steps * self.dt
 
+    @property
+    def single_substep_ticks(self) -> int:
+        """Ticks so far (since the last reset) that took one pymunk step, no contact being
+        able to start in them (adaptive substeps; 0 otherwise)."""
+        gate = self._plan.gate
+        return gate.single_ticks if gate is not None else 0
+
+    def __repr__(self) -> str:
+        return (f"Simulation({self.config.name!r}, seed={self.seed}, t={self.time:.3f} s of "
+                f"{self.config.world.duration:g} s, dt={self.dt:.4g} s x {self.substeps} "
+                f"substeps, robots: {', '.join(self.robots)})")
+
+    @property
+    def built(self) -> Built:
+        """What this run is made of (world, fleet, drive and odometry groups, propulsion):
+        read it, do not rebuild it (:meth:`reset` does)."""
+        return self._built
+
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
         if self._ground is not None:
             raise RuntimeError("a copy on a shared ground advances with its Replicas.step()")
-        started = wallclock.perf_counter()
-        self._before_physics()
-        propulsion = self._built.propulsion
-        propulsion.step(self.dt / self.substeps, self.substeps)
-        now = self._bookkeep(propulsion.positions())
-        self._read_sensors(now)
-        self._after_sensors(now)
-        self.wall_time += wallclock.perf_counter() - started
-        for observer in self.observers:
-            observer(self)
+        Simulation.step_together(self._plan, self._built.propulsion)
 
-    # The tick's phases, in order (Replicas runs them for many copies around one physics step).
+    @staticmethod
+    def plan(sims: Sequence["Simulation"], ground: World) -> TickPlan:
+        """Which of ``sims`` (runs in ``ground``'s Space) have work in each phase of a tick,
+        and the Space's substep gate when its substeps are adaptive (made again after any of
+        them is rebuilt: a new gate's first tick takes every substep)."""
+        first = sims[0]
+        gate = None
+        if first.world.adaptive:
+            gate = SubstepGate(ground.space, [m for sim in sims for m in sim._built.movers],
+                               first.substeps, first.dt, ground.take_disturbed)
+        return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
+                        tuple(s for s in sims if s._reads), any(s._lidars for s in sims), gate)
+
+    @staticmethod
+    def step_together(plan: TickPlan, propulsion: Propulsion, stack: Any = None,
+                      spans: Sequence[tuple[int, int]] | None = None) -> None:
+        """One tick of ``dt`` for every run of ``plan``: the one place where the tick order lives.
+
+        The runs (``plan``, from :meth:`plan`) share ``propulsion`` and its pymunk Space: one
+        run (:meth:`step`), or copies of one scenario (:meth:`Replicas.step
+        <pymunk_bot.replicas.Replicas.step>`), whose robots are ``propulsion``'s in ``spans``
+        (start, stop) and whose bookkeeping may be stacked (``stack``,
+        :mod:`pymunk_bot.stacking`).
+
+        1. controllers whose period has come read their observation and set a command; scenario
+           events fire; actors (moving obstacles, pedestrians) set their motion;
+        2. ``substeps`` times: every drive advances and steers its control body, then pymunk steps;
+        3. bookkeeping: each run's clock, distance and goals, odometry from the encoders;
+        4. sensors whose period has come read the world (every body has moved): every due LiDAR
+           of every run in one cast;
+        5. localizers fold in odometry and scans, maps integrate scans, the estimate is scored;
+        6. metrics that an expectation needs; then each run's observers (loggers, recorders, views).
+        """
+        started = wallclock.perf_counter()
+        sims = plan.sims
+        for sim in plan.acting:
+            sim._before_physics()
+        first, gate = sims[0], plan.gate
+        if gate is None:
+            propulsion.step(first.dt / first.substeps, first.substeps)
+        else:  # one pymunk step where no contact can start (substep_gate.py)
+            substeps, following = gate.counts()
+            propulsion.step(first.dt / substeps, substeps, first.dt / following)
+            for sim in sims:  # what the bodies' velocities now move in, for the IMUs
+                sim.world.substep = first.dt / following
+        if stack is not None:
+            nows = [sim._advance_clock() for sim in sims]
+            stack.bookkeep(propulsion.position_array(), nows)
+        elif spans is None:
+            nows = [first._bookkeep(propulsion.positions())]
+        else:
+            positions = propulsion.positions()
+            nows = [sim._bookkeep(positions[start:stop]) for sim, (start, stop) in zip(sims, spans)]
+        if plan.lidars:
+            caster = first.world.ray_caster()  # the copies share one
+            caster.begin_frame()  # every LiDAR of this tick sees one scene
+            scan_all(caster, [(lidar, now) for sim, now in zip(sims, nows)
+                              for lidar in sim._due_lidars(now)])
+        for sim in plan.reading:
+            now = sim.time
+            sim._read_other_sensors(now)
+            sim._after_sensors(now)
+        share = (wallclock.perf_counter() - started) / len(sims)
+        for sim in sims:
+            sim.wall_time += share
+            for observer in sim.observers:
+                observer(sim)
+
+    # The tick's phases, in the order step_together runs them.
     def _before_physics(self) -> None:
         """Controllers whose period has come set commands; actors set their motion."""
         now = self.steps * self.dt  # self.time, inlined: this runs every tick
+        if self._events.due(now):  # scenario events (teleports: events.py)
+            self._events.fire(now, self.robots)
         self._run_controllers(now)
         for actor in self.world.actors:
             actor.before_step(now, self.dt)
@@ -204,6 +294,15 @@ class Simulation:
         for _ in range(round(duration / self.dt)):
             self.step()
 
+    def attach(self, observer: Any) -> None:
+        """Add ``observer`` (called after every step) once: if it has ``on_reset(sim)``, that
+        is called now, so it starts from the present state, and again after every reset."""
+        on_reset = getattr(observer, "on_reset", None)
+        if on_reset is not None:
+            on_reset(self)
+        if observer not in self.observers:
+            self.observers.append(observer)
+
     def reset(self, seed: int | None = None) -> None:
         """Rebuild everything from the config (pymunk copies are not bit-exact); ``seed``
         replaces the run's seed. Robot handles and ``robots`` stay valid and see the new state.
@@ -213,6 +312,13 @@ class Simulation:
         if self._ground is not None:
             raise RuntimeError("a copy on a shared ground resets with its "
                                "Replicas.reset(index, seed)")
+        self._reset(seed)
+
+    def reset_copy(self, seed: int | None = None) -> None:
+        """:meth:`reset` of a copy on a shared ground (what ``Replicas.reset`` calls, which
+        then rebuilds the steering and stacks of every copy)."""
+        if self._ground is None:
+            raise RuntimeError("only a copy on a shared ground resets with reset_copy")
         self._reset(seed)
 
     def _reset(self, seed: int | None) -> None:
@@ -231,16 +337,8 @@ class Simulation:
         robots = self._robots
         for k in self._control.due(now):
             robot = robots[self._controlled[k]]
-            if not robot._override:
-                command = robot.controller.compute(self.observe(robot))
-                robot._drive_group.set_command(robot._di, command)
-
-    def _read_sensors(self, now: float) -> None:
-        if self._lidars:
-            caster = self.world.ray_caster()
-            caster.begin_frame()  # every LiDAR of this tick sees one scene
-            scan_all(caster, [(lidar, now) for lidar in self._due_lidars(now)])
-        self._read_other_sensors(now)
+            if not robot.overridden:
+                robot.follow(robot.controller.compute(self.observe(robot)))
 
     def _due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
@@ -270,7 +368,8 @@ class Simulation:
             time=self.time, pose=robot.localizer.pose, odometry=robot.odometry.pose,
             goal=robot.nav_goal, goal_tolerance=robot.goal_tolerance, robot=robot.spec,
             scan=robot.lidar.latest if robot.lidar is not None else None,
-            read_extra=robot.readings)
+            read_extra=robot.readings,
+            localized=getattr(robot.localizer, "localized", True))  # a plugin's: trusted
 
     # ------------------------------------------------------------------ results
     def check_expectations(self) -> list[Check]:

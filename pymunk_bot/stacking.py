@@ -58,18 +58,18 @@ class Stack:
     stacked into one; see :meth:`of`."""
 
     def __init__(self, sims: Sequence[Any]) -> None:
-        self._fleets = [sim._built.fleet for sim in sims]
+        self._fleets = [sim.built.fleet for sim in sims]
         self.fleet = type(self._fleets[0]).stacked(self._fleets)
-        self.per_copy = len(sims[0]._robots)  # robots of each copy
-        slots = len(sims[0]._built.drive_groups)
-        self._drives = [[sim._built.drive_groups[j][0] for sim in sims] for j in range(slots)]
-        self._odometry = [[sim._built.odometry_groups[j][0] for sim in sims] for j in range(slots)]
+        self.per_copy = len(sims[0].robots)  # robots of each copy
+        slots = len(sims[0].built.drive_groups)
+        self._drives = [[sim.built.drive_groups[j][0] for sim in sims] for j in range(slots)]
+        self._odometry = [[sim.built.odometry_groups[j][0] for sim in sims] for j in range(slots)]
         # Each whole, with its robots' indices and the first row of each copy's part.
         self.drive_groups: list[tuple[Any, list[int], list[int]]] = []
         self.pairs: list[tuple[Any, Any]] = []  # (drive group, its odometry), stacked
         for j, (drives, odometries) in enumerate(zip(self._drives, self._odometry)):
             members = [copy * self.per_copy + i for copy, sim in enumerate(sims)
-                       for i in sim._built.drive_groups[j][1]]
+                       for i in sim.built.drive_groups[j][1]]
             starts = np.cumsum([0] + [part.n for part in drives[:-1]]).tolist()
             whole = type(drives[0]).stacked(drives)
             self.drive_groups.append((whole, members, starts))
@@ -82,7 +82,7 @@ class Stack:
     def of(cls, sims: Sequence[Any]) -> "Stack | None":
         """The stack of these copies, or None if some group cannot be stacked (its class
         names no ``ROWS``) or a copy has no robots."""
-        first = sims[0]._built
+        first = sims[0].built
         groups = [first.fleet] + [g for g, _ in first.drive_groups + first.odometry_groups]
         if not first.robots or not all(getattr(type(g), "ROWS", ()) for g in groups):
             return None

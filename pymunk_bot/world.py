@@ -34,7 +34,8 @@ class World:
                 pushable=any(getattr(o, "movable", False) for o in config.obstacles))
             self.map = config.world.map_geometry()  # a MapGeometry, or None
             self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
-            self.substeps = config.world.substeps or required_substeps(config)
+            named = config.world.substeps
+            self.substeps = named if isinstance(named, int) else required_substeps(config)
             self._caster: Any = None
             self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
             for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
@@ -65,6 +66,12 @@ class World:
             self.obstacles.append(obstacle)
         self.actors: list[Any] = []
         self.time = 0.0  # simulated time [s], kept by the simulation
+        # Substeps taken only where a contact can start (world.substeps: adaptive).
+        self.adaptive = config.world.substeps == "adaptive"
+        # [s] the pymunk step the bodies' velocities now move in (the next tick's first), kept
+        # by the simulation: dt / substeps, unless the substeps are adaptive.
+        self.substep = config.world.dt / self.substeps
+        self._disturbed = False  # bodies were moved outside the physics (see disturb)
 
     @classmethod
     def ground(cls, config: ScenarioConfig) -> "World":
@@ -77,6 +84,19 @@ class World:
         if self.replica is None:
             return pymunk.ShapeFilter(group=group)
         return physics.replica_filter(self.replica, group)
+
+    def disturb(self) -> None:
+        """Bodies were moved outside the physics (a teleport): adaptive substeps look again
+        before a tick may skip them (on a shared ground, for every copy)."""
+        self._disturbed = True
+        ground = getattr(self, "_ground", None)
+        if ground is not None:
+            ground.disturb()
+
+    def take_disturbed(self) -> bool:
+        """Whether :meth:`disturb` was called since the last time this was asked."""
+        disturbed, self._disturbed = self._disturbed, False
+        return disturbed
 
     def retire(self, bodies: list[pymunk.Body]) -> None:
         """Take this copy's movable obstacles and the given bodies (its robots' bodies and

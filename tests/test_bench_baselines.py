@@ -12,6 +12,7 @@ from pymunk_bot.sensors.lidar import beam_angles
 from pymunk_bot.sim import Simulation
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_swarm_keeps_its_density_and_starts_clear():
     for n in (10, 100, 1000):
         config = parse_scenario(fleet.swarm_scenario(n), "swarm")  # robots inside boxes: exit 2

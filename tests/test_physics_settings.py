@@ -4,7 +4,8 @@ from __future__ import annotations
 import pytest
 from builders import robot
 
-from pymunk_bot.config.substeps import substeps_against_overlap, substeps_against_tunnelling
+from pymunk_bot.config.substeps import PUSHING_CONTACT_STEP, shove_factor, \
+    substeps_against_overlap, substeps_against_tunnelling
 
 
 def test_formula():
@@ -29,7 +30,11 @@ def test_a_pushed_crate_counts_as_a_mover(make_sim):
     alone = make_sim([pusher], [wall], size=(10, 10)).substeps
     with_pellet = make_sim([pusher], [wall, pellet], size=(10, 10)).substeps
     # a 5 mm pellet pushed at 1 m/s must not skip a 1 cm wall: (0.005 + 0.005) / 2 per substep
-    assert with_pellet == substeps_against_tunnelling(1 / 60, 1.0, 0.005, 0.005) == 4
+    assert with_pellet >= substeps_against_tunnelling(1 / 60, 1.0, 0.005, 0.005) == 4
+    # and at 10 g shoved by a 5 kg robot it sinks sqrt(500) / 5 times its step (at 4 substeps
+    # it passes the wall): 13
+    assert with_pellet == substeps_against_overlap(
+        1 / 60, 1.0 * shove_factor(5.0 / 0.01), PUSHING_CONTACT_STEP) == 13
     assert alone == substeps_against_overlap(1 / 60, 1.0) == 3
 
 

@@ -6,7 +6,7 @@ the way (a kinematic body has infinite mass).
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -16,7 +16,7 @@ from ..obstacles import Obstacle
 class PathScript:
     """Where a point moving along ``path`` at ``speed`` [m/s] is at time t [s] (pure)."""
 
-    def __init__(self, path, speed: float, mode: str) -> None:
+    def __init__(self, path: Sequence[Sequence[float]], speed: float, mode: str) -> None:
         points = np.asarray(path, dtype=float)
         if mode == "loop" and np.hypot(*(points[-1] - points[0])) > 1e-9:
             points = np.vstack([points, points[:1]])

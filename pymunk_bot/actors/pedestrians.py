@@ -46,7 +46,7 @@ WALKER_CATEGORY = 1 << 30
 _NOT_WALKERS = pymunk.ShapeFilter(mask=pymunk.ShapeFilter.ALL_MASKS() ^ WALKER_CATEGORY)
 
 
-def build_pedestrian(space: pymunk.Space, config) -> Obstacle:
+def build_pedestrian(space: pymunk.Space, config: Any) -> Obstacle:
     """A walker's body: a dynamic disc that does not spin."""
     body = pymunk.Body(config.mass, math.inf)
     body.position = tuple(config.center)
@@ -200,7 +200,7 @@ class Crowd:
         return force
 
 
-def make_crowd(world, robots: Sequence, rng: np.random.Generator) -> Crowd | None:
+def make_crowd(world: Any, robots: Sequence[Any], rng: np.random.Generator) -> Crowd | None:
     """The crowd of a world's pedestrians (None when it has none)."""
     walkers = [o for o in world.obstacles if getattr(o.config, "type", "") == "pedestrian"]
     if not walkers:

@@ -16,16 +16,22 @@ Verdict = tuple[str, "bool | None"]  # (target, passed; None: skipped or informa
 
 def _simulation(quick: bool) -> list[Verdict]:
     from . import simulation
-    print("60 s of simulated time, median of repeats (wall time)")
-    simulation.main(repeats=2 if quick else 5)
-    return []
+    print("60 s of simulated time, median of repeats (CPU time)")
+    one = simulation.main(repeats=2 if quick else 5)[0]
+    return [(f"{one['case']}, no sensors: >= {simulation.TARGET:g}x real time (got "
+             f"{one['real_time_factor']:.0f}x)", one["real_time_factor"] >= simulation.TARGET)]
 
 
 def _lidar(quick: bool) -> list[Verdict]:
     from . import lidar
     print("microseconds per ray, 360-beam scans: RayCaster against segment_query_first")
-    lidar.main()
-    return []
+    rows = lidar.main()
+    worst = min(rows, key=lambda r: r["speedup"])
+    return [(f"LiDAR: >= {lidar.TARGET:g}x segment_query_first in every world (least "
+             f"{worst['speedup']:.1f}x, {worst['world']})", worst["speedup"] >= lidar.TARGET),
+            ("LiDAR: identical to segment_query_first (largest difference "
+             f"{max(r['max_abs_diff_m'] for r in rows):.1e} m)",
+             all(r["max_abs_diff_m"] == 0.0 for r in rows))]
 
 
 def _movers(quick: bool) -> list[Verdict]:
@@ -37,9 +43,14 @@ def _movers(quick: bool) -> list[Verdict]:
 
 def _contacts(quick: bool) -> list[Verdict]:
     from . import contacts
-    summary = contacts.main(100 if quick else 1000)
-    return [(f"{summary.trials} trials: 0 crossings", summary.crossings == 0),
-            (f"{summary.trials} trials: penetration <= 1 cm", summary.max_penetration <= 0.01)]
+    verdicts: list[Verdict] = []
+    for adaptive in (False, True):
+        summary = contacts.main(100 if quick else 1000, adaptive=adaptive)
+        how = ", adaptive substeps" if adaptive else ""
+        verdicts += [(f"{summary.trials} trials{how}: 0 crossings", summary.crossings == 0),
+                     (f"{summary.trials} trials{how}: penetration <= 1 cm",
+                      summary.max_penetration <= 0.01)]
+    return verdicts
 
 
 def _fleet(quick: bool) -> list[Verdict]:
@@ -53,6 +64,14 @@ def _fleet(quick: bool) -> list[Verdict]:
         r = result[key]
         verdicts.append((f"{r['robots']} robots, {r['beams']}-beam LiDAR: >= {r['target']:g}x "
                          f"real time (got {r['real_time_factor']:.2f}x)", r["passed"]))
+    r = result["swarm_10000"]
+    verdicts += [(f"10,000 robots: built in <= {r['build_target']:g} s CPU (got "
+                  f"{r['build_cpu_s']:.1f} s)", r["build_passed"]),
+                 (f"10,000 robots, no sensors: >= {r['target']:g}x real time (got "
+                  f"{r['real_time_factor']:.2f}x)", r["passed"])]
+    r = result["swarm_10000_adaptive"]
+    verdicts.append((f"10,000 robots, no sensors, world.substeps adaptive: >= {r['target']:g}x "
+                     f"real time (got {r['real_time_factor']:.2f}x)", r["passed"]))
     return verdicts
 
 
@@ -60,8 +79,11 @@ def _learning_loop(quick: bool) -> list[Verdict]:
     from . import learning_loop
     result = learning_loop.run(quick)
     learning_loop.report(result)
-    return [(f"learning loop: >= {result['target']:g}x bare pymunk (got {result['ratio']:.2f}x)",
-             result["passed"])]
+    target = result["target"]
+    return [(f"learning loop, random commands: >= {target:g}x bare pymunk (got "
+             f"{result['ratio']:.2f}x)", result["passed"]),
+            (f"learning loop, random commands, world.substeps adaptive: >= {target:g}x bare "
+             f"pymunk (got {result['adaptive_ratio']:.2f}x)", result["adaptive_ratio"] >= target)]
 
 
 def _irsim(quick: bool) -> list[Verdict]:
@@ -102,6 +124,17 @@ def _localization(quick: bool) -> list[Verdict]:
     return verdicts
 
 
+def _localization_robustness(quick: bool) -> list[Verdict]:
+    from . import localization_robustness as robustness
+    seeds = robustness.QUICK_SEEDS if quick else 10
+    print(f"defaults on unseen worlds: mcl, ekf, global mcl, slam; generated offices, clutter, "
+          f"the warehouse map; {seeds} seeds; failures listed")
+    outcomes = robustness.run(seeds=seeds, verbose=False)
+    for key, row in robustness.summary(outcomes).items():
+        print(f"  {key}: {row}")
+    return robustness.verdicts(outcomes)
+
+
 def _learning(quick: bool) -> list[Verdict]:
     if importlib.util.find_spec("gymnasium") is None:
         return [("learning environments (skipped: gymnasium is not installed; "
@@ -138,6 +171,8 @@ SECTIONS: dict[str, tuple[str, Callable[[bool], list[Verdict]]]] = {
     "movers": ("Pedestrians and scripted obstacles", _movers),
     "maps": ("Maps", _maps),
     "localization": ("Localization (quick)", _localization),
+    "localization_robustness": ("Localization with defaults on unseen worlds",
+                                _localization_robustness),
     "learning": ("Learning environments and sweeps", _learning),
     "fuzz": ("Fuzzing the command line", _fuzz),
 }

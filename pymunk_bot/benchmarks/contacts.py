@@ -97,9 +97,12 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.hypot(*(a + t * ab - p)))
 
 
-def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0) -> tuple[bool, float]:
-    """(crossed, deepest overlap [m]) of one trial."""
+def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0,
+              adaptive: bool = False) -> tuple[bool, float]:
+    """(crossed, deepest overlap [m]) of one trial (``adaptive``: world.substeps adaptive)."""
     data = trial_scenario(kind, rng)
+    if adaptive:
+        data["world"]["substeps"] = "adaptive"
     sim = Simulation.from_dict(data)
     a = sim.robots["a"]
     b = sim.robots.get("b")
@@ -123,19 +126,20 @@ def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0) -> tupl
     return crossed, worst
 
 
-def run_trials(trials: int, seed: int = 0) -> Summary:
+def run_trials(trials: int, seed: int = 0, adaptive: bool = False) -> Summary:
     """``trials`` randomized trials, the hazards in turn."""
     rng = np.random.default_rng(seed)
     summary = Summary()
     for i in range(trials):
         kind = KINDS[i % len(KINDS)]
-        summary.add(kind, *run_trial(kind, rng))
+        summary.add(kind, *run_trial(kind, rng, adaptive=adaptive))
     return summary
 
 
-def main(trials: int = 1000) -> Summary:
-    summary = run_trials(trials)
-    print(f"{summary.trials} trials: {summary.crossings} crossings, "
+def main(trials: int = 1000, adaptive: bool = False) -> Summary:
+    summary = run_trials(trials, adaptive=adaptive)
+    print(f"{summary.trials} trials{' (adaptive substeps)' if adaptive else ''}: "
+          f"{summary.crossings} crossings, "
           f"{summary.deeper_than_1cm} deeper than 1 cm, deepest {summary.max_penetration * 1000:.1f} mm")
     for kind, (n, crossed, worst) in summary.by_kind.items():
         print(f"  {kind:<8} {n:>5} trials  {crossed} crossings  deepest {worst * 1000:.1f} mm")

@@ -1,7 +1,8 @@
 """Fuzzing the command line with mutated shipped scenarios: every file must get an answer.
 
 ``python -m pymunk_bot.benchmarks.fuzz [--files 1000] [--seed 0]`` writes that many seeded
-mutations of the shipped scenarios (see mutations.py), then runs ``validate FILE`` and
+mutations of the shipped scenarios (see mutations.py; a quarter of them get a ROS map or SVG
+plan, often broken, see map_mutations.py), then runs ``validate FILE`` and
 ``run FILE --headless --duration 2`` on each, in worker processes that are killed when a case
 takes longer than ``--timeout`` seconds. It reports how many answers were fine (exit 0/1), bad
 input told in one line (exit 2), tracebacks (exit 3, or a traceback on stderr, or a crashed
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import copy
 import io
 import json
 import os
@@ -26,10 +28,13 @@ from typing import IO
 import numpy as np
 import yaml
 
+from .map_mutations import MAP_MUTATIONS
 from .mutations import mutate
 
 MEMORY_LIMIT = 2 << 30  # [bytes] per worker: a blow-up fails fast instead of swapping
 RUN_SECONDS = "2"  # simulated seconds per `run`
+SLOW_SECONDS = 10.0  # [s] wall: a command slower than this is counted (and named with -v)
+MAP_SHARE = 0.25  # of the cases get a map file (a ROS map or an SVG plan, see map_mutations.py)
 
 
 def write_cases(folder: Path, files: int, seed: int) -> list[tuple[Path, str]]:
@@ -40,8 +45,19 @@ def write_cases(folder: Path, files: int, seed: int) -> list[tuple[Path, str]]:
     rng = np.random.default_rng(seed)
     cases = []
     for k in range(files):
-        name, text = mutate(bases[int(rng.integers(len(bases)))], rng)
+        base = bases[int(rng.integers(len(bases)))]
         path = folder / f"case{k:05d}.yaml"
+        if rng.random() < MAP_SHARE:
+            mutation = MAP_MUTATIONS[int(rng.integers(len(MAP_MUTATIONS)))]
+            name = mutation.__name__
+            text, extra = mutation(copy.deepcopy(base), rng, path.stem)
+            for file_name, content in extra.items():
+                if content is None:
+                    (folder / file_name).mkdir(exist_ok=True)
+                else:
+                    (folder / file_name).write_bytes(content)
+        else:
+            name, text = mutate(base, rng)
         path.write_text(text)
         cases.append((path, name))
     return cases
@@ -134,9 +150,15 @@ def fuzz(files: int = 1000, seed: int = 0, timeout: float = 20.0,
                     ["--headless", "--duration", RUN_SECONDS] if command == "run" else [])
                 if worker.proc.poll() is not None:
                     worker = Worker()
+                started = time.perf_counter()
                 code, stderr = worker.ask(argv, timeout)
+                elapsed = time.perf_counter() - started
                 outcome = classify(code, stderr)
                 counts[command][outcome] += 1
+                if elapsed > SLOW_SECONDS and code is not None:
+                    counts[command]["slow"] += 1
+                    if verbose:
+                        print(f"slow: {command} {path.name} ({name}): {elapsed:.1f} s")
                 if outcome in ("traceback", "hang", "bad-message") and verbose:
                     tail = stderr.strip().splitlines()[-1:] if stderr.strip() else [""]
                     print(f"{outcome}: {command} {path.name} ({name}): {tail[0][:200]}")
@@ -164,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     for command, counter in counts.items():
         print(f"  {command:<8} ok {counter['ok']}, exit-2 {counter['exit-2']}, "
               f"bad message {counter['bad-message']}, tracebacks {counter['traceback']}, "
-              f"hangs {counter['hang']}")
+              f"hangs {counter['hang']}, over {SLOW_SECONDS:g} s {counter['slow']}")
     bad = sum(c[k] for c in counts.values() for k in ("traceback", "hang", "bad-message"))
     return 1 if bad else 0
 

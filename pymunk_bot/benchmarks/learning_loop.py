@@ -4,15 +4,17 @@
 
 The loop is what an RL agent or a 10 Hz controller does: set a command, advance 0.1 s, read the
 180-beam scan and the odometry. The world: 20x20 m, 20 random boxes, one robot (radius 0.2 m,
-5 kg), a full-circle 180-beam LiDAR with 10 m range and no noise. Commands are a seeded random
-walk of (v, omega), the same sequence for both loops.
+5 kg), a full-circle 180-beam LiDAR with 10 m range and no noise. Commands are seeded random
+draws of (v, omega) within the robot's limits, one per 0.1 s as an RL agent sends them (so the
+motors ramp most of the time), the same sequence for both loops. pymunk-bot runs twice: with
+the scenario's substeps in every tick (the default) and with ``world.substeps: adaptive``.
 
 - pymunk-bot: ``robot.set_velocity(v, omega)``, ``sim.run(0.1)`` (the scan is taken at 10 Hz
   by the simulation itself), ``robot.lidar.latest.ranges``, ``robot.odometry.pose``.
 - bare pymunk, as a user would write it: a Space from the same ``physics.new_space`` settings
   with the same boxes and arena walls, the robot's disc pulled by a kinematic control body
-  through a pivot and a gear joint with exactly our force limits (read off our joints), the
-  same substeps per 1/60 s; the control body's velocity set once per 0.1 s; then 180
+  through a pivot and a gear joint with exactly our force limits (read off our joints), one
+  ``space.step(1/60)`` per tick; the control body's velocity set once per 0.1 s; then 180
   ``segment_query_first`` calls with the robot's shape filter, and odometry as the integrated
   commanded velocity (cheaper than wheel encoders).
 
@@ -41,9 +43,11 @@ BEAMS = 180
 MAX_RANGE = 10.0  # [m]
 
 
-def scenario() -> dict:
+def scenario(adaptive: bool = False) -> dict:
     """20x20 m, 20 boxes, one robot with a 180-beam LiDAR and no controller."""
     data = benchmark_scenario(n_obstacles=20, n_robots=1, seed=0)
+    if adaptive:
+        data["world"]["substeps"] = "adaptive"
     robot = data["robots"][0]
     robot.pop("controller")
     robot["lidar"] = {"beams": BEAMS, "max_range": MAX_RANGE, "rate": 1.0 / PERIOD}
@@ -52,19 +56,15 @@ def scenario() -> dict:
 
 
 def commands(iterations: int, seed: int = 0) -> list[tuple[float, float]]:
-    """A smooth random walk of (v [m/s], omega [rad/s]) within the robot's limits."""
+    """Random draws of (v [m/s], omega [rad/s]) within the robot's limits, one per period."""
     rng = np.random.default_rng(seed)
-    v, omega, out = 0.5, 0.0, []
-    for _ in range(iterations):
-        v = float(np.clip(v + rng.normal(0.0, 0.1), -0.3, 0.8))
-        omega = float(np.clip(omega + rng.normal(0.0, 0.3), -1.5, 1.5))
-        out.append((v, omega))
-    return out
+    return [(float(rng.uniform(-0.3, 0.8)), float(rng.uniform(-1.5, 1.5)))
+            for _ in range(iterations)]
 
 
-def ours(steps: list[tuple[float, float]]) -> tuple[float, np.ndarray]:
+def ours(steps: list[tuple[float, float]], adaptive: bool = False) -> tuple[float, np.ndarray]:
     """CPU seconds of the pymunk-bot loop, and the final pose."""
-    sim = Simulation.from_dict(scenario(), source="learning-loop")
+    sim = Simulation.from_dict(scenario(adaptive), source="learning-loop")
     robot = sim.robots["r0"]
     lidar, odometry = robot.lidar, robot.odometry
     started = time.process_time()
@@ -150,11 +150,11 @@ class BareLoop:
 def bare(steps: list[tuple[float, float]]) -> tuple[float, np.ndarray]:
     """CPU seconds of the bare pymunk loop, and the final pose."""
     data = scenario()
-    sim = Simulation.from_dict(data, source="learning-loop")  # for its joint limits and substeps
+    sim = Simulation.from_dict(data, source="learning-loop")  # for its joint limits
     joints = sim.robots["r0"].body.constraints
     force = next(j.max_force for j in joints if isinstance(j, pymunk.PivotJoint))  # [N]
     torque = next(j.max_force for j in joints if isinstance(j, pymunk.GearJoint))  # [N m]
-    loop = BareLoop(data, force, torque, sim.substeps, sim.dt)
+    loop = BareLoop(data, force, torque, 1, sim.dt)  # one space.step per tick, as users write
     cpu = loop.run(steps)
     return cpu, np.array([*loop.body.position, loop.body.angle])
 
@@ -164,17 +164,20 @@ def run(quick: bool = False) -> dict:
     drifts less within a pair than across the run), and each loop's median time."""
     iterations, repeats = (100, 3) if quick else (600, 9)
     steps = commands(iterations)
-    ours_cpu, bare_cpu = [], []
+    ours_cpu, adaptive_cpu, bare_cpu = [], [], []
     for _ in range(repeats):
         cpu, our_pose = ours(steps)
         ours_cpu.append(cpu)
+        adaptive_cpu.append(ours(steps, adaptive=True)[0])
         cpu, bare_pose = bare(steps)
         bare_cpu.append(cpu)
-    o, b = statistics.median(ours_cpu), statistics.median(bare_cpu)
+    o, a, b = (statistics.median(t) for t in (ours_cpu, adaptive_cpu, bare_cpu))
     ratio = statistics.median(bare / ours for ours, bare in zip(ours_cpu, bare_cpu))
+    adaptive_ratio = statistics.median(bare / ours for ours, bare in zip(adaptive_cpu, bare_cpu))
     return {"iterations": iterations, "sim_seconds": iterations * PERIOD, "repeats": repeats,
             "ours_cpu_s": o, "bare_cpu_s": b, "ratio": ratio, "target": TARGET,
             "passed": ratio >= TARGET, "ours_loops_per_s": iterations / o,
+            "adaptive_loops_per_s": iterations / a, "adaptive_ratio": adaptive_ratio,
             "bare_loops_per_s": iterations / b,
             "final_pose_gap_m": float(np.hypot(*(our_pose[:2] - bare_pose[:2])))}
 
@@ -183,7 +186,8 @@ def report(result: dict) -> None:
     print(f"1 robot, {BEAMS}-beam LiDAR: set a command, advance {PERIOD} s, read scan + odometry "
           f"({result['iterations']} loops, {result['repeats']} alternating pairs, the median "
           "pair's ratio, CPU time)")
-    print(f"  pymunk-bot {result['ours_loops_per_s']:7.0f} loops/s   bare pymunk + "
+    print(f"  pymunk-bot {result['ours_loops_per_s']:7.0f} loops/s (adaptive substeps "
+          f"{result['adaptive_loops_per_s']:.0f}, {result['adaptive_ratio']:.2f}x)   bare pymunk + "
           f"segment_query_first {result['bare_loops_per_s']:7.0f} loops/s")
     print(f"  ratio {result['ratio']:.2f}x (target >= {TARGET:g}x): "
           f"{'PASS' if result['passed'] else 'MISS'}   (final poses {result['final_pose_gap_m']:.2f} m "

@@ -1,6 +1,8 @@
 """How well and how fast the localizers work: issue 11's figures, 10 seeds per world.
 
     python -m pymunk_bot.benchmarks.localization [--seeds 10] [--quick] [--out bench.json]
+    python -m pymunk_bot.benchmarks.localization --robustness [--seeds 10] [--quick]
+        # the defaults on unseen worlds (localization_robustness.py)
 
 Worlds (benchmarks/localization_worlds.py): the 10 x 8 m office and the ROS-style map, both
 with drifting odometry (its error after each run is reported too) and a 360-beam LiDAR with
@@ -188,7 +190,16 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--out", help="write the figures as JSON here")
+    parser.add_argument("--robustness", action="store_true",
+                        help="run the benchmark of the defaults on unseen worlds instead "
+                             "(localization_robustness.py; --seeds, --quick and --out apply)")
     args = parser.parse_args()
+    if args.robustness:
+        from . import localization_robustness
+
+        localization_robustness.main(["--seeds", str(args.seeds)] + ["--quick"] * args.quick
+                                     + (["--out", args.out] if args.out else []))
+        return
     result = run_all(args.seeds, args.quick)
     print(json.dumps(result, indent=1))
     if args.out:

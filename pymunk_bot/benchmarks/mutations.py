@@ -87,7 +87,7 @@ def huge_count(data: dict, rng: np.random.Generator) -> str:
             big, 6000)
     elif kind == 3:
         t = np.linspace(0.0, 2 * math.pi, min(big, 6000), endpoint=False)
-        cx, cy = (s / 2 for s in data["world"]["size"])
+        cx, cy = (s / 2 for s in data["world"].get("size") or [6.0, 4.0])  # a map: no size
         points = np.column_stack([cx + 0.3 * np.cos(t), cy + 0.3 * np.sin(t)]).tolist()
         data["obstacles"] = [{"type": "polygon", "points": points}]
     elif kind == 4:

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 
-from ..config.checks import check_seed
 from ..errors import ScenarioError
 from ..results import writable_problem
 
@@ -14,6 +14,7 @@ from ..results import writable_problem
 EXIT_OK, EXIT_EXPECTATION_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR = 0, 1, 2, 3
 MAX_DURATION = 86_400.0  # [s] simulated, as the scenario's own world.duration
 MAX_JOBS = 256  # parallel processes
+_NEGATIVE = re.compile(r"-[\d.]")  # a negative number, range or list: a value, not an option
 
 
 class Parser(argparse.ArgumentParser):
@@ -22,6 +23,19 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"error: {message} (see `{self.prog} --help`)\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """As argparse, but a value that starts with '-' and a digit (``--seeds -3:2``,
+        ``--duration -1``) is the option's value, so its own check can say what is wrong
+        (argparse would take it for an option and say "expected one argument")."""
+        if args is not None:
+            args = list(args)
+            for k in range(len(args) - 1, 0, -1):
+                action = self._option_string_actions.get(args[k - 1])
+                if action is not None and action.nargs is None \
+                        and _NEGATIVE.match(args[k]) and args[k] not in self._option_string_actions:
+                    args[k - 1:k + 1] = [f"{args[k - 1]}={args[k]}"]
+        return super().parse_known_args(args, namespace)
+
 
 def seed_number(text: str) -> int:
     """argparse type: one seed, a whole number in [0, 2**63 - 1] (the API's rule, check_seed)."""
@@ -29,6 +43,8 @@ def seed_number(text: str) -> int:
         value = int(text, 10)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a whole number >= 0 (got '{text}')") from None
+    from ..config.checks import check_seed  # here: `import pymunk_bot.cli` stays light
+
     try:
         seed = check_seed(value)
     except ValueError as exc:

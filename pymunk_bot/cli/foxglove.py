@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from ..errors import ScenarioError
+from .served import ServedOutputs
 
 LOG_FORMATS = (".npz", ".mcap")
 
@@ -20,11 +19,13 @@ def add_run_options(run: argparse.ArgumentParser) -> None:
     group.add_argument("--foxglove", action="store_true",
                        help="serve the run live to Foxglove over WebSocket (see docs/foxglove.md)")
     group.add_argument("--port", type=int,
-                       help=f"WebSocket port (default {DEFAULT_PORT}; 0 picks a free one)")
+                       help=f"WebSocket port (default {DEFAULT_PORT}, 9090 with --rosbridge; 0 picks "
+                            "a free one)")
     group.add_argument("--host",
                        help=f"address to bind (default {DEFAULT_HOST}: this machine only)")
     group.add_argument("--speed", type=float,
-                       help="headless pace with --foxglove, x real time (default 1.0)")
+                       help="headless pace with --foxglove or --rosbridge, x real time "
+                            "(default 1.0)")
 
 
 def add_parser(sub) -> None:
@@ -32,6 +33,9 @@ def add_parser(sub) -> None:
     convert = sub.add_parser("convert", help="convert a run log between .npz and .mcap")
     convert.add_argument("source", type=Path, help="a run log (.npz or .mcap)")
     convert.add_argument("target", type=Path, help="the file to write (.mcap or .npz)")
+    from .ros2 import add_convert_options
+
+    add_convert_options(convert)  # --profile ros2
     convert.set_defaults(func=cmd_convert)
 
 
@@ -42,6 +46,10 @@ def cmd_convert(args: argparse.Namespace) -> int:
     if source.suffix.lower() not in LOG_FORMATS:
         raise ScenarioError(str(source), "", f"unsupported file type; use {' or '.join(LOG_FORMATS)}")
     check_output("target", target, LOG_FORMATS)
+    if getattr(args, "profile", None) == "ros2":
+        from .ros2 import convert_to_bag
+
+        return convert_to_bag(source, target)
     if target.suffix.lower() == ".mcap" or source.suffix.lower() == ".mcap":
         _require_all("convert")
     from ..foxglove.convert import convert
@@ -58,50 +66,19 @@ def _require_all(option: str) -> None:
         require(module, option)
 
 
-@dataclass
-class FoxgloveOutputs:
-    """An MCAP log and/or a live server for one run, fed by one publisher."""
-
-    mcap: Any = None  # McapLogger
-    server: Any = None  # LiveServer
-    speed: float = 1.0
-    closers: list = field(default_factory=list)
-
-    def run_headless(self, sim, duration: float) -> None:
-        """Run ``sim``; paced at real time x speed while serving live."""
-        if self.server is None:
-            sim.run(duration)
-            return
-        from ..foxglove.live import run_paced
-
-        run_paced(sim, duration, self.speed)
-
-    def finish(self) -> None:
-        """Complete the MCAP file and stop the server."""
-        if self.mcap is not None:
-            self.mcap.save()
-            print(f"wrote {self.mcap.path} ({self.mcap.steps} steps)")
-            self.mcap = None
-        self.close()
-
-    def close(self) -> None:
-        """Drop an unfinished MCAP file and stop the server (after an error or Ctrl-C too)."""
-        if self.mcap is not None:
-            self.mcap.abort()
-            self.mcap = None
-        if self.server is not None:
-            self.server.stop()
-            self.server = None
+class FoxgloveOutputs(ServedOutputs):
+    """An MCAP log (``log``) and/or a live server for one run, fed by one publisher."""
 
 
 def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None:
     """Start what ``--log *.mcap`` and ``--foxglove`` ask for; None if neither."""
     live = getattr(args, "foxglove", False)
     mcap = log_path is not None and log_path.suffix.lower() == ".mcap"
-    if not live:
+    if not (live or getattr(args, "rosbridge", False)):
         for option in ("port", "host", "speed"):
             if getattr(args, option, None) is not None:
-                raise ScenarioError(f"--{option}", "", "only applies with --foxglove")
+                raise ScenarioError(f"--{option}", "", "only applies with --foxglove or "
+                                                       "--rosbridge")
     if not (live or mcap):
         return None
     _require_all("--foxglove" if live else "--log")
@@ -117,12 +94,15 @@ def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None
     context = foxglove.Context()
     try:
         if live:
+            from ..foxglove.teleop import attach_teleop  # /cmd_vel from Foxglove's Teleop panel
+
             outputs.server = LiveServer(context, args.host or DEFAULT_HOST,
-                                        DEFAULT_PORT if args.port is None else args.port)
+                                        DEFAULT_PORT if args.port is None else args.port,
+                                        teleop=attach_teleop(sim, getattr(args, "cmd_timeout", None)))
             print(f"foxglove: serving the run at {outputs.server.url} "
                   "(in Foxglove: Open connection -> Foxglove WebSocket)")
         if mcap and log_path is not None:
-            outputs.mcap = McapLogger(log_path, context).attach(sim)  # feeds the server too
+            outputs.log = McapLogger(log_path, context).attach(sim)  # feeds the server too
         else:
             SimPublisher(Publisher(context)).attach(sim)
     except BaseException:

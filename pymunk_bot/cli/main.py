@@ -16,6 +16,10 @@ from ..errors import ControllerError, ScenarioError, ScenarioWarning
 from .arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_INTERNAL_ERROR, EXIT_OK, \
     Parser, duration_seconds, seed_number
 
+DESCRIPTION = ("pymunk-bot: a 2D mobile-robot simulator on pymunk. Run, check and test "
+               "scenarios, sweep their parameters, plot and replay run logs, and convert maps.")
+
+
 def _display_available() -> bool:
     if os.environ.get("SDL_VIDEODRIVER") in ("dummy", "offscreen"):
         return False
@@ -30,7 +34,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.out is not None and (problem := writable_problem(args.out)) is not None:
         raise ScenarioError("--out", "", problem)  # before anything runs
+    from .sweep import parse_settings, scenario_with_settings
+
+    settings = parse_settings(args.assignments, one_value=True)  # before loading anything
     config = load_scenario(args.scenario)
+    if settings:
+        config = scenario_with_settings(config, args.scenario, settings)
     sim = Simulation(config, seed=args.seed, source=args.scenario)
     duration = args.duration if args.duration is not None else config.world.duration
     from .outputs import prepare_outputs
@@ -151,7 +160,7 @@ def _frame_size(text: str) -> tuple[int, int]:
 def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> None:
     parser.add_argument("--record", type=Path, metavar="VIDEO", help=record_help)
     parser.add_argument("--fps", type=float, help="video frames per second (default: 30 for "
-                                                  ".mp4, 20 for .gif)")
+                                                  ".mp4, 10 for .gif)")
     parser.add_argument("--size", type=_frame_size, metavar="WxH",
                         help="video frame size in pixels (default: fitted to the arena)")
 
@@ -159,7 +168,9 @@ def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> Non
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
 
-    parser = Parser(prog="pymunk-bot", description=__doc__)
+    parser = Parser(prog="pymunk-bot", description=DESCRIPTION,
+                    epilog="`pymunk-bot COMMAND --help` describes each command; docs/cli.md "
+                           "has them all.")
     parser.add_argument("--version", action="version", version=f"pymunk-bot {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     run = sub.add_parser("run", help="run a scenario (window if a display is available)")
@@ -169,6 +180,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="simulated seconds (default: the scenario's)")
     run.add_argument("--seed", type=seed_number, help="override the scenario's seed (an integer >= 0)")
     run.add_argument("--out", type=Path, help="write the JSON result here (atomically)")
+    run.add_argument("--set", dest="assignments", action="append", default=[],
+                     metavar="KEY.PATH=VALUE",
+                     help="change one scenario value for this run, e.g. "
+                          "robots[0].max_wheel_speed=0.8 (repeatable; the key paths and checks "
+                          "of sweep --set)")
     _add_video_options(run, "render the run offscreen to a video (.mp4 or .gif); no window")
     run.add_argument("--log", type=Path, metavar="RUN.npz|RUN.mcap",
                      help="save poses, odometry, commands and LiDAR scans over time (.mcap: "
@@ -176,9 +192,15 @@ def build_parser() -> argparse.ArgumentParser:
     from .foxglove import add_parser as add_convert_parser, add_run_options
 
     add_run_options(run)  # --foxglove --port --host --speed
+    from .ros2 import add_run_options as add_ros2_options
+
+    add_ros2_options(run)  # --profile --rosbridge --cmd-timeout
     from .map_output import add_run_options as add_map_options
 
     add_map_options(run)  # --map-out --map-robot
+    from .trajectory import add_run_options as add_trajectory_options
+
+    add_trajectory_options(run)  # --trajectory-out
     run.set_defaults(func=_cmd_run)
     plot = sub.add_parser("plot", help="plot a run log (trajectories, speed, LiDAR ranges)")
     plot.add_argument("log", type=Path, help="a run log written by `run --log`")
@@ -194,11 +216,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_video_options(replay, "render the replay to a video (.mp4 or .gif) instead")
     replay.set_defaults(func=_cmd_replay)
     validate = sub.add_parser("validate", help="check scenario files")
-    validate.add_argument("scenarios", nargs="+")
+    validate.add_argument("scenarios", nargs="+", help="scenario files or shipped names; "
+                                                        "each gets `ok: FILE` or one error line")
     validate.set_defaults(func=_cmd_validate)
     listing = sub.add_parser("list", help="list shipped scenarios")
     listing.set_defaults(func=_cmd_list)
-    bench = sub.add_parser("bench", help="measure simulation and LiDAR speed")
+    bench = sub.add_parser("bench", help="run the benchmarks: speed against bare pymunk, "
+                                         "contacts, localization, fuzzing (see --only)")
     bench.add_argument("--quick", action="store_true", help="fewer repeats")
     bench.add_argument("--only", action="append", choices=SECTION_NAMES, metavar="NAME",
                        help=f"run only this section (repeatable): {', '.join(SECTION_NAMES)}")
@@ -229,15 +253,32 @@ def _terminate(signum, frame) -> None:
     raise SystemExit(128 + signum)
 
 
+def _redelivering_interrupts(previous):
+    """An unraisable-exception hook: a Ctrl-C that lands in a C callback (numba's compiler calls
+    back into Python) would be "ignored" there with a traceback; it is delivered to the main
+    thread again instead. Everything else goes to ``previous``."""
+    def hook(info) -> None:
+        if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+            import _thread
+
+            _thread.interrupt_main()
+            return
+        previous(info)
+
+    return hook
+
+
 def main(argv: list[str] | None = None) -> int:
     """The `pymunk-bot` entry point; returns the exit status (see docs/cli.md)."""
-    args = build_parser().parse_args(argv)
     previous = None
     try:
         previous = signal.signal(signal.SIGTERM, _terminate)
     except ValueError:  # not the main thread: leave signals alone
         pass
-    try:
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = _redelivering_interrupts(unraisable)
+    try:  # the parser too: building it imports most of pymunk-bot (Ctrl-C may come then)
+        args = build_parser().parse_args(argv)
         with warnings.catch_warnings():
             warnings.simplefilter("always", ScenarioWarning)
             warnings.showwarning = _show_warning
@@ -263,6 +304,7 @@ def main(argv: list[str] | None = None) -> int:
               "please report it with the traceback above)", file=sys.stderr)
         return EXIT_INTERNAL_ERROR
     finally:
+        sys.unraisablehook = unraisable
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
 

@@ -25,9 +25,10 @@ def add_parser(sub) -> None:
     map_cmd.set_defaults(func=cmd_map)
     gen = sub.add_parser("generate", help="write a random, solvable scenario (maze, clutter, "
                                           "office) for benchmarking controllers")
-    gen.add_argument("kind", choices=KINDS)
+    gen.add_argument("kind", choices=KINDS, help=f"the kind of world: {', '.join(KINDS)}")
     gen.add_argument("--seed", type=int, default=0, help="the same seed gives the same file")
-    gen.add_argument("-o", "--out", type=Path, required=True, metavar="WORLD.yaml")
+    gen.add_argument("-o", "--out", type=Path, required=True, metavar="WORLD.yaml",
+                     help="the scenario file to write")
     gen.add_argument("--size", type=float, nargs=2, metavar=("W", "H"),
                      help="arena width and height [m] (default depends on the kind)")
     gen.set_defaults(func=cmd_generate)

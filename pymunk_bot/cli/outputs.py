@@ -18,6 +18,8 @@ from .arguments import check_output
 if TYPE_CHECKING:
     from .foxglove import FoxgloveOutputs
     from .map_output import MapOutput
+    from .trajectory import TrajectoryOutput
+    from .ros2 import Ros2Outputs
     from ..runlog import RunLogger
 
 VIDEO_FORMATS = (".mp4", ".gif")
@@ -67,11 +69,15 @@ class RunOutputs:
     log_path: Path | None = None
     logger: RunLogger | None = None
     foxglove: FoxgloveOutputs | None = None  # an MCAP log and/or a live server
+    ros2: Ros2Outputs | None = None  # a ROS 2 bag and/or a rosbridge server
     map_out: MapOutput | None = None  # the map a robot built (--map-out)
+    trajectory: TrajectoryOutput | None = None  # TUM trajectories (--trajectory-out)
 
     def run_headless(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` (paced at real time while serving Foxglove live)."""
-        if self.foxglove is not None:
+        if self.ros2 is not None and (self.ros2.live or self.foxglove is None):
+            self.ros2.run_headless(sim, duration)  # paced while serving rosbridge
+        elif self.foxglove is not None:
             self.foxglove.run_headless(sim, duration)
         else:
             sim.run(duration)
@@ -80,6 +86,8 @@ class RunOutputs:
         """After an error or Ctrl-C: drop unfinished files, stop servers."""
         if self.foxglove is not None:
             self.foxglove.close()
+        if self.ros2 is not None:
+            self.ros2.close()
 
     def record_run(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
@@ -101,6 +109,8 @@ class RunOutputs:
         """Write the run log and the built map (--map-out), if asked for."""
         if self.map_out is not None and sim is not None:
             self.map_out.save(sim)
+        if self.trajectory is not None and sim is not None:
+            self.trajectory.save(sim)
         if self.logger is not None:
             if self.log_path is None:
                 raise RuntimeError("a run logger needs its log path (--log)")
@@ -109,14 +119,18 @@ class RunOutputs:
             print(f"wrote {self.log_path} ({steps} steps)")
         if self.foxglove is not None:
             self.foxglove.finish()
+        if self.ros2 is not None:
+            self.ros2.finish()
 
 
 def prepare_outputs(args, sim) -> RunOutputs:
     """Check --record/--fps/--size/--log before the run and start the logger."""
     from .map_output import prepare_map_output
+    from .trajectory import prepare_trajectory_output
 
     outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size,
-                         map_out=prepare_map_output(args, sim))
+                         map_out=prepare_map_output(args, sim),
+                         trajectory=prepare_trajectory_output(args, sim))
     if args.log is not None:
         from ..runlog import RunLogger
 
@@ -125,7 +139,15 @@ def prepare_outputs(args, sim) -> RunOutputs:
             outputs.logger = RunLogger().attach(sim)
     from .foxglove import prepare_foxglove
 
-    outputs.foxglove = prepare_foxglove(args, sim, outputs.log_path)  # .mcap, --foxglove
+    from .ros2 import prepare_ros2, wants_ros2_bag
+
+    outputs.ros2 = prepare_ros2(args, sim, outputs.log_path)  # --profile ros2, --rosbridge
+    foxglove_log = None if wants_ros2_bag(args) else outputs.log_path
+    try:
+        outputs.foxglove = prepare_foxglove(args, sim, foxglove_log)  # .mcap, --foxglove
+    except BaseException:
+        outputs.close()  # a rosbridge server already started
+        raise
     return outputs
 
 

@@ -2,11 +2,14 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from ..scenario_tests import discover, format_table, run_all
+from ..errors import ControllerError
+from ..scenario_tests import Outcome, discover, format_table, run_scenario
 from .arguments import jobs_count, seed_number
 
 
@@ -22,7 +25,10 @@ def command(args: argparse.Namespace) -> int:
         print(f"no scenario files with an 'expect' block under {', '.join(map(str, specs))}")
         return 0
     started = time.perf_counter()
-    outcomes = run_all(paths, seed=args.seed, jobs=args.jobs)
+    from ..controllers.python import batch_budget
+
+    with batch_budget():
+        outcomes = _run_with_progress(paths, args.seed, args.jobs)
     print(format_table(outcomes))
     counts = {s: sum(o.status == s for o in outcomes) for s in ("passed", "failed", "error")}
     print(f"{counts['passed']} passed, {counts['failed']} failed, {counts['error']} invalid "
@@ -31,6 +37,39 @@ def command(args: argparse.Namespace) -> int:
     if counts["error"]:
         return 2
     return 1 if counts["failed"] else 0
+
+
+def _run_with_progress(paths: list[Path], seed: int | None, jobs: int | None) -> list[Outcome]:
+    """Every file's outcome (in the order given), in parallel over ``jobs`` processes (default:
+    the CPU count), one line on stderr as each finishes; a controller bug fails its scenario."""
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(paths)))
+    outcomes: dict[int, Outcome] = {}
+
+    def done(k: int, outcome: Outcome) -> None:
+        outcomes[k] = outcome
+        label = "ok" if outcome.passed else outcome.status.upper()
+        print(f"[{len(outcomes)}/{len(paths)}] {outcome.name or paths[k].stem}: {label} "
+              f"({outcome.wall_time:.1f} s)", file=sys.stderr, flush=True)
+
+    if jobs == 1:
+        for k, path in enumerate(paths):
+            done(k, _run_guarded(str(path), seed))
+    else:
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            futures = {pool.submit(_run_guarded, str(path), seed): k for k, path in enumerate(paths)}
+            for future in as_completed(futures):
+                done(futures[future], future.result())
+    return [outcomes[k] for k in range(len(paths))]
+
+
+def _run_guarded(path: str, seed: int | None) -> Outcome:
+    """:func:`run_scenario`, with a controller's bug (or overrun) as the scenario's failure."""
+    started = time.perf_counter()
+    try:
+        return run_scenario(path, seed=seed)
+    except ControllerError as exc:
+        return Outcome(path, status="failed", failures=[f"controller {exc}"],
+                       wall_time=time.perf_counter() - started)
 
 
 def _default_specs() -> list[str]:

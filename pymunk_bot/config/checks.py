@@ -38,11 +38,26 @@ def check_seed(seed: object) -> int | None:
 
 def check(scenario: ScenarioConfig) -> None:
     """Raise SemanticError for the first problem found."""
-    width, height = _arena_size(scenario)
+    extent = _arena_extent(scenario)
     for i, obstacle in enumerate(scenario.obstacles):
-        _check_obstacle_in_arena(i, obstacle, width, height)
+        _check_obstacle_in_arena(i, obstacle, extent)
     for i, robot in enumerate(scenario.robots):
         _check_controller(i, robot, scenario)
+    _check_events(scenario, extent)
+
+
+def _check_events(scenario: ScenarioConfig, extent: tuple[float, float, float, float]) -> None:
+    """Every event names a robot of the scenario and teleports it inside the arena."""
+    names = [r.name for r in scenario.robots]
+    for k, event in enumerate(scenario.events):
+        if event.robot not in names:
+            from .messages import did_you_mean
+            raise SemanticError(("events", k, "robot"), f"no robot '{event.robot}' in the "
+                                f"scenario{did_you_mean(event.robot, names)}")
+        if _outside(event.teleport[:2], extent):
+            x, y = event.teleport[:2]
+            raise SemanticError(("events", k, "teleport"), f"({x:g}, {y:g}) is outside the "
+                                f"arena {_span(extent)}")
 
 
 def _arena_size(scenario: ScenarioConfig) -> tuple[float, float]:
@@ -53,7 +68,18 @@ def _arena_size(scenario: ScenarioConfig) -> tuple[float, float]:
     return width, height
 
 
-def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) -> None:
+def _arena_extent(scenario: ScenarioConfig) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1) [m] of the arena: [0, w] x [0, h], or a map's extent (its ``origin``)."""
+    _arena_size(scenario)  # the clear error when neither size nor map is given
+    return scenario.world.extent
+
+
+def _span(extent: tuple[float, float, float, float]) -> str:
+    x0, y0, x1, y1 = extent
+    return f"[{x0:g}, {x1:g}] x [{y0:g}, {y1:g}]"
+
+
+def _check_obstacle_in_arena(index: int, obstacle, extent: tuple[float, float, float, float]) -> None:
     if is_round(obstacle):
         (cx, cy), r = obstacle.center, obstacle.radius
         low, high = np.array([cx - r, cy - r]), np.array([cx + r, cy + r])
@@ -62,27 +88,29 @@ def _check_obstacle_in_arena(index: int, obstacle, width: float, height: float) 
         if outline is None:  # every obstacle but a circle has an outline
             raise SemanticError(("obstacles", index), f"unknown obstacle type {obstacle.type!r}")
         low, high = outline.min(axis=0), outline.max(axis=0)
-    if high[0] <= 0 or high[1] <= 0 or low[0] >= width or low[1] >= height:
+    x0, y0, x1, y1 = extent
+    if high[0] <= x0 or high[1] <= y0 or low[0] >= x1 or low[1] >= y1:
         raise SemanticError(
             ("obstacles", index),
-            f"{obstacle.type} lies outside the arena [0, {width:g}] x [0, {height:g}] "
+            f"{obstacle.type} lies outside the arena {_span(extent)} "
             f"(it spans [{low[0]:g}, {high[0]:g}] x [{low[1]:g}, {high[1]:g}])")
 
 
-def _outside(point, width: float, height: float) -> bool:
-    return not (0 <= point[0] <= width and 0 <= point[1] <= height)
+def _outside(point, extent: tuple[float, float, float, float]) -> bool:
+    x0, y0, x1, y1 = extent
+    return not (x0 <= point[0] <= x1 and y0 <= point[1] <= y1)
 
 
 def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
     controller = robot.controller
     loc = ("robots", index, "controller")
-    width, height = _arena_size(scenario)
+    extent = _arena_extent(scenario)
     if isinstance(controller, WaypointsControllerConfig):
         for k, point in enumerate(controller.points):
-            if _outside(point, width, height):
+            if _outside(point, extent):
                 raise SemanticError(loc + ("points", k),
                                     f"({point[0]:g}, {point[1]:g}) is outside the arena "
-                                    f"[0, {width:g}] x [0, {height:g}]")
+                                    f"{_span(extent)}")
     needs_goal = (GoToGoalControllerConfig, AvoidControllerConfig, NavigateControllerConfig)
     if isinstance(controller, needs_goal) and controller.goal is None and robot.goal is None:
         raise SemanticError(loc, f"{controller.type} needs a goal: set controller.goal or the "

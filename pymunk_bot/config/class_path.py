@@ -44,17 +44,39 @@ def check_class_path(class_path: str, base_dir: str | Path | None = None) -> Non
     """
     module_name, _, attr = class_path.partition(":")
     home = module_home(module_name, base_dir)
-    origin = _find_source(module_name, home)
-    if origin is None:
-        raise ValueError(f"cannot import module '{module_name}': not found next to the scenario, "
-                         "in the folders above it, the current folder or sys.path")
-    if origin.suffix != ".py" or "." in attr:
-        return  # compiled or nested: checked when the simulation imports it
-    try:
-        tree = ast.parse(origin.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, SyntaxError, ValueError) as exc:
-        raise ValueError(f"cannot read '{origin}': {type(exc).__name__}: {exc}") from None
-    _check_source(tree, module_name, attr, class_path)
+    for _ in range(MAX_REEXPORTS + 1):
+        origin = _find_source(module_name, home)
+        if origin is None:
+            raise ValueError(f"cannot import module '{module_name}': not found next to the "
+                             "scenario, in the folders above it, the current folder or sys.path")
+        if origin.suffix != ".py" or "." in attr:
+            return  # compiled or nested: checked when the simulation imports it
+        try:
+            tree = ast.parse(origin.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, SyntaxError, ValueError) as exc:
+            raise ValueError(f"cannot read '{origin}': {type(exc).__name__}: {exc}") from None
+        source = _reexported_from(tree, module_name, origin, attr)
+        if source is None:
+            _check_source(tree, module_name, attr, class_path)
+            return
+        module_name = source  # `from .base import Controller`: the class is defined there
+
+
+MAX_REEXPORTS = 3  # `from .x import Name` links followed to the class's own module
+
+
+def _reexported_from(tree: ast.Module, module_name: str, origin: Path, attr: str) -> str | None:
+    """The module ``attr`` is imported from in this module's top level (None: not imported by
+    a ``from ... import``, or not defined by one)."""
+    package = module_name if origin.name == "__init__.py" else module_name.rpartition(".")[0]
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom) and any((a.asname or a.name) == attr and a.name == attr
+                                                    for a in node.names):
+            if node.level == 0:
+                return node.module
+            base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+            return f"{base}.{node.module}" if node.module else base
+    return None
 
 
 def _find_source(module_name: str, home: Path | None) -> Path | None:
@@ -76,11 +98,20 @@ def _find_source(module_name: str, home: Path | None) -> Path | None:
     return Path(spec.origin) if spec.origin else Path(os.devnull)
 
 
+def _abstract(function: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
+    """A method whose body only raises NotImplementedError (after its docstring)."""
+    body = [n for n in function.body
+            if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant))]
+    return (len(body) == 1 and isinstance(body[0], ast.Raise) and body[0].exc is not None
+            and "NotImplementedError" in ast.unparse(body[0].exc))
+
+
 def _check_source(tree: ast.Module, module_name: str, attr: str, class_path: str) -> None:
     for node in tree.body:
         if isinstance(node, ast.ClassDef) and node.name == attr:
             own = {n.name for n in node.body if isinstance(n, (ast.FunctionDef,
-                                                               ast.AsyncFunctionDef))}
+                                                               ast.AsyncFunctionDef))
+                   and not _abstract(n)}
             bases = {ast.unparse(b).rsplit(".", 1)[-1] for b in node.bases}
             if "compute" not in own and bases <= {"Controller", "object"}:
                 raise ValueError(f"'{class_path}' has no compute(observation) method of its own")

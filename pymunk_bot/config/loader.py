@@ -99,8 +99,8 @@ def scenario_data(config: ScenarioConfig, exclude_unset: bool = False) -> dict:
     data = config.model_dump(exclude_unset=exclude_unset)
     if config.world.map is not None:
         data["world"].pop("size", None)
-        if config.world._map_path is not None:
-            data["world"]["map"] = config.world._map_path
+        if config.world.map_path is not None:
+            data["world"]["map"] = config.world.map_path
     return data
 
 

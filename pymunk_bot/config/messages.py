@@ -96,12 +96,23 @@ def did_you_mean(word: str, choices: typing.Iterable[str]) -> str:
     return f" (did you mean '{match[0]}'?)" if match else ""
 
 
+MAX_ECHO = 80  # [characters] of a user's value quoted back in a message
+
+
+def clip(text: str, limit: int = MAX_ECHO) -> str:
+    """``text`` cut to ``limit`` characters, saying how long it was: a message quoting a user's
+    value stays one readable line however long the value."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text):,} characters)"
+
+
 def _shown(value: Any) -> str:
     if isinstance(value, str):
-        return repr(value)
+        return clip(repr(value))
     if isinstance(value, (dict, list)) and len(repr(value)) > 40:
         return type(value).__name__
-    return repr(value) if not isinstance(value, float) else f"{value:g}"
+    return clip(repr(value)) if not isinstance(value, float) else f"{value:g}"
 
 
 def describe(error: dict, owner: type[BaseModel] | None) -> str:

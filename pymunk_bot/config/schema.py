@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, PrivateAttr
 
+from .events import EventList
 from ..localization.config import MappingConfig
 from .footprint import FootprintConfig
 from .motion import MotionConfig
@@ -33,11 +34,23 @@ class WorldConfig(Section):
     map: str | None = None  # ROS map YAML or SVG plan, relative to the scenario file
     map_scale: PositiveFloat | None = None  # SVG only: metres per SVG user unit (default 0.01)
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
-    # pymunk steps per dt; None = computed so nothing tunnels
-    substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | None = None
+    # pymunk steps per dt; None = computed so nothing tunnels; "adaptive" = that count, taken
+    # only in ticks where a contact can start (one pymunk step in the others)
+    substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | Literal["adaptive"] | None = None
     duration: Duration = 30.0  # default run length [s]
     wall_friction: Friction = 0.5  # contact friction of the arena walls
     _map_path: str | None = PrivateAttr(default=None)  # ``map`` resolved (config.world_map)
+
+    @property
+    def map_path(self) -> str | None:
+        """The absolute path ``map`` resolved to (None before it is, or without a map)."""
+        return self._map_path
+
+    def with_map_path(self, path: str, size: tuple[float, float]) -> "WorldConfig":
+        """A copy of this world with ``map`` resolved to ``path`` and the map's ``size`` [m]."""
+        sized = self.model_copy(update={"size": size})
+        sized._map_path = path
+        return sized
 
     @property
     def extent(self) -> tuple[float, float, float, float]:
@@ -210,6 +223,7 @@ class ScenarioConfig(Section):
     obstacles: Annotated[list[Any], Field(max_length=MAX_OBSTACLES)] = []  # registered kinds' sections
     robots: list[RobotConfig] = Field(min_length=1, max_length=MAX_ROBOTS)
     expect: dict[str, RobotExpectation] = {}
+    events: EventList = []  # things that happen at a simulated time (config/events.py)
 
     @classmethod
     def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> "ScenarioConfig":

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import geometry as geo
 from ..footprint import of_robot, transform
@@ -97,6 +98,9 @@ def check_footprint_polygon(loc: tuple, points) -> None:
         raise SemanticError(loc, "degenerate polygon: edges cross each other")
     if abs(geo.signed_area(points)) < 1e-9:
         raise SemanticError(loc, "degenerate polygon: zero area")
+    if geo.thinness(points) < 1e-9:  # a pinch has no width: nothing could stop at it
+        raise SemanticError(loc, "degenerate polygon: the outline touches itself (a point repeats "
+                                 "another or lies on an edge)")
 
 
 def _check_wall(index: int, wall: WallObstacle) -> None:
@@ -104,9 +108,53 @@ def _check_wall(index: int, wall: WallObstacle) -> None:
         raise SemanticError(("obstacles", index, "end"), "wall has zero length (start == end)")
 
 
-def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
+def _start_neighbours(scenario: ScenarioConfig, feet: list) -> tuple[list[list[int]],
+                                                                     list[list[int]]]:
+    """For each robot, the obstacles and the earlier robots whose bounding discs its own
+    footprint's disc overlaps at the start (ascending): all the start checks need look at.
+    A k-d tree finds them, so a swarm's checks grow as n log n, not n^2."""
+    n = len(scenario.robots)
+    poses = np.array([r.pose for r in scenario.robots], dtype=float).reshape(n, 3)
+    local = np.array([f.center for f in feet], dtype=float).reshape(n, 2)
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    with np.errstate(invalid="ignore"):  # a degenerate footprint fails its own check first
+        centres = np.column_stack((poses[:, 0] + c * local[:, 0] - s * local[:, 1],
+                                   poses[:, 1] + s * local[:, 0] + c * local[:, 1]))
+    radii = np.array([f.radius for f in feet], dtype=float)
+    valid = np.flatnonzero(np.isfinite(centres).all(axis=1) & np.isfinite(radii))
+    robots: list[list[int]] = [[] for _ in range(n)]
+    obstacles: list[list[int]] = [[] for _ in range(n)]
+    if valid.shape[0] == 0:
+        return obstacles, robots
+    centres, radii = centres[valid], radii[valid]
+    tree = cKDTree(centres)
+    for a, b in sorted(tree.query_pairs(2.0 * float(radii.max()) + 1e-6)):
+        if math.dist(centres[a], centres[b]) <= radii[a] + radii[b] + 1e-6:
+            i, k = int(valid[max(a, b)]), int(valid[min(a, b)])
+            robots[i].append(k)
+    for k, obstacle in enumerate(scenario.obstacles):
+        if is_round(obstacle):
+            centre, reach = np.asarray(obstacle.center, dtype=float), float(obstacle.radius)
+        else:
+            outline = obstacle_outline(obstacle)
+            if outline is None:  # a kind with no outline: every robot is checked against it
+                for near in obstacles:
+                    near.append(k)
+                continue
+            centre = outline.mean(axis=0)
+            reach = float(np.hypot(*(outline - centre).T).max())
+        for j in tree.query_ball_point(centre, reach + float(radii.max()) + 1e-6):
+            if math.dist(centres[j], centre) <= reach + radii[j] + 1e-6:
+                obstacles[int(valid[j])].append(k)
+    for near in robots:
+        near.sort()
+    return obstacles, robots
+
+
+def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig, feet: list,
+                       near_obstacles: list[int], near_robots: list[int]) -> None:
     x, y, _ = robot.pose
-    footprint = of_robot(robot)
+    footprint = feet[index]
     geometry = scenario.world.map_geometry()
     if geometry is not None:  # the disc that holds the footprint must start in free space
         from .world_map import disc_problem
@@ -131,14 +179,17 @@ def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig)
                 ("robots", index, "pose"),
                 f"{what} at ({x:g}, {y:g}) is not inside the arena "
                 f"[0, {width:g}] x [0, {height:g}]")
-    for k, obstacle in enumerate(scenario.obstacles):
+    for k in near_obstacles:
+        obstacle = scenario.obstacles[k]
         if footprint_hits(footprint, robot.pose, obstacle):
             raise SemanticError(
                 ("robots", index, "pose"),
                 f"robot starts inside obstacles[{k}] ({obstacle.type})")
-    for k, other in enumerate(scenario.robots[:index]):
-        if footprints_overlap(footprint, robot.pose, of_robot(other), other.pose):
-            raise SemanticError(("robots", index, "pose"), f"robot overlaps robots[{k}] ({other.name})")
+    for k in near_robots:
+        other = scenario.robots[k]
+        if footprints_overlap(footprint, robot.pose, feet[k], other.pose):
+            raise SemanticError(("robots", index, "pose"),
+                                f"robot overlaps robots[{k}] ({other.name})")
 
 
 def _check_sideways(index: int, robot: RobotConfig) -> None:
@@ -170,7 +221,9 @@ def _check_localization(index: int, robot: RobotConfig, scenario: ScenarioConfig
     """A localizer or mapping the robot cannot run (no LiDAR, too large a map) is bad input."""
     from ..localization.checks import check_localizer, check_mapping
     try:
-        check_localizer(robot.localization, robot, has_map=True)  # the scenario is its map
+        x0, y0, x1, y1 = scenario.world.extent
+        check_localizer(robot.localization, robot, has_map=True,  # the scenario is its map
+                        arena=(x1 - x0, y1 - y0))
     except ValueError as exc:
         raise SemanticError(("robots", index, "localization"), str(exc)) from None
     if robot.mapping is not None:
@@ -189,6 +242,9 @@ def check(scenario: ScenarioConfig) -> None:
             _check_wall(i, obstacle)
         check_mover(i, obstacle, scenario)
     names: dict[str, int] = {}
+    with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate one fails its check
+        feet = [of_robot(robot) for robot in scenario.robots]
+    near_obstacles, near_robots = _start_neighbours(scenario, feet)
     for i, robot in enumerate(scenario.robots):
         if robot.name in names:
             raise SemanticError(("robots", i, "name"),
@@ -201,7 +257,7 @@ def check(scenario: ScenarioConfig) -> None:
         footprint = getattr(robot, "footprint", None)
         if footprint is not None and footprint.type == "polygon":
             check_footprint_polygon(("robots", i, "footprint", "points"), footprint.points)
-        _check_robot_start(i, robot, scenario)
+        _check_robot_start(i, robot, scenario, feet, near_obstacles[i], near_robots[i])
         _check_localization(i, robot, scenario)
         _check_sideways(i, robot)
         if robot.goal is not None:
@@ -212,10 +268,18 @@ def check(scenario: ScenarioConfig) -> None:
         if scenario.world.map is not None:  # on a map, waypoints must lie in free space too
             for k, point in enumerate(getattr(robot.controller, "points", None) or ()):
                 _check_point_in_arena(("robots", i, "controller", "points", k), point, scenario)
-    if scenario.world.substeps is None:
+    if not isinstance(scenario.world.substeps, int):  # None or adaptive: computed
         from .schema import MAX_SUBSTEPS
-        from .substeps import required_substeps
+        from .substeps import hardest_shove, required_substeps
         needed = required_substeps(scenario)
+        shove = hardest_shove(scenario)
+        if shove is not None and shove.substeps > MAX_SUBSTEPS:
+            raise SemanticError(
+                ("obstacles", shove.obstacle, "mass"),
+                f"{shove.mass:g} kg is too light to be pushed by a {shove.pusher_mass:g} kg body "
+                f"at {shove.speed:.3g} m/s with world.dt = {scenario.world.dt:.4g} s: the solver "
+                f"would need {shove.substeps} substeps (at most {MAX_SUBSTEPS}) to keep it out of "
+                f"walls; make it heavier, or lower world.dt or the speed")
         if needed > MAX_SUBSTEPS:
             fastest = max(range(len(scenario.robots)),
                           key=lambda i: scenario.robots[i].top_speed())

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,6 +20,9 @@ def substeps_against_tunnelling(dt: float, max_speed: float, robot_radius: float
     middle within one substep, i.e. when ``v * dt / k > r + w``. We keep a factor ``safety`` below.
     """
     depth = robot_radius + thinnest_half_width
+    if not depth > 0:  # the checks refuse shapes without width; this guards other callers
+        raise ValueError(f"collision depth must be > 0 (radius {robot_radius:g} m + half width "
+                         f"{thinnest_half_width:g} m)")
     return max(1, math.ceil(max_speed * dt * safety / depth))
 
 
@@ -42,6 +46,42 @@ def substeps_against_overlap(dt: float, closing_speed: float, step: float = CONT
     """Smallest substep count so that bodies closing at ``closing_speed`` [m/s] first touch
     with at most ``step`` [m] of overlap."""
     return max(1, math.ceil(closing_speed * dt / step))
+
+
+def shove_factor(mass_ratio: float) -> float:
+    """How many times its substep's travel a light body shoved into a wall by one ``mass_ratio``
+    times heavier sinks in. The solver's iterations pass the pusher's impulse through the light
+    body a little at a time, so the squeeze grows with the ratio (measured with
+    tests/trust/test_physics_inputs.py's crate trials: about sqrt(ratio) / 6 from 30:1 to 3000:1
+    at 0.5 .. 3 m/s; 1 below 25:1)."""
+    return max(1.0, math.sqrt(mass_ratio) / 5.0)
+
+
+@dataclass(frozen=True)
+class Shove:
+    """The hardest push in a scenario: the lightest movable obstacle shoved by the heaviest body
+    that can push it, and the substeps that keep it out of a wall."""
+
+    obstacle: int  # index in ``scenario.obstacles``
+    mass: float  # [kg] of that obstacle
+    pusher_mass: float  # [kg]
+    speed: float  # [m/s] the fastest it can be shoved
+    substeps: int
+
+
+def hardest_shove(scenario: ScenarioConfig) -> Shove | None:
+    """The push that needs most substeps, or None without movable obstacles."""
+    movable = [(i, o) for i, o in enumerate(scenario.obstacles) if getattr(o, "movable", False)]
+    if not movable:
+        return None
+    walkers = [o for o in scenario.obstacles if getattr(o, "type", "") == "pedestrian"]
+    heaviest = max([r.mass for r in scenario.robots] + [o.mass for _, o in movable]
+                   + [o.mass for o in walkers])
+    speed = max([r.top_speed() for r in scenario.robots] + [mover_speed(o) for o in walkers])
+    index, lightest = min(movable, key=lambda item: item[1].mass)
+    factor = shove_factor(heaviest / lightest.mass)
+    needed = substeps_against_overlap(scenario.world.dt, speed * factor, PUSHING_CONTACT_STEP)
+    return Shove(index, lightest.mass, heaviest, speed, needed)
 
 
 def map_half_widths(scenario: ScenarioConfig) -> list[float]:
@@ -79,7 +119,8 @@ def required_substeps(scenario: ScenarioConfig) -> int:
 
     Everything that moves counts: robots (by their footprint's thinnest extent), the bodies they
     push (a pushed body moves no faster than its pusher, so the fastest robot bounds it; the
-    smallest movable obstacle is what must not skip through the thinnest wall), and scripted
+    smallest movable obstacle is what must not skip through the thinnest wall, and the lightest
+    must not be squeezed into it by the heaviest pusher: :func:`hardest_shove`), and scripted
     movers and pedestrians closing on a robot."""
     from ..footprint import of_robot
     dt = scenario.world.dt
@@ -98,6 +139,9 @@ def required_substeps(scenario: ScenarioConfig) -> int:
                    substeps_against_tunnelling(dt, closing, smallest, smallest),
                    substeps_against_overlap(dt, closing, PUSHING_CONTACT_STEP if any(
                        getattr(o, "movable", False) for o in scenario.obstacles) else CONTACT_STEP))
+    shove = hardest_shove(scenario)
+    if shove is not None:
+        substeps = max(substeps, shove.substeps)
     for obstacle, speed in zip(scenario.obstacles, scripted):
         if speed > 0:
             substeps = max(substeps, substeps_against_tunnelling(

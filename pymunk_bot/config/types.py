@@ -38,7 +38,7 @@ Vec2 = tuple[Coordinate, Coordinate]
 Pose = tuple[Coordinate, Coordinate, Angle]
 # Counts that size memory or time.
 MAX_OBSTACLES = 2000
-MAX_ROBOTS = 5000  # a swarm; memory and time grow linearly
+MAX_ROBOTS = 20_000  # a swarm; memory and time grow linearly (checks as n log n)
 MAX_POLYGON_POINTS = 2000
 MAX_WAYPOINTS = 1000
 MAX_BEAMS = 4096

@@ -71,14 +71,13 @@ def attach_map(config: ScenarioConfig, source: str, node: Any = None) -> Scenari
     if not (0 < width <= MAX_EXTENT and 0 < height <= MAX_EXTENT):
         raise fail("map", f"the map is {width:g} x {height:g} m; each side must be at most "
                           f"{MAX_EXTENT:g} m")
-    sized = world.model_copy(update={"size": (float(width), float(height))})
-    sized._map_path = str(path.resolve())
+    sized = world.with_map_path(str(path.resolve()), (float(width), float(height)))
     return config.model_copy(update={"world": sized})
 
 
 def map_geometry(world: WorldConfig) -> Any:
     """The loaded map of a world that ``attach_map`` resolved (from the cache when unchanged)."""
-    path = world._map_path
+    path = world.map_path
     if path is None:  # a WorldConfig built by hand: resolve against the current directory
         if world.map is None:
             raise ValueError("the world has no map")

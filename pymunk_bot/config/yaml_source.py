@@ -172,6 +172,12 @@ def parse_yaml(text: str, source: str) -> tuple[Any, yaml.Node | None]:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
         problem = exc.problem or exc.context or "invalid YAML"
+        opened = exc.context_mark
+        if "flow" in (exc.context or "") and opened is not None and line is not None \
+                and opened.line + 1 < line:  # PyYAML notices an unclosed [ or { a line later
+            what = (exc.context or "").removeprefix("while parsing ")
+            problem = f"{what} is not closed ({problem} on line {line})"
+            line = opened.line + 1
         if not isinstance(exc, yaml.constructor.ConstructorError):
             problem = f"YAML syntax error: {problem}"
         raise ScenarioError(source, "", problem, line) from None

@@ -12,6 +12,7 @@ from ..command import STOP, Command
 from ..drives.diff import wheel_speeds
 from ..plugins import controllers
 from ..readings import LaserScan, Observation, RobotSpec
+from .localizing import LOCALIZING, localizing_command
 
 __all__ = ["STOP", "Command", "Controller", "LaserScan", "Observation", "RobotSpec", "controllers",
            "wheel_speeds"]
@@ -26,6 +27,7 @@ class Controller:
 
     rate: float = 10.0  # [Hz]
     needs_map: bool = False  # True: the simulation calls set_map() before the first compute()
+    _localizing_since: float | None = None  # [s] when the estimate last became untrustworthy
 
     def __init__(self, config=None, robot: RobotSpec | None = None) -> None:
         """Built-in controllers pass their config and robot: that sets ``config``, ``rate`` and
@@ -42,6 +44,22 @@ class Controller:
     def compute(self, obs: Observation) -> Command | tuple[float, float]:
         """The body velocity for the next control period (or diff wheel speeds, left and right)."""
         raise NotImplementedError
+
+    def hold_until_localized(self, obs: Observation) -> Command | None:
+        """Localize before driving: while the estimate is not trustworthy (``obs.localized``
+        False: a global start, a kidnapping, a spread above the localizer's bounds) the robot
+        turns once on the spot, then explores on its LiDAR alone (controllers/localizing.py),
+        or stands still if it cannot turn in place without sweeping its outline over
+        something. Returns that command, or None once it may drive."""
+        if getattr(obs, "localized", True):
+            if self.message == LOCALIZING:
+                self.message = ""
+            self._localizing_since = None
+            return None
+        if self._localizing_since is None:
+            self._localizing_since = obs.time
+        self.message = LOCALIZING
+        return localizing_command(obs, obs.time - self._localizing_since)
 
     def set_map(self, world_map) -> None:
         """Receive the scenario's map (a :class:`pymunk_bot.planning.MapInfo`) if ``needs_map``."""

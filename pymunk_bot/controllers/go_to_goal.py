@@ -35,6 +35,9 @@ class GoToGoalController(Controller):
         if goal is None:
             self.status, self.message = "failed", "no goal: set controller.goal or the robot's goal"
             return STOP
+        hold = self.hold_until_localized(obs)  # localize before driving (Controller)
+        if hold is not None:
+            return hold
         x, y, theta = obs.pose
         dx, dy = goal[0] - x, goal[1] - y
         distance = math.hypot(dx, dy)

@@ -84,6 +84,9 @@ class NavigateController(Controller):
             return self._fail("no goal: set controller.goal or the robot's goal", permanent=True)
         if self.static is None:
             return self._fail("no map (the simulation did not call set_map)", permanent=True)
+        hold = self.hold_until_localized(obs)  # localize before driving (Controller)
+        if hold is not None:
+            return hold
         goal = (float(goal[0]), float(goal[1]))
         if goal != self._goal:
             self._reset(goal)

@@ -8,106 +8,125 @@ Where the module is looked for: next to the scenario file, then in the folders a
 the current folder, then ``sys.path``. Validation only *finds* the module and reads its source
 (no user code runs); the simulation imports it, with the found folder on ``sys.path`` only
 for the import. A bug in the user's code (an exception in its import, constructor or
-``compute``) is a :class:`~pymunk_bot.errors.ControllerError` carrying its traceback, not
-bad input.
+``compute``, ``sys.exit()`` included) is a :class:`~pymunk_bot.errors.ControllerError` carrying
+its traceback, not bad input.
+
+Time budget: when the environment variable ``PYMUNK_BOT_CALL_BUDGET`` holds a number of seconds,
+each call into user code (the import, the constructor, every ``compute``) may take at most that
+long; a call that overruns is stopped and fails the run with a ``ControllerError`` naming the
+controller. ``pymunk-bot test`` and ``pymunk-bot sweep`` set it to ``BATCH_CALL_BUDGET`` (10 s)
+unless it is set already (``0`` turns it off); interactive runs and the Python API have no
+budget unless the variable is set. A call stuck in C code that ignores signals (and, in threads
+other than the main one, a blocking call) is only stopped when it returns to Python.
 """
 from __future__ import annotations
 
-import ast
 import importlib
-import importlib.machinery
-import importlib.util
+import contextlib
+import ctypes
 import inspect
 import math
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
+from ..config.class_path import module_home
 from ..config.controllers import PythonControllerConfig
 from ..errors import ControllerError
 from .base import Command, Controller, Observation, RobotSpec
 
 
-def search_dirs(base_dir: str | Path | None) -> list[Path]:
-    """The scenario's folder and those above it, then the current folder."""
-    dirs = []
-    if base_dir is not None:
-        base = Path(base_dir).resolve()
-        dirs += [base, *base.parents]
-    dirs.append(Path(os.getcwd()))
-    return dirs
+CALL_BUDGET_ENV = "PYMUNK_BOT_CALL_BUDGET"
+BATCH_CALL_BUDGET = 10.0  # [s] per call into user code in `test` and `sweep` runs
 
 
-def module_home(module_name: str, base_dir: str | Path | None) -> Path | None:
-    """The first search folder holding the module's top-level package (None: use sys.path)."""
-    top = module_name.split(".")[0]
-    if top in sys.modules or top == "pymunk_bot":
+class _Overran(BaseException):
+    """Raised into user code that ran past its budget (a BaseException: a user's ``except
+    Exception`` must not swallow it)."""
+
+    def __init__(self) -> None:
+        super().__init__("stopped here: the call ran past its time budget")
+
+
+def call_budget() -> float | None:
+    """Seconds one call into user code may take (``PYMUNK_BOT_CALL_BUDGET``); None: no limit."""
+    text = os.environ.get(CALL_BUDGET_ENV, "").strip()
+    if not text:
         return None
-    for directory in search_dirs(base_dir):
-        if importlib.machinery.PathFinder.find_spec(top, [str(directory)]) is not None:
-            return directory
-    return None
-
-
-def check_class_path(class_path: str, base_dir: str | Path | None = None) -> None:
-    """Find the module and check the class without running user code; ValueError if wrong.
-
-    Our own package is imported (it is not user code); a user's module is found on disk and
-    its source parsed, which catches a missing class or one with no ``compute`` of its own.
-    """
-    module_name, _, attr = class_path.partition(":")
-    if module_name.split(".")[0] == "pymunk_bot":
-        import_class(class_path)
-        return
-    home = module_home(module_name, base_dir)
-    origin = _find_source(module_name, home)
-    if origin is None:
-        raise ValueError(f"cannot import module '{module_name}': not found next to the scenario, "
-                         "in the folders above it, the current folder or sys.path")
-    if origin.suffix != ".py" or "." in attr:
-        return  # compiled or nested: checked when the simulation imports it
     try:
-        tree = ast.parse(origin.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, SyntaxError, ValueError) as exc:
-        raise ValueError(f"cannot read '{origin}': {type(exc).__name__}: {exc}") from None
-    _check_source(tree, module_name, attr, class_path)
+        budget = float(text)
+    except ValueError:
+        raise ValueError(f"{CALL_BUDGET_ENV} must be a number of seconds (got {text[:40]!r})") \
+            from None
+    if not (math.isfinite(budget) and budget >= 0):
+        raise ValueError(f"{CALL_BUDGET_ENV} must be >= 0 s (got {text[:40]!r})")
+    return budget or None
 
 
-def _find_source(module_name: str, home: Path | None) -> Path | None:
-    """The file of a (dotted) module, found without importing it; None if absent."""
-    parts = module_name.split(".")
-    if home is None:
+@contextlib.contextmanager
+def batch_budget() -> Iterator[None]:
+    """For the block (a `test` or `sweep` command, its worker processes included): user code
+    gets ``BATCH_CALL_BUDGET`` per call unless ``PYMUNK_BOT_CALL_BUDGET`` is set already."""
+    if CALL_BUDGET_ENV in os.environ:
+        yield
+        return
+    os.environ[CALL_BUDGET_ENV] = f"{BATCH_CALL_BUDGET:g}"
+    try:
+        yield
+    finally:
+        os.environ.pop(CALL_BUDGET_ENV, None)
+
+
+@contextlib.contextmanager
+def budgeted(class_path: str, what: str) -> Iterator[None]:
+    """Run the block (one call into user code) within :func:`call_budget`; a ControllerError
+    naming ``class_path`` and ``what`` when it overruns."""
+    budget = call_budget()
+    if budget is None:
+        yield
+        return
+    overran = ControllerError(class_path, f"{what} took longer than {budget:g} s (the per-call "
+                                          f"time budget, {CALL_BUDGET_ENV})")
+    if threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer"):
+        def alarm(signum, frame) -> None:
+            raise _Overran
+
+        previous = signal.signal(signal.SIGALRM, alarm)
+        signal.setitimer(signal.ITIMER_REAL, budget)
         try:
-            spec = importlib.util.find_spec(parts[0])
-        except (ImportError, ValueError):
-            return None
-    else:
-        spec = importlib.machinery.PathFinder.find_spec(parts[0], [str(home)])
-    for part in parts[1:]:
-        if spec is None or not spec.submodule_search_locations:
-            return None
-        spec = importlib.machinery.PathFinder.find_spec(part, list(spec.submodule_search_locations))
-    if spec is None:
-        return None
-    return Path(spec.origin) if spec.origin else Path(os.devnull)
+            yield
+        except _Overran as stop:  # its traceback shows where the user's code was
+            raise overran from stop
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
+        return
+    # Other threads get no signals: a timer raises into this thread when it next runs Python.
+    target, lock, state = threading.get_ident(), threading.Lock(), {"done": False, "fired": False}
 
+    def fire() -> None:
+        with lock:
+            if not state["done"]:
+                state["fired"] = True
+                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(target),
+                                                           ctypes.py_object(_Overran))
 
-def _check_source(tree: ast.Module, module_name: str, attr: str, class_path: str) -> None:
-    for node in tree.body:
-        if isinstance(node, ast.ClassDef) and node.name == attr:
-            own = {n.name for n in node.body if isinstance(n, (ast.FunctionDef,
-                                                               ast.AsyncFunctionDef))}
-            bases = {ast.unparse(b).rsplit(".", 1)[-1] for b in node.bases}
-            if "compute" not in own and bases <= {"Controller", "object"}:
-                raise ValueError(f"'{class_path}' has no compute(observation) method of its own")
-            return
-    bound = {t.id for n in tree.body if isinstance(n, (ast.Assign, ast.AnnAssign))
-             for t in (n.targets if isinstance(n, ast.Assign) else [n.target])
-             if isinstance(t, ast.Name)}
-    bound |= {(a.asname or a.name).split(".")[0] for n in tree.body
-              if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names}
-    if attr not in bound and not any(isinstance(n, (ast.If, ast.Try)) for n in tree.body):
-        raise ValueError(f"module '{module_name}' has no attribute '{attr}'")
+    timer = threading.Timer(budget, fire)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    except _Overran as stop:
+        raise overran from stop
+    finally:
+        with lock:
+            state["done"] = True
+        timer.cancel()
+    if state["fired"]:  # it fired as the call returned: the run still overran
+        raise overran
 
 
 def import_class(class_path: str, base_dir: str | Path | None = None) -> type:
@@ -134,13 +153,16 @@ def import_module_attr(class_path: str, base_dir: str | Path | None = None) -> o
         sys.path.insert(0, str(home))  # for this import only: sys.path is left as it was
         importlib.invalidate_caches()
     try:
-        module = importlib.import_module(module_name)
+        with budgeted(class_path, f"importing '{module_name}'"):
+            module = importlib.import_module(module_name)
+    except ControllerError:
+        raise
     except ModuleNotFoundError as exc:
         if exc.name is not None and module_name.startswith(exc.name):
             raise ValueError(f"cannot import module '{module_name}': {exc}") from None
         raise ControllerError(class_path, f"importing '{module_name}' failed: "
                                           f"{type(exc).__name__}: {exc}") from exc
-    except Exception as exc:  # the user's module raised while importing
+    except (Exception, SystemExit) as exc:  # the user's module raised (or exited) importing
         raise ControllerError(class_path, f"importing '{module_name}' failed: "
                                           f"{type(exc).__name__}: {exc}") from exc
     finally:
@@ -160,6 +182,7 @@ class PythonController(Controller):
     def __init__(self, config: PythonControllerConfig, robot: RobotSpec) -> None:
         super().__init__()
         self.class_path = config.class_path
+        call_budget()  # a bad PYMUNK_BOT_CALL_BUDGET is bad input, told before user code runs
         cls = import_class(config.class_path, config.base_dir)
         try:
             inspect.signature(cls).bind(robot, **config.params)
@@ -168,8 +191,11 @@ class PythonController(Controller):
         except ValueError:
             pass  # no signature to check (a builtin): let the call decide
         try:
-            self.inner = cls(robot, **config.params)
-        except Exception as exc:
+            with budgeted(config.class_path, "its constructor"):
+                self.inner = cls(robot, **config.params)
+        except ControllerError:
+            raise
+        except (Exception, SystemExit) as exc:
             raise ControllerError(config.class_path, f"its constructor raised "
                                                      f"{type(exc).__name__}: {exc}") from exc
         self.rate = float(config.rate if config.rate is not None
@@ -180,14 +206,17 @@ class PythonController(Controller):
     def compute(self, obs: Observation) -> Command | tuple[float, float]:
         """The user's command: a :class:`Command`, or (left, right) diff wheel speeds [m/s]."""
         try:
-            command = self.inner.compute(obs)
+            with budgeted(self.class_path, "compute()"):
+                command = self.inner.compute(obs)
             self.status = getattr(self.inner, "status", self.status)
             self.message = getattr(self.inner, "message", self.message)
             if isinstance(command, Command):
                 return command
             left, right = command
             left, right = float(left), float(right)
-        except Exception as exc:
+        except ControllerError:
+            raise
+        except (Exception, SystemExit) as exc:
             raise ControllerError(self.class_path, f"compute() raised {type(exc).__name__}: "
                                                    f"{exc}") from exc
         if not (math.isfinite(left) and math.isfinite(right)):

@@ -107,6 +107,9 @@ class WaypointsController(Controller):
         return path + [path[0]] if self.config.loop and len(path) > 1 else path
 
     def compute(self, obs: Observation) -> Command:
+        hold = self.hold_until_localized(obs)  # localize before driving (Controller)
+        if hold is not None:
+            return hold
         x, y, _ = obs.pose
         if self.follower is None:
             start = (float(x), float(y))

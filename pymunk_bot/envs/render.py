@@ -39,10 +39,10 @@ class FrameRenderer:
 
     # observer protocol: trails and scans, after every step and reset
     def __call__(self, sim) -> None:
-        self.source._observe()
+        self.source.observe()
 
     def on_reset(self, sim) -> None:
-        self.source._rebuild()
+        self.source.rebuild()
 
     def rgb(self) -> np.ndarray:
         """The present state as an (H, W, 3) uint8 RGB array."""

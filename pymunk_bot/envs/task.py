@@ -201,6 +201,20 @@ class RobotTask:
             raise RuntimeError(f"robot '{self.name}' has no goal: the navigation task needs one")
         return goal
 
+    @property
+    def last_distance(self) -> float:
+        """Distance to the goal [m] at the last observation (progress is measured from it)."""
+        return self._distance
+
+    @property
+    def last_collisions(self) -> int:
+        """Contact episodes counted at the last observation."""
+        return self._collisions
+
+    def remember(self, distance: float, collisions: int) -> None:
+        """What the step just observed, for the next step's progress and new contacts."""
+        self._distance, self._collisions = distance, collisions
+
     def start(self, robot: Robot) -> None:
         """Bind to the (re)built robot and remember where the episode starts."""
         self.robot = robot
@@ -261,18 +275,15 @@ class RobotTask:
         if ranges or out is None:
             self.fill_ranges(obs[None], [self])
         x, y, theta, gx, gy = self.where() if where is None else where
-        bearing = math.atan2(gy - y, gx - x) - theta
         body = robot.body
         angle = theta if self.pose_source == "ground_truth" else body.angle
         c, s = math.cos(angle), math.sin(angle)
         vx, vy = body.velocity
-        # Contacts can push a robot past its own limits for a moment (and a goal can lie
-        # outside the arena): keep to the bounds. The bearing's cos and sin are within them.
-        tail = [min(1.0, _length(gx - x, gy - y) / self.diagonal), math.cos(bearing),
-                math.sin(bearing), min(1.0, max(-1.0, (c * vx + s * vy) / self.v_max)),
-                min(1.0, max(-1.0, body.angular_velocity / self.omega_max))]
+        bearing = math.atan2(gy - y, gx - x) - theta
+        tail = [*_pose_features(self, _length(gx - x, gy - y), math.cos(bearing),
+                                math.sin(bearing), c * vx + s * vy, body.angular_velocity)]
         if self.vy_max is not None:
-            tail.append(min(1.0, max(-1.0, (-s * vx + c * vy) / self.vy_max)))
+            tail.append(_bounded((-s * vx + c * vy) / self.vy_max))
         obs[b:] = tail
         return obs
 
@@ -291,20 +302,45 @@ class RobotTask:
                 ) -> tuple[float, bool, dict]:
         """(reward, terminated, info) for the control step just taken (``elapsed`` seconds);
         ``where``: :meth:`where`, if already read this step."""
-        robot, w = self.bound(), self.weights
+        robot = self.bound()
         x, y, _, gx, gy = self.where() if where is None else where
         distance = _length(gx - x, gy - y)
         collisions = robot.collisions
         new_collisions = collisions - self._collisions
         reached = robot.goal_reached
-        reward = (w.progress * (self._distance - distance) + w.collision * new_collisions
-                  + w.time * elapsed + (w.success if reached else 0.0))
+        reward = _reward(self.weights, self._distance - distance, new_collisions, elapsed, reached)
         self._distance = distance
         self._collisions = collisions
         info = {"distance_to_goal": distance, "collisions": collisions,
                 "new_collisions": new_collisions, "goal_reached": reached,
                 "is_success": reached}
         return float(reward), bool(reached or (terminate_on_collision and new_collisions > 0)), info
+
+
+def _reward(w: RewardWeights, progress: Any, new_collisions: Any, elapsed: float,
+            reached: Any) -> Any:
+    """The reward of a control step, for one robot (floats) or many (arrays), the same floats:
+    progress toward the goal [m], new contact episodes, time [s] and arrival."""
+    return (w.progress * progress + w.collision * new_collisions + w.time * elapsed
+            + w.success * reached)
+
+
+def _bounded(value: Any) -> Any:
+    """``value`` kept to [-1, 1] (a float, or an array elementwise): contacts can push a robot
+    past its own limits for a moment."""
+    return np.minimum(1.0, np.maximum(-1.0, value)) if isinstance(value, np.ndarray) else (
+        min(1.0, max(-1.0, value)))
+
+
+def _pose_features(task: "RobotTask", distance: Any, cos_bearing: Any, sin_bearing: Any,
+                   forward: Any, omega: Any) -> tuple[Any, Any, Any, Any, Any]:
+    """The observation's goal and motion features, for one robot (floats) or many (arrays):
+    goal distance over the arena's diagonal (a goal may lie outside the arena: at most 1), the
+    goal bearing's cos and sin, forward speed [m/s] and yaw rate [rad/s] over their limits."""
+    scaled = distance / task.diagonal
+    near = min(1.0, scaled) if not isinstance(scaled, np.ndarray) else np.minimum(1.0, scaled)
+    return (near, cos_bearing, sin_bearing, _bounded(forward / task.v_max),
+            _bounded(omega / task.omega_max))
 
 
 def _length(dx: float, dy: float) -> float:
@@ -324,24 +360,21 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
     dx, dy = states["goal_x"] - states["x"], states["goal_y"] - states["y"]
     distance = np.sqrt(dx * dx + dy * dy)
     collisions, reached = states["collisions"], states["reached"]
-    new_collisions = collisions - np.array([task._collisions for task in tasks], dtype=np.int64)
-    before = np.array([task._distance for task in tasks])
-    rewards = (w.progress * (before - distance) + w.collision * new_collisions
-               + w.time * elapsed + np.where(reached, w.success, 0.0))
+    new_collisions = collisions - np.array([task.last_collisions for task in tasks],
+                                           dtype=np.int64)
+    before = np.array([task.last_distance for task in tasks])
+    rewards = _reward(w, before - distance, new_collisions, elapsed, reached)
     terminated = reached | (terminate_on_collision & (new_collisions > 0))
     for task, d, c in zip(tasks, distance.tolist(), collisions.tolist()):
-        task._distance, task._collisions = d, c
+        task.remember(d, c)
     # The bearing and heading through math, robot by robot, as observe takes them.
     theta = states["theta"]
     trig = np.array([(math.cos(b), math.sin(b), math.cos(t), math.sin(t))
                      for b, t in zip(_bearings(dy, dx, theta), theta.tolist())]).reshape(-1, 4)
     c, s = trig[:, 2], trig[:, 3]
-    tail = obs[:, first.beams:]
-    tail[:, 0] = np.minimum(1.0, distance / first.diagonal)
-    tail[:, 1], tail[:, 2] = trig[:, 0], trig[:, 1]
-    forward = (c * states["vx"] + s * states["vy"]) / first.v_max
-    tail[:, 3] = np.minimum(1.0, np.maximum(-1.0, forward))
-    tail[:, 4] = np.minimum(1.0, np.maximum(-1.0, states["omega"] / first.omega_max))
+    features = _pose_features(first, distance, trig[:, 0], trig[:, 1],
+                              c * states["vx"] + s * states["vy"], states["omega"])
+    obs[:, first.beams:first.beams + 5] = np.column_stack(features)
     info = {"distance_to_goal": distance, "collisions": collisions,
             "new_collisions": new_collisions, "goal_reached": reached,
             "is_success": reached.copy()}

@@ -4,6 +4,7 @@
 - :mod:`.publisher`: the channel layer, snapshots -> Foxglove messages (shared by file and live);
 - :mod:`.mcap_log`: ``run --log run.mcap``, an observer writing MCAP atomically;
 - :mod:`.live`: ``run --foxglove``, the SDK's WebSocket server, paced at real time;
+- :mod:`.teleop`: client publishing on that server (Foxglove's Teleop panel on ``/cmd_vel``);
 - :mod:`.reader`: MCAP back to a :class:`~pymunk_bot.runlog.RunLog` (``replay``, ``plot``);
 - :mod:`.convert`: ``pymunk-bot convert run.npz run.mcap``.
 
@@ -13,18 +14,11 @@ Topic and frame names are in :mod:`.frames` and docs/foxglove.md. The optional p
 """
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
-from ..errors import ScenarioError
-
-INSTALL_HINT = "pip install 'pymunk-bot[foxglove]'"
+from ..extras import require as require_extra
 
 
 def require(module: str, option: str) -> Any:
     """Import ``module`` (e.g. "foxglove"), or raise a ScenarioError naming the install command."""
-    try:
-        return importlib.import_module(module)
-    except ImportError as exc:
-        raise ScenarioError(option, "", f"needs the optional package '{exc.name or module}' "
-                                        f"(install it with: {INSTALL_HINT})") from None
+    return require_extra(module, option, "foxglove")

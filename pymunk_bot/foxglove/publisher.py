@@ -17,7 +17,8 @@ from . import scene
 from .channels import OBSTACLE_POSES_SCHEMA, ROBOT_STATE_SCHEMA, Channels
 from .frames import (LOG_TOPIC, OBSTACLES_TOPIC, SCENE_TOPIC, TF_TOPIC, WORLD_FRAME, base_frame,
                      lidar_frame, nanoseconds, robot_topic, yaw_quaternion)
-from .snapshot import RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim, snapshot_of_sim
+from .snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim, movable_bodies,
+                       snapshot_of_sim)
 
 REFRESH_PERIOD = 1.0  # [s] simulated: the whole scene and paths again, for late viewers and seeks
 GRID_PERIOD = 1.0  # [s] simulated: at most this often a changed occupancy grid
@@ -121,7 +122,8 @@ class Publisher:
         self._last_path[robot.name] = path
         channel = self.channels.wanted(robot_topic(robot.name, "path"), "PosesInFrame")
         if channel is not None:
-            poses = [] if path is None else [scene.pose_msg(float(x), float(y), _heading(path, i))
+            poses = [] if path is None else [scene.pose_msg(float(x), float(y),
+                                                            heading_along(path, i))
                                              for i, (x, y) in enumerate(path)]
             channel.log(PosesInFrame(timestamp=scene.timestamp(t), frame_id=WORLD_FRAME,
                                      poses=poses), log_time=log_time)
@@ -209,14 +211,12 @@ class SimPublisher:
 
     def attach(self, sim) -> "SimPublisher":
         """Publish ``sim``'s present state, then every step."""
-        self.on_reset(sim)
-        if self not in sim.observers:
-            sim.observers.append(self)
+        sim.attach(self)  # on_reset now, then every step
         return self
 
     def on_reset(self, sim) -> None:
         geometry = geometry_of_sim(sim)
-        self._bodies = [sim.world.obstacles[i].body for i, _ in geometry.movable]
+        self._bodies = movable_bodies(sim, geometry)
         if self.publisher.geometry is not None:
             self.publisher.log_event(sim.time, "sim", f"simulation reset (seed {sim.seed})")
         self.publisher.start(geometry, snapshot_of_sim(sim, self._bodies))
@@ -259,7 +259,7 @@ def _state(robot: RobotSnapshot, t: float) -> dict:
             "teleop": robot.teleop, "status": robot.status}
 
 
-def _heading(path: np.ndarray, i: int) -> float:
+def heading_along(path: np.ndarray, i: int) -> float:
     """Direction of travel at point ``i`` of a path (towards the next point; the last keeps
     the previous segment's)."""
     if len(path) < 2:

@@ -39,6 +39,11 @@ class RobotSnapshot:
     scan: LaserScan | None = None  # the latest scan taken (at or before this instant)
     path: np.ndarray | None = None  # (N, 2) the controller's planned path [m]
     grid: Any = None  # an OccupancyGrid the robot's mapper is building
+    estimate: np.ndarray | None = None  # the localizer's pose, even a passive one [x, y, theta]
+    estimate_covariance: np.ndarray | None = None  # its 3x3 covariance of [x, y, theta]
+    odometry_covariance: np.ndarray | None = None  # 3x3 covariance of the odometry estimate
+    imu: Any = None  # the latest ImuReading (None: no IMU, or no reading yet)
+    imu_noise: tuple[float, float] = (0.0, 0.0)  # the IMU's (gyro [rad/s], accel [m/s^2]) std
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,12 @@ def geometry_of_sim(sim) -> RunGeometry:
     return RunGeometry(sim.world.width, sim.world.height, fixed, movable, meta)
 
 
+def movable_bodies(sim: Any, geometry: RunGeometry) -> list:
+    """The bodies of ``geometry``'s movable obstacles, in its order (``snapshot_of_sim`` reads
+    their poses)."""
+    return [sim.world.obstacles[i].body for i, _ in geometry.movable]
+
+
 def snapshot_of_sim(sim, movable_bodies: list) -> Snapshot:
     """The present state of ``sim``; ``movable_bodies`` in the order of its RunGeometry."""
     return Snapshot(float(sim.time), [_robot_of_sim(r) for r in sim.robots.values()],
@@ -103,7 +114,7 @@ def _robot_of_sim(robot) -> RobotSnapshot:
         localizer = None  # ground truth or odometry: already on their own topics
     mapper = getattr(robot, "mapper", None)
     drive = getattr(robot, "drive", None)  # the diff drive's wheel state, when there is one
-    lidar = robot.lidar
+    lidar, imu, belief = robot.lidar, robot.imu, robot.localizer
     return RobotSnapshot(
         name=robot.name, radius=float(robot.radius),
         pose=np.array(robot.pose, dtype=float), odometry=np.array(robot.odometry.pose, dtype=float),
@@ -119,7 +130,19 @@ def _robot_of_sim(robot) -> RobotSnapshot:
         lidar_offset=None if lidar is None else _triple(lidar.config.offset),
         scan=None if lidar is None else lidar.latest,
         path=None if not path else np.asarray(path, dtype=float).reshape(-1, 2),
-        grid=None if mapper is None else getattr(mapper, "grid", None))
+        grid=None if mapper is None else getattr(mapper, "grid", None),
+        estimate=None if belief is None else np.array(belief.pose, dtype=float),
+        estimate_covariance=_covariance(belief),
+        odometry_covariance=_covariance(robot.odometry),
+        imu=None if imu is None else imu.reading,
+        imu_noise=(0.0, 0.0) if imu is None else (float(imu.config.gyro_noise_std),
+                                                  float(imu.config.accel_noise_std)))
+
+
+def _covariance(estimator) -> np.ndarray | None:
+    """A copy of an estimator's 3x3 covariance, if it keeps one."""
+    covariance = getattr(estimator, "covariance", None)
+    return None if covariance is None else np.array(covariance, dtype=float).reshape(3, 3)
 
 
 def _pair(value) -> tuple[float, float] | None:

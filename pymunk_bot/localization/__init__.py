@@ -9,6 +9,8 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .. import config as _config  # noqa: F401  (first: config's schema imports .config, which
+# imports config.types; loaded in this order the cycle resolves whichever package comes first)
 from ..plugins import localizers
 from .base import Localizer, LocalizerContext, LocalizerInputs
 from .checks import check_localizer, check_mapping
@@ -16,7 +18,8 @@ from .config import MAX_MAP_CELLS, MAX_PARTICLES_LIMIT, EkfConfig, MappingConfig
 
 _LAZY = {"MclLocalizer": "mcl", "EkfLocalizer": "ekf", "SlamLocalizer": "slam",
          "OccupancyMapper": "mapping", "ate": "metrics", "rpe": "metrics",
-         "error_block": "metrics", "map_scores": "metrics"}
+         "error_block": "metrics", "map_scores": "metrics", "read_tum": "tum",
+         "write_tum": "tum", "TrajectoryRecorder": "tum"}
 
 
 def __getattr__(name: str) -> Any:
@@ -28,4 +31,5 @@ def __getattr__(name: str) -> Any:
 __all__ = ["Localizer", "LocalizerContext", "LocalizerInputs", "localizers", "MclConfig",
            "EkfConfig", "SlamConfig", "MappingConfig", "MclLocalizer", "EkfLocalizer",
            "SlamLocalizer", "OccupancyMapper", "check_localizer", "check_mapping", "ate", "rpe",
-           "error_block", "map_scores", "MAX_PARTICLES_LIMIT", "MAX_MAP_CELLS"]
+           "error_block", "map_scores", "read_tum", "write_tum", "TrajectoryRecorder",
+           "MAX_PARTICLES_LIMIT", "MAX_MAP_CELLS"]

@@ -6,6 +6,7 @@ Write your own by subclassing :class:`Localizer`; register it with
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,6 +15,10 @@ import numpy as np
 from ..maps.grid import OccupancyGrid
 from ..readings import LaserScan, RobotSpec
 
+# When an estimate is trustworthy enough to drive on (docs/localization.md, "Localize before
+# driving"): its position std (along its worst axis) and heading std within these bounds.
+LOCALIZED_POSITION_STD = 0.2  # [m]
+LOCALIZED_HEADING_STD = math.radians(10.0)  # [rad]
 
 
 @dataclass(frozen=True)
@@ -23,9 +28,17 @@ class LocalizerContext:
     robot: RobotSpec
     start_pose: np.ndarray  # [x, y, theta]: the true start pose (what ``initial: known`` means)
     rng: np.random.Generator  # the localizer's own random stream
-    arena: tuple[float, float]  # interior width, height [m]
+    arena: tuple[float, float]  # interior width, height [m]; see ``origin``
     map: OccupancyGrid | None = None  # the prebuilt map, given when the class sets ``needs_map``
     lidar_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # LiDAR mount in the robot frame
+    origin: tuple[float, float] = (0.0, 0.0)  # [m] the arena's lower-left corner (a ROS map's
+    # origin): the arena spans [x0, x0 + width] x [y0, y0 + height]
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1) [m] of the arena in the world frame."""
+        (x0, y0), (w, h) = self.origin, self.arena
+        return (x0, y0, x0 + w, y0 + h)
 
 
 @dataclass(frozen=True)
@@ -57,6 +70,21 @@ class Localizer:
     def debug(self) -> dict[str, Any]:
         """Extra state for views and logs (e.g. ``particles``: (n, 3) array); empty by default."""
         return {}
+
+    @property
+    def localized(self) -> bool:
+        """Whether a controller may drive on ``pose`` (else it waits or turns on the spot).
+        True by default; the built-in filters answer :meth:`spread_within_bounds`."""
+        return True
+
+    def spread_within_bounds(self) -> bool:
+        """``covariance`` within LOCALIZED_POSITION_STD and LOCALIZED_HEADING_STD."""
+        cov = np.asarray(self.covariance, dtype=float)
+        if not np.all(np.isfinite(cov)):
+            return False
+        position_var = float(np.linalg.eigvalsh(0.5 * (cov[:2, :2] + cov[:2, :2].T))[-1])
+        return (position_var <= LOCALIZED_POSITION_STD ** 2
+                and float(cov[2, 2]) <= LOCALIZED_HEADING_STD ** 2)
 
 
 

@@ -2,7 +2,8 @@
 ``mapping: {...}``). Every field has physical bounds; particle counts are bounded so that memory
 stays sane. docs/localization.md lists every key with its unit and default; keep them in step.
 
-MCL's keys are ROS / Nav2 AMCL's parameter names, with Nav2's defaults.
+MCL's keys are ROS / Nav2 AMCL's parameter names and meanings, with Nav2's defaults except
+the odometry noise (alpha1-5) and the update thresholds; docs/localization.md says why.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from ..config.types import Float, Int, NonNegativeFloat, Section
 
 MAX_PARTICLES_LIMIT = 100_000  # ~2.4 MB of particles; a 60-beam update is done in chunks
 MAX_MAP_CELLS = 16_000_000  # cells of a built occupancy grid (e.g. 200 x 200 m at 5 cm)
+LOCALIZER_MAP_RESOLUTION = 0.05  # [m] of the prebuilt occupancy grid localizers are given
 
 Alpha = Annotated[Float, Field(ge=0.0, le=10.0)]
 Weight = Annotated[Float, Field(ge=0.0, le=1.0)]
@@ -32,19 +34,26 @@ class MclConfig(Section):
     initial: Literal["known", "global"] = "known"  # known: around the true start pose
     initial_std: StdVec3 = (0.1, 0.1, 0.1)  # [m, m, rad] spread around the start pose (known)
     robot_model_type: Literal["diff", "omni"] = "diff"
-    alpha1: Alpha = 0.2  # rotation noise from rotation
-    alpha2: Alpha = 0.2  # rotation noise from translation
-    alpha3: Alpha = 0.2  # translation noise from translation
-    alpha4: Alpha = 0.2  # translation noise from rotation
-    alpha5: Alpha = 0.2  # strafe noise from translation (omni only)
+    # Odometry noise as AMCL defines it (variance ratios, motion.py). Nav2's 0.2 (a std of 45 %
+    # of each motion) diffuses the cloud metres along an aisle the scan cannot fix; ours cover
+    # an uncalibrated robot's 2-3 % and wheel noise with margin (docs/localization.md).
+    alpha1: Alpha = 0.02  # rotation noise from rotation
+    alpha2: Alpha = 0.05  # rotation noise from translation
+    alpha3: Alpha = 0.02  # translation noise from translation
+    alpha4: Alpha = 0.02  # translation noise from rotation
+    alpha5: Alpha = 0.02  # strafe noise from translation (omni only)
     min_particles: ParticleCount = 500
     max_particles: ParticleCount = 2000
     pf_err: Annotated[Float, Field(gt=0.0, lt=1.0)] = 0.05  # KLD: max error of the sampled belief
     pf_z: Annotated[Float, Field(gt=0.0, le=10.0)] = 0.99  # KLD: the normal quantile (as AMCL uses it)
-    update_min_d: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.25  # [m] travel before an update
-    update_min_a: Annotated[Float, Field(ge=0.0, le=2 * math.pi)] = 0.2  # [rad] turn before an update
+    # Nav2: 0.25 m / 0.2 rad. The motion noise per update grows with the step squared, so per
+    # metre it grows with the step: shorter steps diffuse less and fold in more scans.
+    update_min_d: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.1  # [m] travel before an update
+    update_min_a: Annotated[Float, Field(ge=0.0, le=2 * math.pi)] = 0.1  # [rad] turn before an update
     resample_interval: Annotated[Int, Field(ge=1, le=1000)] = 1  # updates between resamplings
-    laser_model_type: Literal["likelihood_field", "beam"] = "likelihood_field"
+    # Nav2's default is likelihood_field (1 + sum pz^3), too weak to hold a cloud where the
+    # scan sees one wall (docs/localization.md); likelihood_field_prob is Nav2's product of pz.
+    laser_model_type: Literal["likelihood_field", "likelihood_field_prob", "beam"] = "likelihood_field_prob"
     z_hit: Weight = 0.5
     z_short: Weight = 0.05  # beam model only
     z_max: Weight = 0.05  # beam model only
@@ -53,8 +62,10 @@ class MclConfig(Section):
     lambda_short: Annotated[Float, Field(gt=0.0, le=100.0)] = 0.1  # [1/m], beam model only
     laser_likelihood_max_dist: Distance = 2.0  # [m] distance field cap
     max_beams: Annotated[Int, Field(ge=2, le=10_000)] = 60
-    recovery_alpha_slow: Weight = 0.0  # 0 disables recovery; e.g. 0.001
-    recovery_alpha_fast: Weight = 0.0  # e.g. 0.1
+    # AMCL's recovery, on (Nav2: 0, off): a kidnapped robot or a wrong global guess needs it;
+    # with it on, tracking succeeded as often (robustness benchmark, docs/localization.md).
+    recovery_alpha_slow: Weight = 0.001  # 0 (both) disables recovery
+    recovery_alpha_fast: Weight = 0.1
 
     @model_validator(mode="after")
     def _consistent(self) -> "MclConfig":
@@ -74,9 +85,16 @@ class EkfConfig(Section):
 
     type: Literal["ekf"] = "ekf"
     initial_std: StdVec3 = (0.05, 0.05, 0.05)  # [m, m, rad] around the true start pose
-    trans_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.02  # [m/sqrt(m)] per metre driven
-    rot_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.02  # [rad/sqrt(m)] per metre driven
-    turn_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.05  # [rad/sqrt(rad)] per radian turned
+    # Random (white) odometry noise: variance grows with the distance and angle moved.
+    trans_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.03  # [m/sqrt(m)] per metre driven
+    rot_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [rad/sqrt(m)] per metre driven
+    turn_noise: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [rad/sqrt(rad)] per radian turned
+    # Systematic error of an uncalibrated robot (wheel radii, track width), as a fraction of
+    # each motion; folded in over each interval between scan corrections (see ekf.py).
+    calibration_error: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.03
+    # Consecutive good matches refused by the gate before the filter admits it is lost and
+    # widens its covariance by the disagreement (no lock-out).
+    gate_patience: Annotated[Int, Field(ge=1, le=1000)] = 5
     max_dist: Distance = 1.0  # [m] distance-field cap for matching
     huber: Distance = 0.1  # [m] residuals beyond this count linearly (robust to clutter)
     iterations: Annotated[Int, Field(ge=1, le=100)] = 10  # Gauss-Newton iterations per match

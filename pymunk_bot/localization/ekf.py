@@ -12,6 +12,17 @@ State: the pose [x, y, theta] and its 3x3 covariance P.
   ``map_std^2`` in x and y for a map whose walls are off by that much); the
   measurement model is z = x + noise (H = I). An innovation beyond the Mahalanobis ``gate``
   is refused (a bad match), and the Joseph form keeps P symmetric and positive.
+- **Systematic odometry error.** An uncalibrated robot's wheel radii and track width are off
+  by a few percent: its odometry errs by a *fraction* of each motion, the same sign every time,
+  which white noise growing with sqrt(distance) cannot cover. Before each correction, P gains
+  the error that fraction (``calibration_error``) makes over the motion since the last
+  correction: ``c * D`` along and across the track, ``c * A + c * D / track`` in heading (a
+  wheel off by c turns the robot by c * D / track). Between corrections a bias is white, so this
+  is honest without knowing the simulator's true drift.
+- **No lock-out.** ``gate_patience`` good matches in a row refused by the gate mean the filter,
+  not the scans, is wrong (its noise model was too optimistic): P is widened by the squared
+  innovation and the match is folded in, so the filter recovers instead of coasting on
+  odometry forever.
 """
 from __future__ import annotations
 
@@ -24,6 +35,8 @@ from .config import EkfConfig
 from .likelihood import LikelihoodField
 from .scanmatch import match_scan, subsample
 from .se2 import between, compose, scan_points, wrap
+
+MIN_TRACK = 0.1  # [m] the lever for heading drift when the robot has no wheel track (omni)
 
 
 class EkfLocalizer(Localizer):
@@ -41,7 +54,11 @@ class EkfLocalizer(Localizer):
         self._odom: np.ndarray | None = None
         self.updates = 0  # scans folded in
         self.rejected = 0  # matches refused by the gate
+        self.recoveries = 0  # times the gate's patience ran out and P was widened
         self.last_nis: float | None = None  # normalised innovation squared of the last update
+        self._refused = 0  # consecutive refusals
+        self._since = np.zeros(2)  # distance [m] and |angle| [rad] moved since the last correction
+        self._track = max(float(context.robot.track_width), MIN_TRACK)  # [m] nominal
 
     def update(self, inputs: LocalizerInputs) -> None:
         odom = np.asarray(inputs.odometry, dtype=float)
@@ -53,7 +70,13 @@ class EkfLocalizer(Localizer):
             self._correct(scan)
 
     def debug(self) -> dict[str, Any]:
-        return {"updates": self.updates, "rejected": self.rejected, "nis": self.last_nis}
+        return {"updates": self.updates, "rejected": self.rejected, "nis": self.last_nis,
+                "recoveries": self.recoveries}
+
+    @property
+    def localized(self) -> bool:
+        """Its covariance is within the bounds (a kidnapped or lost filter widens it)."""
+        return self.spread_within_bounds()
 
     def _predict(self, u: np.ndarray) -> None:
         c = self.config
@@ -68,6 +91,17 @@ class EkfLocalizer(Localizer):
                      c.rot_noise ** 2 * d + c.turn_noise ** 2 * a])
         self.pose = compose(self.pose, u)
         self.covariance = f @ self.covariance @ f.T + g @ q @ g.T
+        self._since += (d, a)
+
+    def _add_calibration_error(self) -> None:
+        """P += the systematic error over the motion since the last correction (robot frame)."""
+        c = self.config.calibration_error
+        d, a = self._since
+        self._since[:] = 0.0
+        cs, sn = np.cos(self.pose[2]), np.sin(self.pose[2])
+        g = np.array([[cs, -sn, 0.0], [sn, cs, 0.0], [0.0, 0.0, 1.0]])
+        q = np.diag([(c * d) ** 2, (c * d) ** 2, (c * a + c * d / self._track) ** 2])
+        self.covariance = self.covariance + g @ q @ g.T
 
     def _correct(self, scan) -> None:
         c = self.config
@@ -76,15 +110,22 @@ class EkfLocalizer(Localizer):
                            c.huber, c.match_cov_scale)
         if not match.ok:
             return
+        self._add_calibration_error()
         innovation = match.pose - self.pose
         innovation[2] = wrap(innovation[2])
         r = match.covariance + np.diag([c.map_std ** 2, c.map_std ** 2, 0.0])
-        s = self.covariance + r
-        s_inv = np.linalg.inv(s)
+        s_inv = np.linalg.inv(self.covariance + r)
         nis = float(innovation @ s_inv @ innovation)
         if nis > c.gate:
             self.rejected += 1
-            return
+            self._refused += 1
+            if self._refused < c.gate_patience:
+                return
+            # The scans keep disagreeing with a confident filter: believe the disagreement.
+            self.covariance = self.covariance + np.diag(np.square(innovation))
+            s_inv = np.linalg.inv(self.covariance + r)
+            self.recoveries += 1
+        self._refused = 0
         k = self.covariance @ s_inv
         self.pose = self.pose + k @ innovation
         self.pose[2] = float(wrap(self.pose[2]))

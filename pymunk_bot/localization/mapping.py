@@ -44,10 +44,13 @@ class OccupancyMapper:
         self._last_time: float | None = None
 
     @classmethod
-    def for_arena(cls, config: MappingConfig, arena: tuple[float, float]) -> "OccupancyMapper":
-        """A mapper over the arena [0, w] x [0, h] plus ``config.margin`` on every side."""
+    def for_arena(cls, config: MappingConfig, arena: tuple[float, float],
+                  origin: tuple[float, float] = (0.0, 0.0)) -> "OccupancyMapper":
+        """A mapper over the arena [x0, x0 + w] x [y0, y0 + h] (``origin`` = (x0, y0) [m], a
+        ROS map's origin) plus ``config.margin`` on every side."""
         m = config.margin
-        return cls(config, ((-m, -m), (arena[0] + m, arena[1] + m)))
+        (x0, y0), (w, h) = origin, arena
+        return cls(config, ((x0 - m, y0 - m), (x0 + w + m, y0 + h + m)))
 
     def due(self, time: float) -> bool:
         """Whether a scan taken at ``time`` [s] should be integrated (``rate`` limits it)."""

@@ -7,11 +7,15 @@ Definitions follow evo (Grupp, github.com/MichaelGrupp/evo), reduced to SE(2):
   as RMSE, mean, median, max and std over the samples. No alignment by default: estimates here
   live in the world frame already (``align=True`` first applies the least-squares rigid motion,
   Umeyama without scale, as ``evo_ape -a``).
-- **RPE** (evo's RPE, translation and rotation parts): for pairs ``(i, j)`` where ``j`` is the
-  first sample at least ``delta`` further along (metres of true path, evo's ``--delta_unit m``;
-  or samples, ``unit="frames"``), ``E_ij = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)``; the error is
-  ``|trans(E_ij)|`` [m] and ``|angle(E_ij)|`` [rad]. It measures drift per ``delta``,
-  independent of where the error started.
+- **RPE** (evo's RPE, translation and rotation parts): for pairs ``(i, j)`` ``delta`` apart,
+  ``E_ij = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)``; the error is ``|trans(E_ij)|`` [m] and
+  ``|angle(E_ij)|`` [rad]. It measures drift per ``delta``, independent of where the error
+  started. The pairs are evo's: ``delta`` metres of path (``--delta_unit m``) or samples
+  (``unit="frames"``), consecutive (the path cut into ``delta`` pieces) or, with
+  ``all_pairs``, every sample paired with the one nearest ``delta`` further on (within 10 %);
+  the path is the estimate's, as evo's default (``pairs_from="truth"``: evo's
+  ``--pairs_from_reference``). tests/localization/test_trajectory_out.py checks the figures
+  against evo's on the same files.
 """
 from __future__ import annotations
 
@@ -65,23 +69,60 @@ def ate(truth: np.ndarray, estimate: np.ndarray, align: bool = False) -> dict[st
     return _stats(np.hypot(*(estimate[:, :2] - truth[:, :2]).T))
 
 
-def rpe(truth: np.ndarray, estimate: np.ndarray, delta: float = 1.0,
-        unit: str = "m") -> dict[str, Any]:
-    """Relative pose error over ``delta`` metres of true path (or ``delta`` samples, "frames").
+def _path_pairs(path: np.ndarray, delta: float, all_pairs: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``delta`` metres of ``path`` apart, as evo's ``filter_pairs_by_path``."""
+    steps = np.hypot(*np.diff(path[:, :2], axis=0).T)
+    if all_pairs:  # each i with the later sample whose distance along is nearest delta
+        along = np.concatenate([[0.0], np.cumsum(steps)])
+        n = along.size
+        i = np.arange(n - 1)
+        target = along[i] + delta
+        after = np.searchsorted(along, target, side="left")  # first at or beyond delta
+        before = np.maximum(after - 1, i + 1)  # the last short of it (not i itself)
+        before = np.searchsorted(along, along[before], side="left").clip(i + 1)  # its first tie
+        after_ok = after < n
+        gap_after = np.where(after_ok, np.abs(along[np.minimum(after, n - 1)] - target), np.inf)
+        gap_before = np.abs(along[before] - target)
+        j = np.where(gap_before <= gap_after, before, after)
+        keep = np.minimum(gap_before, gap_after) <= 0.1 * delta
+        return i[keep], j[keep]
+    ids, travelled = [0], 0.0  # the path cut into pieces of at least delta
+    for k, step in enumerate(steps.tolist(), start=1):
+        travelled += step
+        if travelled >= delta:
+            ids.append(k)
+            travelled = 0.0
+    cut = np.asarray(ids)
+    return cut[:-1], cut[1:]
+
+
+def rpe(truth: np.ndarray, estimate: np.ndarray, delta: float = 1.0, unit: str = "m",
+        all_pairs: bool = False, pairs_from: str = "estimate") -> dict[str, Any]:
+    """Relative pose error over ``delta`` metres of path (or ``delta`` samples, "frames").
 
     Returns {"trans": stats [m], "rot": stats [rad], "pairs": count}; empty stats when the
     trajectory is shorter than ``delta``.
     """
     truth, estimate = _check(truth, estimate)
+    if pairs_from not in ("estimate", "truth"):
+        raise ValueError(f"pairs_from must be 'estimate' or 'truth' (got {pairs_from!r})")
     if unit == "m":
-        travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(truth[:, :2], axis=0).T))])
-        j = np.searchsorted(travelled, travelled + delta)
+        if not delta > 0:
+            raise ValueError(f"delta must be > 0 m (got {delta!r})")
+        i, j = _path_pairs(estimate if pairs_from == "estimate" else truth, float(delta), all_pairs)
     elif unit == "frames":
-        j = np.arange(truth.shape[0]) + int(delta)
+        step = int(delta)
+        if step != delta or step < 1:
+            raise ValueError(f"delta must be a whole number of frames >= 1 (got {delta!r})")
+        n = truth.shape[0]
+        if all_pairs:
+            i = np.arange(max(n - step, 0))
+            j = i + step
+        else:
+            cut = np.arange(0, n, step)
+            i, j = cut[:-1], cut[1:]
     else:
         raise ValueError(f"unit must be 'm' or 'frames' (got {unit!r})")
-    i = np.flatnonzero(j < truth.shape[0])
-    j = j[i]
     if i.size == 0:
         return {"trans": {}, "rot": {}, "pairs": 0}
     rel_truth = between(truth[i], truth[j])

@@ -46,7 +46,8 @@ class SlamLocalizer(Localizer):
     def __init__(self, config: SlamConfig, context: LocalizerContext) -> None:
         super().__init__(config, context)
         self.mapper = OccupancyMapper.for_arena(
-            MappingConfig(resolution=config.resolution, margin=config.margin), context.arena)
+            MappingConfig(resolution=config.resolution, margin=config.margin), context.arena,
+            context.origin)
         self.covariance = np.zeros((3, 3))
         self.keyframes: list[np.ndarray] = []  # estimated poses
         self._scans: list = []  # the LaserScan of each keyframe
@@ -63,6 +64,12 @@ class SlamLocalizer(Localizer):
     def grid(self) -> OccupancyGrid:
         """The occupancy grid built from the keyframes at their (optimized) poses."""
         return self.mapper.grid
+
+    def due(self, time: float) -> bool:
+        """Never: when SLAM stands as the robot's mapper (``localization: slam`` without a
+        ``mapping`` key), its map is built from its own keyframes at their *estimated* poses,
+        so the simulation must not fold scans in at the true pose as it does for ``mapping``."""
+        return False
 
     def debug(self) -> dict[str, Any]:
         return {"keyframes": np.array(self.keyframes).reshape(-1, 3),

@@ -50,7 +50,7 @@ def make_context(sim, robot_name: str, seed: int, grid: OccupancyGrid | None) ->
     return LocalizerContext(robot=robot.spec, start_pose=robot.pose.copy(),
                             rng=np.random.default_rng([seed, 11]),
                             arena=(sim.world.width, sim.world.height), map=grid,
-                            lidar_offset=offset)
+                            lidar_offset=offset, origin=tuple(sim.world.extent[:2]))
 
 
 def run_trial(sim, localizer: Localizer, route: list[tuple[float, float]], max_time: float,

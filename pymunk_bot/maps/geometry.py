@@ -172,6 +172,8 @@ def _runs(solid: np.ndarray, vertical: bool) -> tuple[np.ndarray, np.ndarray]:
     grid = solid if vertical else solid.T  # transposed: rows become columns
     differs = grid[:, :-1] != grid[:, 1:]
     along, across = np.nonzero(differs.T)  # sorted by edge line, then along it
+    if not len(along):  # all solid or all free: no edge between them
+        return np.empty((0, 2), dtype=np.int64), np.empty((0, 2), dtype=np.int64)
     solid_low = grid[across, along]  # solid on the lower-index side of the edge
     # A run continues while the line and the side stay the same and the edges are adjacent.
     breaks = np.ones(len(along), dtype=bool)
@@ -296,8 +298,15 @@ def add_to_space(space: pymunk.Space, geometry: MapGeometry, friction: float = 0
     for shape in shapes:
         shape.friction = friction
         shape.collision_type = collision_type
-    space.add(*shapes)
+    space.add(*(shapes[i] for i in interleaved(len(shapes))))
     return shapes
+
+
+def interleaved(n: int) -> np.ndarray:
+    """0..n-1 in a fixed, well-spread order (the golden-ratio sequence). Chipmunk's static index
+    grows lopsided when neighbouring shapes arrive in order along a wall: 40,000 segments of one
+    traced outline took 4.7 s to add in order, 0.3 s interleaved (190,000: 2.2 s, not minutes)."""
+    return np.argsort((np.arange(n) * 0.6180339887498949) % 1.0, kind="stable")
 
 
 def free_disc(geometry: MapGeometry, x: float, y: float, radius: float) -> bool:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..config.messages import clip
 from ..errors import ScenarioError
 from ..results import write_atomic
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
@@ -34,6 +35,9 @@ DEFAULT_FREE_THRESH = 0.196  # [probability]: a written map's unknown grey (205)
 MAX_SIDE = 20_000  # [pixels] per side of a map image
 MAX_CELLS = 64_000_000  # [pixels] in a map image (8000 x 8000)
 MAX_RESOLUTION = 100.0  # [m] per cell
+# Image formats a map may be in (Pillow reads them all; Nav2's map_server reads these too).
+IMAGE_SUFFIXES = (".pgm", ".png", ".ppm", ".pnm", ".pbm", ".bmp", ".jpg", ".jpeg", ".tif", ".tiff",
+                  ".gif")
 # What a written map's pixels are, as Nav2's map_saver writes them (trinary).
 PIXEL_OCCUPIED, PIXEL_FREE, PIXEL_UNKNOWN = 0, 254, 205
 
@@ -129,10 +133,10 @@ def _read_yaml(yaml_path: Path, fail: _Problem) -> dict:
         raise fail("resolution", f"must be > 0 and <= {MAX_RESOLUTION:g} m per cell "
                                  f"(got {meta['resolution']:g})")
     origin = doc["origin"]
-    if not isinstance(origin, list) or len(origin) not in (2, 3):
-        raise fail("origin", f"must be [x, y, yaw] (got {origin!r})")
+    if not isinstance(origin, list) or len(origin) != 3:
+        raise fail("origin", f"must be three numbers [x, y, yaw] (got {clip(repr(origin))})")
     meta["origin"] = [_number(v, f"origin[{i}]", fail) for i, v in enumerate(origin)]
-    if len(origin) == 3 and meta["origin"][2] != 0.0:
+    if meta["origin"][2] != 0.0:
         raise fail("origin[2]", f"a rotated map is not supported: yaw must be 0 (got "
                                 f"{meta['origin'][2]:g})")
     negate = doc.get("negate", 0)
@@ -167,8 +171,15 @@ def _read_image(image_path: Path, fail: _Problem) -> tuple[np.ndarray, np.ndarra
     except ImportError:  # pragma: no cover - Pillow comes with matplotlib and imageio
         raise fail("image", "reading map images needs Pillow: pip install Pillow") \
             from None
-    if not image_path.is_file():
-        raise fail("image", f"image file not found: {image_path}")
+    if not image_path.exists():
+        raise fail("image", f"image file not found: {clip(str(image_path))}")
+    if image_path.is_dir():
+        raise fail("image", f"{clip(str(image_path))} is a directory, not an image file")
+    if not image_path.is_file():  # a device, FIFO or socket: reading it may never end
+        raise fail("image", f"{clip(str(image_path))} is not a regular file")
+    if image_path.suffix.lower() not in IMAGE_SUFFIXES:
+        raise fail("image", f"must be an image file ({', '.join(IMAGE_SUFFIXES)}) "
+                            f"(got {clip(str(image_path))})")
     try:
         with Image.open(image_path) as img:
             width, height = img.size

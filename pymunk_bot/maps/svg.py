@@ -28,8 +28,13 @@ from ..errors import ScenarioError
 from .geometry import FilledArea, MapGeometry, convex_pieces, edge_chain
 
 CURVE_TOLERANCE = 0.01  # [m] largest distance between a sampled curve and its chords
-MAX_POINTS = 1_000_000  # sampled outline points in one plan
+# Bounds on the work one plan may cost (measured: about 0.3 ms per painted shape to read and
+# cut into pieces, 2 s per MB for svgelements to parse; every segment also costs run time).
+MAX_FILE_BYTES = 10 << 20  # [bytes] of the SVG file
+MAX_SHAPES = 20_000  # painted shapes
+MAX_POINTS = 200_000  # sampled outline points in one plan
 MAX_CURVE_SAMPLES = 1 << 16  # per curve segment
+MAX_REACH = 1e4  # [m] how far a shape may reach beyond the plan (as a map's extent, 10 km)
 DEFAULT_MAP_SCALE = 0.01  # [m per user unit]: 1 unit = 1 cm
 
 
@@ -55,11 +60,22 @@ def read_svg_map(path: str | Path, map_scale: float | None = None, source: str |
         raise fail("reading SVG maps needs svgelements: pip install 'pymunk-bot[maps]'") from None
     if not svg_path.is_file():
         raise fail("map file not found" if not svg_path.exists() else "not a file")
+    if svg_path.stat().st_size > MAX_FILE_BYTES:
+        raise fail(f"the SVG is {svg_path.stat().st_size / 2**20:.1f} MB; a plan may have at "
+                   f"most {MAX_FILE_BYTES >> 20} MB")
     try:
         svg = se.SVG.parse(str(svg_path), reify=True)
     except Exception as exc:  # svgelements raises ElementTree, ValueError, ... on bad files
         raise fail(f"cannot read the SVG: {type(exc).__name__}: {exc}") from None
     to_user = np.eye(3)
+    if svg.viewbox is not None:
+        box = [svg.viewbox.x, svg.viewbox.y, svg.viewbox.width, svg.viewbox.height]
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in box):
+            raw = str(svg.values.get("viewBox", ""))[:80]
+            raise fail(f"the viewBox must be four finite numbers: x y width height (got {raw!r})")
+        if not (box[2] > 0 and box[3] > 0):
+            raise fail(f"the viewBox has no area ({box[2]:g} x {box[3]:g} user units); its "
+                       "width and height must be > 0")
     if svg.viewbox is not None and svg.viewbox_transform:
         to_user = np.linalg.inv(_matrix(se.Matrix(svg.viewbox_transform)))
     px_to_user = math.sqrt(abs(np.linalg.det(to_user[:2, :2])))  # user units per pixel
@@ -77,7 +93,7 @@ def _matrix(m) -> np.ndarray:
 
 def _read_shapes(svg, se, to_user: np.ndarray, tolerance_px: float, fail) -> list[dict]:
     """Each painted shape: its subpaths in user units, whether filled, stroke width [units]."""
-    shapes = []
+    shapes: list[dict] = []
     total = 0
     unit = math.sqrt(abs(np.linalg.det(to_user[:2, :2])))
     for element in svg.elements():
@@ -88,6 +104,9 @@ def _read_shapes(svg, se, to_user: np.ndarray, tolerance_px: float, fail) -> lis
         stroke = float(element.implicit_stroke_width or 0.0) * unit if _painted(element.stroke) else 0.0
         if not filled and stroke <= 0:
             continue
+        if len(shapes) >= MAX_SHAPES:
+            raise fail(f"the SVG has more than {MAX_SHAPES:,} painted shapes (each costs time "
+                       "to build and to simulate); merge or drop the small ones")
         subpaths = []
         for sub in abs(se.Path(element)).as_subpaths():  # abs(): transform applied
             points, closed = _sample(se.Path(sub), se, tolerance_px)
@@ -164,6 +183,15 @@ def _geometry(shapes: list[dict], canvas, scale: float, fail) -> MapGeometry:
     cx, cy, cw, ch = canvas
     if not (cw > 0 and ch > 0):
         raise fail(f"the plan has no area ({cw:g} x {ch:g} user units)")
+    reach = MAX_REACH / scale  # [user units]
+    for k, shape in enumerate(shapes):
+        points = np.concatenate([p for p, _ in shape["subpaths"]])
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or lo[0] < cx - reach \
+                or lo[1] < cy - reach or hi[0] > cx + cw + reach or hi[1] > cy + ch + reach:
+            raise fail(f"painted shape {k + 1} reaches from ({lo[0]:.6g}, {lo[1]:.6g}) to "
+                       f"({hi[0]:.6g}, {hi[1]:.6g}) user units, more than {MAX_REACH:g} m beyond "
+                       "the plan")
 
     def to_world(user: np.ndarray) -> np.ndarray:
         return np.stack([(user[:, 0] - cx) * scale, (cy + ch - user[:, 1]) * scale], axis=1)

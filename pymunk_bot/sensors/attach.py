@@ -23,7 +23,7 @@ def make_lidar(config: Any, robot: "Robot", world: "World", rng: np.random.Gener
 
 
 def make_imu(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Imu:
-    imu = Imu(config, robot.body, rng, substep=world.config.world.dt / world.substeps)
+    imu = Imu(config, robot.body, rng, substep=lambda: world.substep)
     robot.imu = imu
     return imu
 
@@ -40,8 +40,7 @@ def attach_sensors(robot: "Robot", world: "World", rng: np.random.Generator) -> 
         config = getattr(robot.config, entry.name, None)
         if config is not None:
             robot.sensors.append(sensor_kinds.get(entry.name)(config, robot, world, child))
-    fleet, index = robot._fleet, robot._i
-    robot.bumper = Bumper(robot.body, lambda: int(fleet.collisions[index]), clock=lambda: world.time)
+    robot.bumper = Bumper(robot.body, lambda: robot.collisions, clock=lambda: world.time)
     robot.sensors.append(robot.bumper)
     for sensor in robot.sensors:
         sensor.update(0.0)

@@ -7,7 +7,7 @@ odometry reads its wheels through an :class:`EncoderBank`.
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -54,7 +54,7 @@ class EncoderBank:
 class OdometryHandle:
     """One robot's odometry (``robot.odometry``): ``pose`` and ``covariance`` of its group."""
 
-    def __init__(self, group, index: int) -> None:
+    def __init__(self, group: Any, index: int) -> None:
         self._group = group
         self._i = index
         self.config = group.configs[index]

@@ -16,6 +16,7 @@ Measurement model, per reading k taken dt_k after the previous one:
 from __future__ import annotations
 
 import math
+from typing import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,10 +41,11 @@ class Imu:
     name = "imu"
 
     def __init__(self, config: ImuConfig, body: pymunk.Body, rng: np.random.Generator,
-                 substep: float = 0.0, start_time: float = 0.0) -> None:
+                 substep: float | Callable[[], float] = 0.0, start_time: float = 0.0) -> None:
         self.config = config
         self._body = body
-        self._substep = substep  # [s], the physics step h of one pymunk step
+        # [s] the pymunk step the body's velocity now moves in (a number, or read each time)
+        self._substep: Callable[[], float] = substep if callable(substep) else (lambda: substep)
         self._rng = rng
         self._schedule = Schedule(config.rate, start_time)
         self._gyro_bias = float(config.gyro_bias)  # [rad/s], drifts with gyro_bias_walk
@@ -84,7 +86,7 @@ class Imu:
             elapsed = time - self._last_time
             awx = (v.x - self._last_velocity[0]) / elapsed
             awy = (v.y - self._last_velocity[1]) / elapsed
-            mid = 0.5 * (angle + self._last_angle + self._body.angular_velocity * self._substep)
+            mid = 0.5 * (angle + self._last_angle + self._body.angular_velocity * self._substep())
             c, s = math.cos(mid), math.sin(mid)
             ax, ay = c * awx + s * awy, -s * awx + c * awy
         self._last_time, self._last_velocity, self._last_angle = time, (v.x, v.y), angle

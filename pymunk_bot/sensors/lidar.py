@@ -152,83 +152,92 @@ class Lidar:
         ranges[no_return] = c.max_range
         return ranges
 
-
-def requests_all(lidars: Sequence[Lidar]) -> tuple[list, Any, list, list]:
-    """:meth:`Lidar.cast_request` of many LiDARs, as the columns ``cast_many`` takes: the same
-    origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
-    origins, thetas, offsets, ranges, filters = [], [], [], [], []
-    for lidar in lidars:
-        body = lidar._body
-        if lidar._mount == (0.0, 0.0):  # the body's origin: its position, exactly
-            p = body.position
+    @staticmethod
+    def requests_all(lidars: Sequence["Lidar"]) -> tuple[list, Any, list, list]:
+        """:meth:`Lidar.cast_request` of many LiDARs, as the columns ``cast_many`` takes: the same
+        origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
+        origins, thetas, offsets, ranges, filters = [], [], [], [], []
+        for lidar in lidars:
+            body = lidar._body
+            if lidar._mount == (0.0, 0.0):  # the body's origin: its position, exactly
+                p = body.position
+            else:
+                p = body.local_to_world(lidar._mount)
+            origins.append((p.x, p.y))
+            thetas.append(body.angle)
+            offsets.append(lidar._angles)
+            ranges.append(lidar.config.max_range)
+            filters.append(lidar._filter)
+        if len({a.shape[0] for a in offsets}) == 1:
+            # body.angle + _angles, row by row
+            angles: Any = np.array(thetas)[:, None] + np.stack(offsets)
         else:
-            p = body.local_to_world(lidar._mount)
-        origins.append((p.x, p.y))
-        thetas.append(body.angle)
-        offsets.append(lidar._angles)
-        ranges.append(lidar.config.max_range)
-        filters.append(lidar._filter)
-    if len({a.shape[0] for a in offsets}) == 1:
-        angles: Any = np.array(thetas)[:, None] + np.stack(offsets)  # body.angle + _angles, row by row
-    else:
-        angles = [theta + a for theta, a in zip(thetas, offsets)]
-    return origins, angles, ranges, filters
+            angles = [theta + a for theta, a in zip(thetas, offsets)]
+        return origins, angles, ranges, filters
 
 
-def record_all(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
-    """:meth:`Lidar.record` for many LiDARs (each with the time [s] of its scan): the same
-    floats from the same random streams, with the model's array work done once for all the
-    noisy ones, and once for all the exact ones, that share a beam count."""
-    beams = {true.shape[0] for true in true_ranges}
-    if len(due) < 2 or len(beams) != 1:
-        for (lidar, time), true in zip(due, true_ranges):
-            lidar.record(time, true)
-        return
-    exact, noisy = [], []
-    for k, (lidar, time) in enumerate(due):
-        noise_std, _, _, dropout = lidar._model
-        if noise_std > 0.0:
-            noisy.append(k)
-        elif dropout == 0.0:
-            exact.append(k)
-        else:  # dropout alone: one by one
-            lidar.record(time, true_ranges[k])
-    if exact:
-        _record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
-    if not noisy:
-        return
-    lidars = [due[k][0] for k in noisy]
-    true = np.stack([true_ranges[k] for k in noisy])
-    model = np.array([lidar._model for lidar in lidars])
-    std, low, high = model[:, 0:1], model[:, 1:2], model[:, 2:3]
-    ranges = np.empty_like(true)
-    for row, lidar in zip(ranges, lidars):
-        lidar._periodic_rng.standard_normal(out=row)
-    ranges *= std  # the single scan's true + std * noise, operand for operand
-    ranges += true
-    np.maximum(ranges, low, out=ranges)
-    np.minimum(ranges, high, out=ranges)
-    no_return = true < low
-    no_return |= true >= high
-    if model[:, 3].any():
-        for row, lidar in zip(no_return, lidars):
-            dropout = lidar._model[3]
-            if dropout > 0.0:
-                row |= lidar._periodic_rng.random(row.shape[0]) < dropout
-    np.copyto(ranges, high, where=no_return)  # high broadcast along each row
-    ranges.setflags(write=False)
-    for row, k in zip(ranges, noisy):
-        lidar, time = due[k]
-        lidar._keep(time, row)
+    @staticmethod
+    def record_all(due: Sequence[tuple["Lidar", float]], true_ranges: Sequence[np.ndarray]) -> None:
+        """:meth:`Lidar.record` for many LiDARs (each with the time [s] of its scan): the same
+        floats from the same random streams, with the model's array work done once for all the
+        noisy ones, and once for all the exact ones, that share a beam count."""
+        beams = {true.shape[0] for true in true_ranges}
+        if len(due) < 2 or len(beams) != 1:
+            for (lidar, time), true in zip(due, true_ranges):
+                lidar.record(time, true)
+            return
+        exact, noisy = [], []
+        for k, (lidar, time) in enumerate(due):
+            noise_std, _, _, dropout = lidar._model
+            if noise_std > 0.0:
+                noisy.append(k)
+            elif dropout == 0.0:
+                exact.append(k)
+            else:  # dropout alone: one by one
+                lidar.record(time, true_ranges[k])
+        if exact:
+            Lidar._record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
+        if not noisy:
+            return
+        lidars = [due[k][0] for k in noisy]
+        true = np.stack([true_ranges[k] for k in noisy])
+        model = np.array([lidar._model for lidar in lidars])
+        std, low, high = model[:, 0:1], model[:, 1:2], model[:, 2:3]
+        ranges = np.empty_like(true)
+        for row, lidar in zip(ranges, lidars):
+            lidar._periodic_rng.standard_normal(out=row)
+        ranges *= std  # the single scan's true + std * noise, operand for operand
+        ranges += true
+        np.maximum(ranges, low, out=ranges)
+        np.minimum(ranges, high, out=ranges)
+        no_return = true < low
+        no_return |= true >= high
+        if model[:, 3].any():
+            for row, lidar in zip(no_return, lidars):
+                dropout = lidar._model[3]
+                if dropout > 0.0:
+                    row |= lidar._periodic_rng.random(row.shape[0]) < dropout
+        np.copyto(ranges, high, where=no_return)  # high broadcast along each row
+        ranges.setflags(write=False)
+        for row, k in zip(ranges, noisy):
+            lidar, time = due[k]
+            lidar._keep(time, row)
 
 
-def _record_exact(due: Sequence[tuple[Lidar, float]], true_ranges: Sequence[np.ndarray]) -> None:
-    """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
-    model = np.array([lidar._model for lidar, _ in due])
-    low, high = model[:, 1:2], model[:, 2:3]
-    ranges = np.stack(true_ranges)
-    np.minimum(ranges, high, out=ranges)
-    np.copyto(ranges, high, where=ranges < low)
-    ranges.setflags(write=False)
-    for row, (lidar, time) in zip(ranges, due):
-        lidar._keep(time, row)
+    @staticmethod
+    def _record_exact(due: Sequence[tuple["Lidar", float]],
+                      true_ranges: Sequence[np.ndarray]) -> None:
+        """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
+        model = np.array([lidar._model for lidar, _ in due])
+        low, high = model[:, 1:2], model[:, 2:3]
+        ranges = np.stack(true_ranges)
+        np.minimum(ranges, high, out=ranges)
+        np.copyto(ranges, high, where=ranges < low)
+        ranges.setflags(write=False)
+        for row, (lidar, time) in zip(ranges, due):
+            lidar._keep(time, row)
+
+
+# The batched forms, by their module-level names.
+requests_all = Lidar.requests_all
+record_all = Lidar.record_all

@@ -89,7 +89,9 @@ class AckermannOdometryGroup:
             self._propagate(np.array(self._random), c, s, chord * ds, kappa, heading_gain,
                             np.abs(wheels), np.abs(true_ds))
 
-    def _propagate(self, i: np.ndarray, c, s, chord, kappa, gain, abs_wheels, abs_ds) -> None:
+    def _propagate(self, i: np.ndarray, c: np.ndarray, s: np.ndarray, chord: np.ndarray,
+                   kappa: np.ndarray, gain: np.ndarray, abs_wheels: np.ndarray,
+                   abs_ds: np.ndarray) -> None:
         """P <- F P F^T + G Q G^T with inputs (ds, heading noise)."""
         m = len(i)
         f = np.tile(np.eye(3), (m, 1, 1))

@@ -67,7 +67,8 @@ class OmniOdometryGroup:
         if self.encoders.noisy:
             self._propagate(np.array(self.encoders.noisy), c, s, chord, dx, dy, np.abs(wheels))
 
-    def _propagate(self, i, c, s, chord, dx, dy, abs_wheels) -> None:
+    def _propagate(self, i: np.ndarray, c: np.ndarray, s: np.ndarray, chord: np.ndarray,
+                   dx: np.ndarray, dy: np.ndarray, abs_wheels: np.ndarray) -> None:
         """P <- F P F^T + G Q G^T, G mapping wheel noise through the inverse and the rotation."""
         m = len(i)
         f = np.tile(np.eye(3), (m, 1, 1))

@@ -23,17 +23,17 @@ class Schedule:
             raise ValueError(f"rate must be a finite number > 0 (got {rate})")
         self.period = None if rate is None else 1.0 / rate  # [s]
         self.start = start  # [s]
-        self._next = 0  # index k of the next due time
+        self.next_index = 0  # index k of the next due time
 
     def due(self, time: float) -> bool:
         """True (and advance to the next due time) if a reading is due at ``time`` [s]."""
         if self.period is None:
             return True
         elapsed = time - self.start
-        if elapsed + TIME_TOLERANCE < self._next * self.period:
+        if elapsed + TIME_TOLERANCE < self.next_index * self.period:
             return False
         # Skip every due time this tick has already passed.
-        self._next = math.floor((elapsed + TIME_TOLERANCE) / self.period) + 1
+        self.next_index = math.floor((elapsed + TIME_TOLERANCE) / self.period) + 1
         return True
 
 
@@ -48,7 +48,8 @@ class ScheduleArray:
         self.period = np.array([np.inf if s.period is None else s.period for s in schedules])
         self.every_tick = np.array([s.period is None for s in schedules], dtype=bool)
         self.start = np.array([s.start for s in schedules], dtype=float)
-        self.next = np.array([s._next for s in schedules], dtype=float)  # index k of the next due time
+        # index k of each one's next due time
+        self.next = np.array([s.next_index for s in schedules], dtype=float)
         self.earliest = self._first_due()  # [s] nothing is due before this
 
     def _first_due(self) -> float:
@@ -65,8 +66,8 @@ class ScheduleArray:
             return []
         if self._each is not None:  # a few: the schedules themselves are cheaper than numpy
             hits = [k for k, schedule in enumerate(self._each) if schedule.due(time)]
-            self.earliest = min((s.start + s._next * s.period if s.period is not None else -math.inf
-                                  for s in self._each), default=math.inf)
+            self.earliest = min((s.start + s.next_index * s.period if s.period is not None
+                                 else -math.inf for s in self._each), default=math.inf)
             return hits
         elapsed = time - self.start + TIME_TOLERANCE
         due = self.every_tick | (elapsed >= self.next * np.where(self.every_tick, 0.0, self.period))

@@ -27,9 +27,10 @@ class LiveSource:
 
     def __init__(self, sim) -> None:
         self.sim = sim
-        self._rebuild()
+        self.rebuild()
 
-    def _rebuild(self) -> None:
+    def rebuild(self) -> None:
+        """Start over from the simulation as it is now (after a reset)."""
         sim = self.sim
         fixed, movable = world_geometry(sim.world)
         self._fixed = [g.placed((0.0, 0.0, 0.0)) for g in fixed]
@@ -38,7 +39,7 @@ class LiveSource:
         self._trails: dict[str, list[tuple[float, float]]] = {}
         self._scans: dict[str, tuple] = {}
         self._seen_scan: dict[str, object] = {}
-        self._observe()
+        self.observe()
 
     # ------------------------------------------------------------------ clock
     @property
@@ -74,14 +75,16 @@ class LiveSource:
     def step(self) -> None:
         """One physics step, then note trails and new scans."""
         self.sim.step()
-        self._observe()
+        self.observe()
 
     def reset(self) -> None:
         """Rebuild the simulation from its config and seed; observers (e.g. a logger) stay."""
         self.sim.reset()
-        self._rebuild()
+        self.rebuild()
 
-    def _observe(self) -> None:
+    def observe(self) -> None:
+        """Note trails and new scans after a step the simulation took (the source's own
+        :meth:`step`, or someone else's: an env's)."""
         for name, robot in self.sim.robots.items():
             x, y, _ = robot.pose
             trail = self._trails.setdefault(name, [(x, y)])

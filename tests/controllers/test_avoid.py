@@ -15,6 +15,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 SEEDS = range(100, 112)  # not the seeds the defaults were tuned on (0-15)
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_crosses_random_cluttered_fields_without_collisions():
     results = parallel(clutter_case, SEEDS, [{"type": "avoid"}] * len(SEEDS))
     assert sum(r["collisions"] for r in results) == 0
@@ -40,6 +41,7 @@ SWAPS = [(6.0, offset, seed, speed) for offset in (0.0, 0.05, -0.1, 0.2) for see
                                       for seed in (0, 1)]
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_two_robots_meeting_head_on_keep_right_and_pass_without_touching():
     results = parallel(swap_case, *zip(*SWAPS))
     failed = [(case, {n: (r["goal_reached"], r["collisions"]) for n, r in robots.items()})

@@ -1,5 +1,6 @@
 """navigate: plans on the map, reaches goals in mazes, replans around the unmapped, fails clearly."""
 import numpy as np
+import pytest
 
 from pathlib import Path
 
@@ -11,6 +12,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 SEEDS = range(200, 208)
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_reaches_the_goal_in_random_mazes_without_collisions():
     results = parallel(maze_case, SEEDS, [{"type": "navigate"}] * len(SEEDS))
     assert all(r["goal_reached"] for r in results), [r["controller_message"] for r in results]

@@ -42,9 +42,12 @@ def test_rpe_ignores_a_constant_offset_but_sees_drift():
     assert rpe(truth, compose(np.array([0.5, -0.2, 0.1]), truth))["trans"]["rmse"] < 1e-9
     drifting = truth.copy()
     drifting[:, :2] *= 1.01  # 1 % scale error: 1 cm per metre
-    result = rpe(truth, drifting, delta=1.0)
+    result = rpe(truth, drifting, delta=1.0, all_pairs=True)
     assert result["trans"]["rmse"] == pytest.approx(0.01, rel=0.1)
     assert result["pairs"] > 300
+    consecutive = rpe(truth, drifting, delta=1.0)  # the path cut into 1 m pieces (evo's default)
+    assert consecutive["trans"]["rmse"] == pytest.approx(0.01, rel=0.1)
+    assert 10 < consecutive["pairs"] < 40
 
 
 def test_metrics_refuse_mismatched_input():

@@ -54,6 +54,7 @@ def feed(odometry: Odometry, left: float, right: float, ticks: int) -> None:
         odometry.update(left, right)
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_straight_drive_spread_matches_the_closed_form():
     sigma, distance, ticks, runs = 2e-4, 10.0, 100, 4000
     config = OdometryConfig(wheel_noise_std=sigma)
@@ -74,6 +75,7 @@ def test_straight_drive_spread_matches_the_closed_form():
     assert correlations(reported) == pytest.approx(correlations(predicted), abs=0.02)
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_arc_spread_matches_the_propagated_covariance():
     sigma, ticks, runs = 3e-3, 120, 4000
     left, right = 0.06, 0.1  # [m] per tick: about 2.3 rad of turn over 9.6 m
@@ -90,6 +92,7 @@ def test_arc_spread_matches_the_propagated_covariance():
     assert correlations(empirical) == pytest.approx(correlations(predicted), abs=0.03)
 
 
+@pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)
 def test_end_point_spread_over_seeded_simulation_runs_matches_the_model():
     """The real simulation: 300 seeded runs of a 10 m straight drive."""
     sigma, runs = 2e-4, 300

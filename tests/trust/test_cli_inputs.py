@@ -145,7 +145,8 @@ def test_pymunk_bot_test_without_arguments_outside_the_repository(tmp_path, caps
     from pymunk_bot.cli import test as scenario_tests
 
     ran = []
-    monkeypatch.setattr(scenario_tests, "run_all", lambda paths, **kw: ran.extend(paths) or [])
+    monkeypatch.setattr(scenario_tests, "_run_with_progress",
+                        lambda paths, seed, jobs: ran.extend(paths) or [])
     main(["test"])
     out = capsys.readouterr().out
     assert "running the shipped scenarios" in out and len(ran) >= 8

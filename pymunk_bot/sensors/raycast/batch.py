@@ -39,7 +39,7 @@ def cast_many(caster: "RayCaster", origins: list[tuple[float, float]], angles: l
     groups: dict[int, tuple[World, np.ndarray, list[tuple]]] = {}
     for i, (origin, ang, rng, f) in enumerate(zip(origins, angles, max_ranges, filters)):
         ox, oy, ang, rng = check_args(origin, ang, rng)
-        parts, bound, keep, _ = caster._cache.world(f)
+        parts, bound, keep, _ = caster.scene_cache.world(f)
         scale = 1.0 + abs(ox) + abs(oy) + rng
         usable = (len(parts) == 1 and not parts[0].rounded and ang.shape[0] > 0
                   and not _near_side_lines(caster, ox, oy, scale)
@@ -65,7 +65,7 @@ def cast_many(caster: "RayCaster", origins: list[tuple[float, float]], angles: l
 def _near_side_lines(caster: "RayCaster", ox: float, oy: float, scale: float) -> bool:
     """Within EDGE_NEAR * scale of a static bounding box's side line (see caster._side_flags)."""
     near = EDGE_NEAR * scale
-    for sides, v in ((caster._cache.side_x, ox), (caster._cache.side_y, oy)):
+    for sides, v in ((caster.scene_cache.side_x, ox), (caster.scene_cache.side_y, oy)):
         i = bisect.bisect_left(sides, v - near)
         if i < len(sides) and sides[i] <= v + near:
             return True

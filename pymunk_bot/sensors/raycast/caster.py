@@ -156,6 +156,11 @@ class RayCaster:
                                       flagged[row, :count])
         return [r if r is not None else np.empty(0) for r in out]
 
+    @property
+    def scene_cache(self) -> SceneCache:
+        """The cached view of the scene that casts share (the batched casts read it too)."""
+        return self._cache
+
     def begin_frame(self) -> None:
         """Bodies have moved: casts until the next call share one view of the scene (the
         simulation calls this once per tick before its LiDARs read)."""

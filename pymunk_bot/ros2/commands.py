@@ -1,0 +1,138 @@
+"""Commands from outside (``/cmd_vel``, ``/goal_pose``) -> the robot's public command API.
+
+Network threads (the rosbridge server, the Foxglove server) only :meth:`CommandInbox.put`;
+the simulation applies what arrived after each step (the inbox is a simulation observer), so
+a robot changes only between steps, as teleop in the viewer does.
+
+The watchdog: a robot driven by ``/cmd_vel`` keeps its last command until ``timeout`` seconds
+of wall-clock time pass without a new one (a real base driver guards its link the same way);
+then it is stopped and given back to its controller, which drives on if it has one.
+"""
+from __future__ import annotations
+
+import collections
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+from ..errors import ScenarioError
+from .jsonmsg import BadMessage, parse_pose_stamped, parse_twist
+from .names import DEFAULT_COMMAND_TIMEOUT, MAP_FRAME
+
+MAX_TIMEOUT = 3600.0  # [s]
+MAX_PENDING = 10_000  # commands waiting for the next step; more are dropped (a flood)
+
+
+def check_timeout(timeout: float) -> float:
+    """``timeout`` if usable as the watchdog's [s], else a one-line ScenarioError."""
+    if not (math.isfinite(timeout) and 0 < timeout <= MAX_TIMEOUT):
+        raise ScenarioError("--cmd-timeout", "", f"must be > 0 and <= {MAX_TIMEOUT:g} s "
+                                                 f"(got {timeout:g})")
+    return timeout
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Drive ``robot`` at body-frame ``v`` [m/s], ``omega`` [rad/s], ``vy`` [m/s]."""
+
+    robot: str
+    v: float
+    omega: float
+    vy: float = 0.0
+
+
+@dataclass(frozen=True)
+class Goal:
+    """Send ``robot``'s controller to (``x``, ``y``) [m] in the map frame."""
+
+    robot: str
+    x: float
+    y: float
+
+
+def command_of(robot: str, what: str, message) -> Drive | Goal:
+    """The command in a client's JSON ``message`` on ``robot``'s ``what`` topic ("cmd_vel":
+    a Twist, "goal_pose": a PoseStamped in the map frame); BadMessage if it does not fit."""
+    if what == "cmd_vel":
+        v, omega, vy = parse_twist(message)
+        return Drive(robot, v, omega, vy)
+    x, y, frame = parse_pose_stamped(message)
+    if frame not in ("", MAP_FRAME):
+        raise BadMessage(f"msg.header.frame_id must be '{MAP_FRAME}' (got '{frame}')")
+    return Goal(robot, x, y)
+
+
+class CommandInbox:
+    """Thread-safe inbox of :class:`Drive` and :class:`Goal` commands, applied to the
+    simulation after each step, with the ``/cmd_vel`` watchdog."""
+
+    def __init__(self, timeout: float = DEFAULT_COMMAND_TIMEOUT,
+                 clock: Callable[[], float] = time.monotonic,
+                 report: Callable[[str], None] = print) -> None:
+        self.timeout = check_timeout(timeout)  # [s] wall
+        self.clock = clock
+        self.report = report  # one line per event worth telling the user
+        self._pending: collections.deque = collections.deque()  # append/popleft are atomic
+        self._driven: dict[str, float] = {}  # robot -> wall time of its last /cmd_vel
+
+    def put(self, command: Drive | Goal) -> bool:
+        """Queue a command (any thread); False when the inbox is full (dropped)."""
+        if len(self._pending) >= MAX_PENDING:
+            return False
+        self._pending.append(command)
+        return True
+
+    def attach(self, sim) -> "CommandInbox":
+        if self not in sim.observers:
+            sim.observers.append(self)
+        return self
+
+    def on_reset(self, sim) -> None:
+        self._driven.clear()  # a reset rebuilds the robots: nobody holds them any more
+
+    def __call__(self, sim) -> None:
+        """After a step: apply what arrived, then let the watchdog release quiet robots."""
+        pending = self._pending
+        while pending:  # only this thread takes from the queue
+            command = pending.popleft()
+            robot = sim.robots.get(command.robot)
+            if robot is None:  # checked on arrival; only a reset can remove a robot
+                continue
+            try:
+                if isinstance(command, Drive):
+                    robot.set_velocity(command.v, command.omega, command.vy)
+                    if command.robot not in self._driven:
+                        self.report(f"{command.robot}: driven by /cmd_vel (back to its controller "
+                                    f"after {self.timeout:g} s without a command)")
+                    self._driven[command.robot] = self.clock()
+                else:
+                    robot.set_nav_goal((command.x, command.y))
+                    self.release(sim, command.robot, quiet=True)
+                    if robot.overridden:  # held by something else (the viewer's teleop)
+                        robot.clear_command()
+                    self.report(f"{command.robot}: goal ({command.x:.2f}, {command.y:.2f}) m")
+            except ValueError as exc:  # a drive that cannot take this command
+                self.report(f"{command.robot}: command refused: {exc}")
+        if self._driven:
+            now = self.clock()
+            for name, last in list(self._driven.items()):
+                if now - last > self.timeout:
+                    self.release(sim, name)
+
+    def release(self, sim, name: str, quiet: bool = False) -> None:
+        """Stop robot ``name`` and give it back to its controller, if /cmd_vel holds it."""
+        if self._driven.pop(name, None) is None:
+            return
+        robot = sim.robots[name]
+        if robot.overridden:
+            robot.set_velocity(0.0, 0.0)  # without a controller, it would keep the last command
+            robot.clear_command()
+        if not quiet:
+            self.report(f"{name}: no /cmd_vel for {self.timeout:g} s: stopped, back to its "
+                        "controller")
+
+    @property
+    def driven(self) -> list[str]:
+        """The robots /cmd_vel holds now."""
+        return list(self._driven)

@@ -1,0 +1,197 @@
+"""Substeps only where contacts can start: each tick's substep count, from the scene.
+
+The scenario's substep count (``config/substeps.py``) keeps every contact shallow and nothing
+from tunnelling. It is needed only in ticks where a contact can start or is going on; a tick in
+which no two shapes can touch is one ``space.step(dt)``.
+
+A *mover* is a body that moves (a robot, a crate, a pedestrian, a scripted obstacle): its shapes
+lie within ``reach`` [m] of its origin, and its origin moves no faster than ``speed`` [m/s]
+(robots and pedestrians: their drive's or walk's limit; a crate, which only contacts can speed
+up: its speed now). Between two recomputations no contact starts anywhere, so those bounds hold
+throughout. The gate keeps the time until which nothing can touch (``clear_until``):
+
+- a mover against the fixed world: its distance to the nearest static shape (a pymunk point
+  query) less its reach, over its speed;
+- two movers of the same copy: the distance between their origins less both reaches, over
+  both speeds.
+
+A tick takes one substep when it ends before ``clear_until``, otherwise the scenario's count;
+a test that finds less than ``MIN_CLEAR`` ahead counts as failed. In free space one substep and
+many follow the same arc once the motors have settled (to rounding); a motor still ramping
+changes speed once in a one-substep tick instead of once per substep. The count is chosen one
+tick ahead, because the velocities solved in a tick's last substep move the robots through the
+next tick's first: that substep is aimed for the next tick's length. A scene where something is
+always near (a crowded fleet) fails the test again and again: each failure waits twice as many
+ticks before the next test (at most ``MAX_WAIT``), so the test costs little where it cannot pay.
+Bodies moved outside the physics (a teleport) make the next tick take every substep and the
+one after it be tested anew.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+import pymunk
+from scipy.spatial import cKDTree
+
+HORIZON = 0.5  # [s] the farthest ahead one test looks: nearer shapes are all it queries
+# [s] the least clear time a test must find to grant single substeps: near shapes, where it
+# would grant only a tick or two, the full count is cheaper than testing again so soon.
+MIN_CLEAR = 0.1
+MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the contact slop)
+MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
+_PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
+
+
+@dataclass
+class Mover:
+    """A body that moves: ``reach`` [m] from its origin to its farthest shape point; ``speed``
+    [m/s] the most its origin moves while nothing touches it (None: its speed now, for a body
+    only contacts move); ``copy`` the copy of a shared space it belongs to (None: alone)."""
+
+    body: pymunk.Body
+    reach: float
+    speed: float | None
+    copy: int | None = None
+
+    def __post_init__(self) -> None:
+        # Only dynamic bodies meet static shapes (a kinematic one passes through them).
+        self.collides_with_static = self.body.body_type == pymunk.Body.DYNAMIC
+
+
+def reach_of(body: pymunk.Body) -> float:
+    """The farthest point of ``body``'s shapes from its origin [m]."""
+    reach = 0.0
+    for shape in body.shapes:
+        if isinstance(shape, pymunk.Circle):
+            far = math.hypot(*shape.offset) + shape.radius
+        elif isinstance(shape, pymunk.Poly):
+            far = max(math.hypot(*v) for v in shape.get_vertices()) + shape.radius
+        elif isinstance(shape, pymunk.Segment):
+            far = max(math.hypot(*shape.a), math.hypot(*shape.b)) + shape.radius
+        else:  # an unknown shape kind: its bounding box about the origin
+            bb = shape.bb
+            x, y = body.position
+            far = max(math.hypot(px - x, py - y) for px in (bb.left, bb.right)
+                      for py in (bb.bottom, bb.top))
+        reach = max(reach, far)
+    return reach
+
+
+def _origin_speed(body: pymunk.Body) -> float:
+    """How fast ``body``'s origin moves now [m/s] (its centre of gravity's speed plus the turn
+    of the offset between the two)."""
+    return abs(body.velocity) + abs(body.angular_velocity) * abs(body.center_of_gravity)
+
+
+class SubstepGate:
+    """Chooses the substep count of each tick (see the module docstring).
+
+    ``full`` is the scenario's count; ``dt`` the tick [s]. ``disturbed()`` says whether bodies
+    were moved outside the physics since it was last asked (a teleport)."""
+
+    def __init__(self, space: pymunk.Space, movers: Sequence[Mover], full: int, dt: float,
+                 disturbed: Callable[[], bool]) -> None:
+        self.space = space
+        self.disturbed = disturbed
+        self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
+        self.movers = [m for m in movers if m.body.shapes]
+        self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
+        self.full = full
+        self.dt = dt
+        self.clear_until = -math.inf  # [s] no contact can start before this time
+        self._planned = full  # the count of the coming tick, chosen in the one before
+        self._wait = 0  # ticks left before the next test
+        self._failures = 0  # failed tests in a row
+        self._first = 0  # the mover that failed the last test: tested first next time
+        self.single_ticks = 0  # ticks taken in one substep (for results and benchmarks)
+
+    def counts(self) -> tuple[int, int]:
+        """The substep counts of the coming tick and of the one after it."""
+        now = self.ticks * self.dt
+        self.ticks += 1
+        if self.disturbed():  # the coming tick takes the full count; the next is tested anew
+            self.clear_until = -math.inf
+            self._planned = self.full
+            self._wait = 0
+        current = self._planned
+        if current == 1:
+            self.single_ticks += 1
+        if self.full == 1:
+            return 1, 1
+        end = now + 2.0 * self.dt  # the next tick's end
+        planned = 1
+        if end > self.clear_until:
+            if self._wait > 0:
+                self._wait -= 1
+                planned = self.full
+            else:
+                self.clear_until = now + self._clear_for(max(2.0 * self.dt, MIN_CLEAR))
+                if now + MIN_CLEAR > self.clear_until or end > self.clear_until:
+                    self._failures += 1
+                    self._wait = min(MAX_WAIT, 2 ** (self._failures - 1))
+                    planned = self.full
+                else:
+                    self._failures = 0
+        self._planned = planned
+        return current, planned
+
+    def _clear_for(self, needed: float) -> float:
+        """How long [s] (at most HORIZON) no two shapes can touch; stops early, returning
+        something below ``needed``, as soon as it is clear that they can within it."""
+        movers = self.movers
+        if not movers:
+            return HORIZON
+        speeds = np.array([_origin_speed(m.body) if m.speed is None
+                           else max(m.speed, _origin_speed(m.body)) for m in movers])
+        clear = self._clear_between_movers(speeds)
+        if clear < needed:
+            return clear
+        moving = self._bodies
+        order = list(range(self._first, len(movers))) + list(range(self._first))
+        for k in order:
+            mover = movers[k]
+            if not mover.collides_with_static:
+                continue
+            speed = float(speeds[k])
+            look = mover.reach + speed * min(clear, HORIZON) + MARGIN
+            for hit in self.space.point_query(mover.body.position, look, pymunk.ShapeFilter()):
+                shape = hit.shape
+                if shape is None or shape.sensor or shape.body in moving:
+                    continue  # movers meet movers in _clear_between_movers
+                gap = hit.distance - mover.reach - MARGIN
+                clear = min(clear, gap / speed if speed > 0.0 else (HORIZON if gap > 0 else 0.0))
+                if clear < needed:
+                    self._first = k
+                    return clear
+        return max(clear, 0.0)
+
+    def _clear_between_movers(self, speeds: np.ndarray) -> float:
+        """How long [s] no two movers of one copy can touch (bounding discs), up to HORIZON."""
+        n = len(self.movers)
+        if n < 2:
+            return HORIZON
+        xy = np.array([tuple(m.body.position) for m in self.movers])
+        reach = np.array([m.reach for m in self.movers])
+        if n < _PAIRS_BY_TREE:
+            i, j = np.triu_indices(n, 1)
+        else:
+            near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
+            pairs = cKDTree(xy).query_pairs(near, output_type="ndarray")
+            if len(pairs) == 0:
+                return HORIZON
+            i, j = pairs[:, 0], pairs[:, 1]
+        copies = [m.copy for m in self.movers]
+        dynamic = np.array([m.collides_with_static for m in self.movers])
+        meet = np.array([copies[a] == copies[b] for a, b in zip(i.tolist(), j.tolist())],
+                        dtype=bool) & (dynamic[i] | dynamic[j])  # kinematic pairs never touch
+        if not meet.any():
+            return HORIZON
+        i, j = i[meet], j[meet]
+        gap = np.hypot(*(xy[i] - xy[j]).T) - reach[i] - reach[j] - MARGIN
+        closing = speeds[i] + speeds[j]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(closing > 0.0, gap / closing, np.where(gap > 0.0, HORIZON, 0.0))
+        return float(min(HORIZON, max(0.0, t.min())))

@@ -1,0 +1,105 @@
+"""world.substeps: adaptive: one pymunk step where no contact can start, every substep where one
+can; contacts hold as with the fixed count, and free-space arcs stay exact."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from builders import robot, scenario, wheels
+
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.errors import ScenarioError
+from pymunk_bot.replicas import Replicas
+from pymunk_bot.sim import Simulation
+
+
+def _sim(robots, obstacles=None, **extra) -> Simulation:
+    return Simulation(parse_scenario(scenario(robots, obstacles, **extra), "test"))
+
+
+def _fit_circle(points: np.ndarray) -> tuple[np.ndarray, float]:
+    a = np.c_[2 * points, np.ones(len(points))]
+    c = np.linalg.lstsq(a, (points ** 2).sum(axis=1), rcond=None)[0]
+    return c[:2], float(np.sqrt(c[2] + c[:2] @ c[:2]))
+
+
+def test_open_space_takes_one_step_per_tick_and_keeps_the_arc_exact():
+    sim = _sim([robot([10, 10, 0], controller=wheels(0.45, 0.55), track_width=0.3)],
+               substeps="adaptive")
+    sim.run(1.0)  # the motors settle
+    points = []
+    for _ in range(120):
+        sim.step()
+        points.append(sim.robots["r"].pose[:2])
+    assert sim.single_substep_ticks >= 0.9 * sim.steps  # nothing near: one step nearly always
+    centre, radius = _fit_circle(np.array(points))
+    expected = 0.3 / 2 * (0.55 + 0.45) / (0.55 - 0.45)  # track / 2 * (r + l) / (r - l)
+    assert radius == pytest.approx(expected, abs=1e-6)
+    assert np.hypot(*(np.array(points) - centre).T).std() < 1e-9  # on the circle
+
+
+def test_default_and_named_counts_take_every_substep():
+    for extra in ({}, {"substeps": 3}):
+        sim = _sim([robot([10, 10, 0], controller=wheels(0.5, 0.5))], **extra)
+        sim.run(1.0)
+        assert sim.single_substep_ticks == 0
+
+
+@pytest.mark.parametrize("thickness", [0.01, 0.02])
+def test_a_fast_robot_stops_at_a_thin_wall(thickness):
+    """Into a thin wall at 2 m/s: every substep where the contact starts, so no crossing and
+    no contact deeper than 1 cm; one contact episode."""
+    sim = _sim([robot([2, 2, 0], max_wheel_speed=2.0, max_accel=10.0,
+                      controller={"type": "velocity", "v": 2.0})],
+               [{"type": "wall", "start": [5, 0], "end": [5, 4], "thickness": thickness}],
+               size=(8, 4), substeps="adaptive")
+    deepest = 0.0
+    for _ in range(240):
+        sim.step()
+        for arbiter_depth in _depths(sim):
+            deepest = max(deepest, arbiter_depth)
+    r = sim.robots["r"]
+    assert r.pose[0] < 5 - thickness / 2 - 0.2 + 0.01  # stopped at the wall's near face
+    assert r.collisions == 1
+    assert deepest <= 0.01
+    assert 0 < sim.single_substep_ticks < sim.steps  # free on the way, substepped at the wall
+
+
+def _depths(sim: Simulation) -> list[float]:
+    body = sim.robots["r"].body
+    depths: list[float] = []
+    body.each_arbiter(lambda arbiter: depths.extend(
+        -point.distance for point in arbiter.contact_point_set.points))
+    return depths
+
+
+def test_a_teleport_makes_the_next_tick_take_every_substep():
+    sim = _sim([robot([10, 10, 0], controller=wheels(0.5, 0.5))],
+               [{"type": "box", "center": [3, 3], "size": [1, 1]}], substeps="adaptive")
+    sim.run(1.0)
+    before = sim.single_substep_ticks
+    sim.robots["r"].teleport(3.0, 3.75, 0.0)  # beside the box
+    sim.step()
+    assert sim.single_substep_ticks == before  # no single step right after the jump
+
+
+def test_adaptive_runs_are_deterministic_alone_and_as_copies():
+    data = scenario([robot([3, 3, 0.3], controller=wheels(0.6, 0.8))],
+                    [{"type": "box", "center": [6, 4], "size": [1, 1]}], size=(10, 8),
+                    substeps="adaptive")
+    config = parse_scenario(data, "test")
+    a, b = Simulation(config, seed=3), Simulation(config, seed=3)
+    a.run(8.0)
+    b.run(8.0)
+    assert a.result()["robots"] == b.result()["robots"]
+    twice = [Replicas(config, [1, 2]) for _ in range(2)]
+    for replicas in twice:
+        for _ in range(480):
+            replicas.step()
+    assert [s.result()["robots"] for s in twice[0].sims] == \
+        [s.result()["robots"] for s in twice[1].sims]
+
+
+def test_substeps_accepts_adaptive_and_refuses_other_words():
+    parse_scenario(scenario([robot([1, 1, 0])], substeps="adaptive"), "test")
+    with pytest.raises(ScenarioError, match="world.substeps"):
+        parse_scenario(scenario([robot([1, 1, 0])], substeps="auto"), "test")

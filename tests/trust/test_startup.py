@@ -1,0 +1,30 @@
+"""Ctrl-C at any moment of `pymunk-bot`'s start-up (imports, building the parser, loading the
+scenario) ends it with one line, never a KeyboardInterrupt traceback."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("delay", [0.15, 0.2, 0.3, 0.45, 0.7])
+def test_ctrl_c_during_start_up_is_one_line(delay):
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless"],
+                            cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    if "init_import_site" in err:  # Python itself was still starting (a loaded machine)
+        pytest.skip("the signal came before the interpreter ran any of pymunk-bot")
+    assert "Traceback" not in err, err
+    assert len(err.strip().splitlines()) <= 1, err
+    assert proc.returncode in (130, -signal.SIGINT), (proc.returncode, err)
