@@ -303,6 +303,11 @@ class Simulation:
         if observer not in self.observers:
             self.observers.append(observer)
 
+    def detach(self, observer: Any) -> None:
+        """Stop calling ``observer`` after every step (nothing if it was not attached)."""
+        if observer in self.observers:
+            self.observers.remove(observer)
+
     def reset(self, seed: int | None = None) -> None:
         """Rebuild everything from the config (pymunk copies are not bit-exact); ``seed``
         replaces the run's seed. Robot handles and ``robots`` stay valid and see the new state.

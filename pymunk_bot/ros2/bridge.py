@@ -26,7 +26,7 @@ from ..foxglove.snapshot import geometry_of_sim, movable_bodies, snapshot_of_sim
 from .commands import CommandInbox
 from .jsonmsg import dumps, loads, to_plain
 from .messages import Outgoing, RosMessages, typestore
-from .names import DEFAULT_PORT, latched
+from .names import DEFAULT_PORT, latched, robot_names
 from .protocol import BadRequest, Catalog, ClientState, Protocol, status
 
 CLIENT_QUEUE = 200  # messages waiting for one client; older ones are dropped
@@ -85,6 +85,7 @@ class RosbridgeServer:
         self._stopping: asyncio.Event | None = None
         self._ready = threading.Event()
         self._error: BaseException | None = None
+        self._on_stop: list[Callable[[], None]] = []  # run once, by stop()
         self.port = port
         self._thread = threading.Thread(target=self._serve, name="rosbridge", daemon=True)
         self._thread.start()
@@ -126,6 +127,12 @@ class RosbridgeServer:
                 pass
         self._thread.join(START_TIMEOUT)
         self._loop = None
+        while self._on_stop:
+            self._on_stop.pop()()
+
+    def when_stopped(self, action: Callable[[], None]) -> None:
+        """Run ``action`` when the server stops (e.g. take its observers off the run)."""
+        self._on_stop.append(action)
 
     # ------------------------------------------------------------------ the loop's thread
     def _serve(self) -> None:
@@ -294,7 +301,11 @@ class BridgeObserver:
         self._bodies = movable_bodies(sim, geometry)
         self._messages = RosMessages(geometry, self.world_map)
         self._every_step = self.server.protocol.catalog.every_step
-        self._sensors = [s for r in sim.robots.values() for s in (r.lidar, r.imu) if s is not None]
+        # Each sensor with the topic its readings go out on: a reading nobody subscribed to
+        # is no reason to sample the run.
+        names = robot_names(list(sim.robots))
+        self._sensors = [(s, names[r.name].topic("scan" if s is r.lidar else "imu"))
+                         for r in sim.robots.values() for s in (r.lidar, r.imu) if s is not None]
         self._readings: list = [None] * len(self._sensors)
         self.server.publish(self._messages.start(snapshot_of_sim(sim, self._bodies), self._wanted))
 
@@ -305,18 +316,19 @@ class BridgeObserver:
         subscribed = self.server.subscribed
         if not subscribed or self._messages is None:
             return  # nobody listens: no snapshot, no messages
-        if subscribed.isdisjoint(self._every_step) and not self._new_reading():
-            return  # only sensor topics wanted, and no sensor has read since the last step
+        if subscribed.isdisjoint(self._every_step) and not self._new_reading(subscribed):
+            return  # only sensor topics wanted, and none of theirs has read since the last step
         self.server.publish(self._messages.messages(snapshot_of_sim(sim, self._bodies),
                                                     self._wanted))
 
-    def _new_reading(self) -> bool:
-        """Whether a LiDAR or IMU has taken a reading since the last call."""
+    def _new_reading(self, subscribed: Any) -> bool:
+        """Whether a LiDAR or IMU on a subscribed topic has read since the last call."""
         new = False
-        for k, sensor in enumerate(self._sensors):
+        for k, (sensor, topic) in enumerate(self._sensors):
             reading = sensor.latest if sensor.name == "lidar" else sensor.reading
             if reading is not self._readings[k]:
-                self._readings[k], new = reading, True
+                self._readings[k] = reading
+                new = new or topic in subscribed
         return new
 
 
@@ -329,8 +341,12 @@ def serve_sim(sim, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
     mapping = [r.name for r in sim.robots.values() if r.mapper is not None]
     catalog = Catalog.of_run(geometry_of_sim(sim).meta, world_map is not None, mapping)
     server = RosbridgeServer(catalog, inbox, lambda: float(sim.time), host, port, report)
+    # Stopped, the server lets go of the run: no cycle through sim.observers keeps the run
+    # alive past the interpreter's own teardown (where freeing a Space crashes cffi).
+    server.when_stopped(lambda: sim.detach(inbox))
     try:
-        BridgeObserver(server, world_map).attach(sim)
+        observer = BridgeObserver(server, world_map).attach(sim)
+        server.when_stopped(lambda: sim.detach(observer))
     except BaseException:
         server.stop()
         raise
