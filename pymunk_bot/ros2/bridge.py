@@ -18,6 +18,7 @@ import itertools
 import logging
 import threading
 import time
+import weakref
 from typing import Any, Callable
 
 from ..errors import ScenarioError
@@ -340,7 +341,13 @@ def serve_sim(sim, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
     inbox = (inbox or CommandInbox(report=report)).attach(sim)
     mapping = [r.name for r in sim.robots.values() if r.mapper is not None]
     catalog = Catalog.of_run(geometry_of_sim(sim).meta, world_map is not None, mapping)
-    server = RosbridgeServer(catalog, inbox, lambda: float(sim.time), host, port, report)
+    run = weakref.ref(sim)  # the server does not keep the run alive
+
+    def sim_time() -> float:
+        alive = run()
+        return float(alive.time) if alive is not None else 0.0
+
+    server = RosbridgeServer(catalog, inbox, sim_time, host, port, report)
     # Stopped, the server lets go of the run: no cycle through sim.observers keeps the run
     # alive past the interpreter's own teardown (where freeing a Space crashes cffi).
     server.when_stopped(lambda: sim.detach(inbox))
