@@ -18,6 +18,7 @@ class ScenarioError(Exception):
         return (type(self), (self.source, self.path, self.problem, self.line))
 
     def format(self) -> str:
+        """The one-line message: file, key path, problem and (when known) the line."""
         where = f"{self.source}: {self.path}: " if self.path else f"{self.source}: "
         line = f" (line {self.line})" if self.line is not None else ""
         # One line always, even when the problem quotes user text with line breaks in it.

@@ -38,6 +38,8 @@ class Registry(Generic[T]):
         return decorate
 
     def add(self, name: str, factory: T, config: Any = None) -> None:
+        """Register ``factory`` (or a ``"module:attr"`` string) and its config model as
+        ``name``; ValueError if the name is taken."""
         if name in self._items:
             raise ValueError(f"{self.kind} '{name}' is already registered")
         self._items[name] = Entry(name, factory, config)
@@ -49,6 +51,7 @@ class Registry(Generic[T]):
         self.version += 1
 
     def entry(self, name: str) -> Entry[T]:
+        """The entry registered as ``name``; KeyError listing the valid names if none is."""
         try:
             return self._items[name]
         except KeyError:
@@ -65,6 +68,7 @@ class Registry(Generic[T]):
         return entry.factory
 
     def names(self) -> list[str]:
+        """The registered names, sorted."""
         return sorted(self._items)
 
     def entries(self) -> list[Entry[T]]:

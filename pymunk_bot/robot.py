@@ -98,6 +98,7 @@ class Fleet:
         self._refresh_targets()
 
     def watch_goal(self, i: int) -> None:
+        """Robot ``i`` has a new goal: not reached yet, and checked every tick from now."""
         self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
         self._pending = np.union1d(self._pending, [i])
         self._refresh_targets()

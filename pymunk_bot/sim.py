@@ -57,6 +57,7 @@ class LocalizationScore:
         self.estimate: list[np.ndarray] = []
 
     def add(self, truth: np.ndarray, estimate: np.ndarray) -> None:
+        """One sample: the true pose and the estimate [x, y, theta]."""
         self.truth.append(np.array(truth, dtype=float))
         self.estimate.append(np.array(estimate, dtype=float))
 
@@ -378,6 +379,7 @@ class Simulation:
 
     # ------------------------------------------------------------------ results
     def check_expectations(self) -> list[Check]:
+        """Every expectation of the scenario against the run so far, one Check each."""
         return evaluate(self.config.expect, self.robots)
 
     def verdict(self) -> Verdict:

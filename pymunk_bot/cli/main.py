@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 import traceback
 import warnings
 from pathlib import Path
@@ -55,11 +56,14 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
     from ..results import write_json
 
     interactive = not args.headless and outputs.record is None and _display_available()
+    watched: float | None = None
     if interactive:
         from ..viewer import ViewerUnavailable, run_window
 
+        opened = time.perf_counter()
         try:
             run_window(sim, duration)
+            watched = time.perf_counter() - opened  # [s] of real time the window was open
         except ViewerUnavailable as exc:
             interactive = False
             print(f"note: the window cannot open ({exc}); running headless")
@@ -74,15 +78,13 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
     outputs.finish(sim)  # the run log, the built map (--map-out)
     if args.out:
         write_json(args.out, result)
-    _print_summary(result, verdict.lines())
+    _print_summary(result, verdict.lines(), watched)
     return EXIT_OK if verdict.passed else EXIT_EXPECTATION_FAILED
 
 
-def _print_summary(result: dict, verdict_lines: list[str]) -> None:
-    rtf = result["real_time_factor"]
-    speed = f" ({rtf:.0f}x real time)" if rtf else ""
-    print(f"{result['scenario']} (seed {result['seed']}): {result['sim_time']:.2f} s simulated in "
-          f"{result['wall_time']:.3f} s{speed}")
+def _print_summary(result: dict, verdict_lines: list[str], watched: float | None = None) -> None:
+    """The run's result; ``watched`` [s]: how long the window was open, if there was one."""
+    print(summary_line(result, watched))
     for name, r in result["robots"].items():
         goal = ""
         if r["goal_reached"]:
@@ -98,6 +100,20 @@ def _print_summary(result: dict, verdict_lines: list[str]) -> None:
     for line in verdict_lines[:-1]:
         print(f"  {line}")
     print(verdict_lines[-1])
+
+
+def summary_line(result: dict, watched: float | None = None) -> str:
+    """What was simulated and what was measured: the real time spent computing steps (the
+    result's ``wall_time``; its ratio is ``real_time_factor``), and, after a window, how long
+    the run was watched, which is what its speed setting paced."""
+    rtf = result["real_time_factor"]
+    line = f"{result['scenario']} (seed {result['seed']}): {result['sim_time']:.2f} s simulated"
+    compute = f"computing the steps took {result['wall_time']:.3f} s"
+    if watched is None:
+        return f"{line}; {compute}" + (f" ({rtf:.0f}x real time)" if rtf else "")
+    pace = f" ({result['sim_time'] / watched:.2f}x real time)" if watched > 0 else ""
+    headless = f" (headless, it would run at {rtf:.0f}x real time)" if rtf else ""
+    return f"{line}, watched over {watched:.1f} s in the window{pace}; {compute} of that{headless}"
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:

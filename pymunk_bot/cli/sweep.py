@@ -123,7 +123,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     passed = sum(bool(r["passed"]) for r in rows)
     print(f"{passed}/{len(rows)} runs passed; rows in {args.out}")
     if plot is not None:
-        plot_summary(groups, plot)
+        plot_summary(groups, plot, scenario=args.scenario)
         print(f"plot in {plot}")
     return EXIT_OK if passed == len(rows) else EXIT_SOME_FAILED
 

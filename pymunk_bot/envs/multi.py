@@ -130,7 +130,7 @@ class MultiRobotEnv(ParallelEnv):
         if self._renderer is None:
             from .render import FrameRenderer
 
-            self._renderer = FrameRenderer(self._sim())
+            self._renderer = FrameRenderer(self._sim(), agents=self.possible_agents)
         if self.render_mode == "rgb_array":
             return self._renderer.rgb()
         self._renderer.show(f"pymunk-bot: {self.config.name}")

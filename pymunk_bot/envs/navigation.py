@@ -102,7 +102,7 @@ class NavigationEnv(gym.Env):
         if self._renderer is None:
             from .render import FrameRenderer
 
-            self._renderer = FrameRenderer(self.episode.sim)
+            self._renderer = FrameRenderer(self.episode.sim, agents=[self.episode.robot_name])
         if self.render_mode == "rgb_array":
             return self._renderer.rgb()
         from ..viewer import ViewerUnavailable

@@ -2,7 +2,7 @@
 and the "human" window. pygame is imported only here, and only when a frame is asked for."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Iterable
 
 import numpy as np
 
@@ -17,7 +17,9 @@ class FrameRenderer:
     """Draws a simulation. It watches every physics step (as an observer) so trails and scans
     are drawn exactly as the viewer would; after a reset it starts over."""
 
-    def __init__(self, sim, size: tuple[int, int] | None = None) -> None:
+    def __init__(self, sim, size: tuple[int, int] | None = None,
+                 agents: Iterable[str] = ()) -> None:
+        """``agents``: the robots the env's agent drives, labelled as such in the HUD."""
         from ..viewer._pygame import require_pygame
 
         self.pygame = require_pygame()
@@ -33,6 +35,7 @@ class FrameRenderer:
         self.size = size
         self.viewer = Viewer(self.source, size)
         self.viewer.recording = True  # no speed and key hints in the frame
+        self.viewer.agents = frozenset(agents)
         self.surface = self.pygame.Surface(size)
         self._window: pygame.Surface | None = None  # the "human" window, once opened
         sim.observers.append(self)

@@ -47,6 +47,7 @@ class RewardWeights:
 
     @classmethod
     def from_any(cls, value: "RewardWeights | Mapping[str, float] | None") -> "RewardWeights":
+        """Weights as given, from a mapping of some of their names, or the defaults (None)."""
         if value is None:
             return cls()
         if isinstance(value, cls):

@@ -287,7 +287,8 @@ class NavigationVectorEnv(VectorEnv):
         if self.render_mode is not None and self._renderers is None:
             from .render import FrameRenderer
 
-            self._renderers = [FrameRenderer(e.sim) for e in self.episodes]
+            self._renderers = [FrameRenderer(e.sim, agents=[e.robot_name])
+                               for e in self.episodes]
 
     def close_extras(self, **kwargs: Any) -> None:
         for renderer in self._renderers or []:

@@ -58,6 +58,7 @@ class OccupancyMapper:
         return rate is None or self._last_time is None or time - self._last_time >= 1.0 / rate - 1e-9
 
     def reset(self) -> None:
+        """Forget every observation: the whole grid back to unknown."""
         self.log_odds[:] = 0.0
         self.observed[:] = False
         self.scans = 0

@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from ..config import ScenarioConfig, load_scenario, parse_scenario, scenario_data
+from ..config import ScenarioConfig, load_scenario, parse_scenario, resolve, scenario_data
 from ..errors import ScenarioError
 from .backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
 from .grid import Run, build_grid, parse_assignment, parse_seeds
@@ -38,12 +38,17 @@ def chunk_runs(runs: list[Run], workers: int, chunk_size: int | None = None) -> 
     return [runs[i:i + chunk_size] for i in range(0, len(runs), chunk_size)]
 
 
-def _load(scenario: str | Path | dict | ScenarioConfig | None) -> tuple[ScenarioConfig, str]:
+def _load(scenario: str | Path | dict | ScenarioConfig | None, base_dir: str | Path | None
+          ) -> tuple[ScenarioConfig, str, str | None]:
+    """The config, its name in messages, and the folder its Python controllers come from."""
     if isinstance(scenario, ScenarioConfig):
-        return scenario, f"scenario '{scenario.name}'"
+        return scenario, f"scenario '{scenario.name}'", None if base_dir is None else str(base_dir)
     if isinstance(scenario, dict):
-        return parse_scenario(scenario, "<dict>"), "<dict>"
-    return load_scenario(scenario), "default" if scenario is None else str(scenario)
+        folder = None if base_dir is None else str(Path(base_dir).resolve())
+        return parse_scenario(scenario, "<dict>", base_dir=folder), "<dict>", folder
+    folder = str(Path(base_dir).resolve() if base_dir is not None
+                 else resolve(scenario).resolve().parent)  # beside the file, as `run` does
+    return load_scenario(scenario), "default" if scenario is None else str(scenario), folder
 
 
 def _resumed_rows(out: Path, runs: list[Run], source: str) -> dict[int, dict]:
@@ -67,15 +72,18 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
               address: str | None = None, workers: int | None = None,
               out: str | Path | None = None, resume: bool = False,
               duration: float | None = None, chunk_size: int | None = None,
-              progress: bool = False) -> list[dict]:
+              progress: bool = False, base_dir: str | Path | None = None) -> list[dict]:
     """Run every combination of ``grid`` values (key path -> values) for every seed.
+
+    A ``python`` controller's module is looked for beside the scenario file first (as
+    ``pymunk-bot run`` does), or in ``base_dir`` when given (for a dict or a config).
 
     Returns one row per run, sorted by run index (see docs/sweeps.md for the columns). With
     ``out`` (.csv or .parquet), rows are journalled as they arrive and the table is written
     atomically at the end; ``resume`` skips the runs an earlier attempt finished.
     Bad keys or values raise ScenarioError before anything runs.
     """
-    config, source = _load(scenario)
+    config, source, folder = _load(scenario, base_dir)
     values = {str(k): list(v) for k, v in (grid or {}).items()}  # key path -> its values
     if isinstance(seeds, str):
         seeds = parse_seeds(seeds)
@@ -90,7 +98,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
         raise ValueError(f"--chunk-size must be >= 1 (got {chunk_size})")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be > 0 (got {duration})")
-    runs = build_grid(config, source, values, seeds)  # every combination validated here
+    runs = build_grid(config, source, values, seeds, folder)  # every combination validated
     out = None if out is None else Path(out)
     done: dict[int, dict] = {}
     if out is not None:
@@ -111,7 +119,8 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     bar = tqdm(total=len(runs), initial=len(done), unit="run", desc="sweep",
                disable=None if progress else True, leave=False)
     try:
-        for rows in run_chunks(backend, base, source, chunks, duration, workers, address):
+        for rows in run_chunks(backend, base, source, chunks, duration, workers, address,
+                               folder):
             if journal is not None:
                 journal.write(rows)
             for row in rows:

@@ -28,24 +28,25 @@ def default_workers() -> int:
 
 
 def run_chunks(backend: str, base: dict, source: str, chunks: list[list[Run]],
-               duration: float | None, workers: int | None, address: str | None
-               ) -> Iterator[Rows]:
-    """Rows of each chunk, in completion order."""
+               duration: float | None, workers: int | None, address: str | None,
+               base_dir: str | None = None) -> Iterator[Rows]:
+    """Rows of each chunk, in completion order (``base_dir``: where the scenario's Python
+    controllers are looked for, as :func:`~pymunk_bot.config.parse_scenario` takes it)."""
     runners: dict[str, Callable[..., Iterator[Rows]]] = {
         "serial": _serial, "process": _process, "dask": _dask, "ray": _ray}
     if backend not in runners:
         raise ValueError(f"unknown backend '{backend}' (choose from {', '.join(BACKENDS)})")
     if address is not None and backend not in ("dask", "ray"):
         raise ValueError(f"--address is for the dask and ray backends, not '{backend}'")
-    yield from runners[backend](base, source, chunks, duration, workers, address)
+    yield from runners[backend](base, source, chunks, duration, workers, address, base_dir)
 
 
-def _serial(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
+def _serial(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
     for chunk in chunks:
-        yield run_chunk(base, source, chunk, duration)
+        yield run_chunk(base, source, chunk, duration, base_dir)
 
 
-def _process(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
+def _process(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -53,7 +54,8 @@ def _process(base, source, chunks, duration, workers, address) -> Iterator[Rows]
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers or default_workers(),
                              mp_context=context) as pool:
-        futures = [pool.submit(run_chunk, base, source, chunk, duration) for chunk in chunks]
+        futures = [pool.submit(run_chunk, base, source, chunk, duration, base_dir)
+                   for chunk in chunks]
         try:
             for future in as_completed(futures):
                 yield future.result()
@@ -62,7 +64,7 @@ def _process(base, source, chunks, duration, workers, address) -> Iterator[Rows]
                 future.cancel()
 
 
-def _dask(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
+def _dask(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -84,7 +86,8 @@ def _dask(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
         raise BackendUnavailable(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
         base_future = client.scatter(base, broadcast=True)
-        futures = [client.submit(run_chunk, base_future, source, chunk, duration, pure=False)
+        futures = [client.submit(run_chunk, base_future, source, chunk, duration, base_dir,
+                                 pure=False)
                    for chunk in chunks]
         try:
             for future in as_completed(futures):
@@ -97,7 +100,7 @@ def _dask(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
             cluster.close()
 
 
-def _ray(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
+def _ray(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
     try:
         import ray
     except ImportError:
@@ -115,7 +118,7 @@ def _ray(base, source, chunks, duration, workers, address) -> Iterator[Rows]:
     try:
         remote = ray.remote(num_cpus=1)(run_chunk)
         base_ref = ray.put(base)
-        pending = [remote.remote(base_ref, source, chunk, duration) for chunk in chunks]
+        pending = [remote.remote(base_ref, source, chunk, duration, base_dir) for chunk in chunks]
         try:
             while pending:
                 done, pending = ray.wait(pending, num_returns=1)

@@ -143,9 +143,10 @@ def scenario_with(base: dict, values: Iterable[tuple[str, Any]]) -> dict:
 
 
 def build_grid(config: ScenarioConfig, source: str, grid: dict[str, list[Any]],
-               seeds: Sequence[int]) -> list[Run]:
+               seeds: Sequence[int], base_dir: str | None = None) -> list[Run]:
     """Every combination of ``grid`` values times ``seeds``, each combination validated as a
-    scenario first: a bad path or value raises ScenarioError naming it, before any run."""
+    scenario first (Python controllers looked for in ``base_dir`` first): a bad path or value
+    raises ScenarioError naming it, before any run."""
     for path, values in grid.items():
         if not values:
             raise ScenarioError(source, path, "--set needs at least one value")
@@ -167,7 +168,7 @@ def build_grid(config: ScenarioConfig, source: str, grid: dict[str, list[Any]],
             where, problem = exc.args
             raise ScenarioError(source, where, f"{problem} (--set {_describe(values)})") from None
         try:
-            parse_scenario(data, source)
+            parse_scenario(data, source, base_dir=base_dir)
         except ScenarioError as exc:
             raise ScenarioError(source, exc.path, f"{exc.problem} (with --set "
                                                   f"{_describe(values)})") from None

@@ -46,15 +46,17 @@ def result_row(run: Run, result: dict) -> dict[str, Any]:
     return row
 
 
-def run_one(base: dict, source: str, run: Run, duration: float | None) -> dict[str, Any]:
-    """Build the run's scenario, simulate it headless and return its row."""
-    config = parse_scenario(scenario_with(base, run.values), source)
+def run_one(base: dict, source: str, run: Run, duration: float | None,
+            base_dir: str | None = None) -> dict[str, Any]:
+    """Build the run's scenario (Python controllers looked for in ``base_dir`` first, as for
+    the scenario file), simulate it headless and return its row."""
+    config = parse_scenario(scenario_with(base, run.values), source, base_dir=base_dir)
     sim = Simulation(config, seed=run.seed, source=source)
     sim.run(config.world.duration if duration is None else duration)
     return result_row(run, sim.result())
 
 
-def run_chunk(base: dict, source: str, runs: list[Run], duration: float | None
-              ) -> list[dict[str, Any]]:
+def run_chunk(base: dict, source: str, runs: list[Run], duration: float | None,
+              base_dir: str | None = None) -> list[dict[str, Any]]:
     """Several runs in one task, so the per-task overhead of a backend is paid once."""
-    return [run_one(base, source, run, duration) for run in runs]
+    return [run_one(base, source, run, duration, base_dir) for run in runs]

@@ -8,6 +8,9 @@ from typing import Any
 
 # Shown in the printed table (every numeric field is in the Summary); per robot, by suffix.
 HEADLINE = ("goal_reached", "time_to_goal", "collisions", "min_clearance")
+# The headline metrics' units, as the plot's axes show them (goal_reached is plotted as a rate)
+HEADLINE_UNITS = {"goal_reached": "% of runs", "time_to_goal": "time [s]",
+                  "collisions": "contact episodes", "min_clearance": "distance [m]"}
 NOT_METRICS = {"run", "seed", "steps", "sim_time"}
 
 
@@ -20,6 +23,9 @@ class Stat:
 
 @dataclass(frozen=True)
 class Group:
+    """The runs of one swept value (or all runs, ``key == "all"``): their count, pass rate and
+    each metric's mean and spread."""
+
     key: str  # the swept key path, or "all"
     value: Any
     runs: int

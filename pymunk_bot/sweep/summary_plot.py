@@ -5,11 +5,26 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .summary import HEADLINE, Group
+from .summary import HEADLINE, HEADLINE_UNITS, Group
+
+# Units of the scenario keys a sweep most often varies, by the key's last name (the scenario
+# format's units); a key not listed is labelled by its path alone.
+KEY_UNITS = {"max_wheel_speed": "m/s", "max_speed": "m/s", "max_accel": "m/s²",
+             "max_angular_speed": "rad/s", "max_steer": "rad", "max_steer_rate": "rad/s",
+             "radius": "m", "mass": "kg", "track_width": "m", "wheelbase": "m", "dt": "s",
+             "duration": "s", "tolerance": "m", "max_range": "m", "min_range": "m",
+             "fov": "rad", "rate": "Hz", "beams": "beams", "particles": "particles"}
 
 
-def plot_summary(groups: list[Group], path: str | Path) -> None:
-    """Pass rate and headline metrics (mean, error bar = std) against each swept value."""
+def axis_label(name: str, units: dict[str, str]) -> str:
+    """``name [unit]`` when the unit of the name's last part is known, else ``name``."""
+    unit = units.get(name.rsplit(".", 1)[-1].split("[")[0])
+    return f"{name} [{unit}]" if unit else name
+
+
+def plot_summary(groups: list[Group], path: str | Path, scenario: str | None = None) -> None:
+    """Pass rate and headline metrics (mean, error bar = std) against each swept value, titled
+    with what was swept, on which ``scenario`` (a name or path), and how many runs."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -31,20 +46,26 @@ def plot_summary(groups: list[Group], path: str | Path) -> None:
             if panel == "pass rate":
                 ax.bar(x, [100 * g.pass_rate for g in mine], color="tab:green")
                 ax.set_ylim(0, 100)
-                ax.set_ylabel("passed [%]")
+                ax.set_ylabel("% of runs")
             elif panel.endswith("goal_reached"):  # a rate, like the pass rate
                 ax.bar(x, [100 * g.metrics[panel].mean if panel in g.metrics else 0.0
                            for g in mine], color="tab:blue")
                 ax.set_ylim(0, 100)
-                ax.set_ylabel(f"{panel} [%]")
+                ax.set_ylabel(HEADLINE_UNITS[panel.rsplit(".", 1)[-1]])
             else:
                 means = [g.metrics[panel].mean if panel in g.metrics else math.nan for g in mine]
                 stds = [g.metrics[panel].std if panel in g.metrics else 0.0 for g in mine]
                 ax.errorbar(list(x), means, yerr=stds, fmt="o-", capsize=3)
-                ax.set_ylabel(panel)
+                ax.set_ylabel(HEADLINE_UNITS[panel.rsplit(".", 1)[-1]])
+            ax.set_title(panel, fontsize="medium")
             ax.set_xticks(list(x), labels)
-            ax.set_xlabel(key)
-    fig.tight_layout()
+            ax.set_xlabel(axis_label(key, KEY_UNITS))
+    runs = sum(g.runs for g in groups if g.key == keys[0]) if keys else 0
+    where = f" on {scenario}" if scenario else ""
+    fig.suptitle(f"Sweep of {', '.join(keys)}{where}: {runs} runs", fontweight="bold")
+    fig.text(0.5, 0.005, "points: mean over the runs of each value; error bars: ± 1 standard "
+             "deviation", ha="center", va="bottom", fontsize="small", color="0.35")
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
     path = Path(path)
     tmp = temp_beside(path, path.suffix or ".png")
     try:

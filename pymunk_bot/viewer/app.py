@@ -52,7 +52,8 @@ class Viewer:
         self.speed_index = DEFAULT_SPEED
         self.help = False
         self.running = True
-        self.recording = False  # a video frame: no speed, no key hint
+        self.recording = False  # a video frame: no speed, no key hint, the HUD off the arena
+        self.agents: frozenset[str] = frozenset()  # robots a program drives (an env's agent)
         names = source.robot_names
         self.selected: str | None = names[0] if names else None
         self.held: set[str] = set()  # teleop directions held down
@@ -256,7 +257,8 @@ class Viewer:
             robot.clear_wheel_speeds()
             self.held.clear()
         note = "" if robot.controller is not None else " (it has no controller to drive there)"
-        self.say(f"{self.selected}: goal ({x:.2f}, {y:.2f}) m{note}")
+        task = "; the task goal still judges the run" if robot.goal is not None else ""
+        self.say(f"{self.selected}: drive-to goal ({x:.2f}, {y:.2f}) m{note}{task}")
 
     # ------------------------------------------------------------------ teleop
     def teleop_key(self, direction: str, down: bool) -> None:
@@ -323,11 +325,22 @@ class Viewer:
         if self.recording and len(scene.robots) > 1:
             selected = None  # a video has no selection: the HUD sums over the robots
         running = not (self.paused or self.ended)
+        # A frame (video, rgb_array) puts its HUD in the margins, off the arena.
+        band = self._margin(surface.get_height()) if self.recording else 0
         state = HudState(speed_label="" if self.recording else self.speed_label,
                          achieved=self.achieved if running else None, paused=self.paused,
                          ended=self.ended, message=self.message, help=self.help,
-                         replay=not self.source.interactive, hint=not self.recording)
+                         replay=not self.source.interactive, hint=not self.recording,
+                         agents=self.agents, band=band)
         self.hud.draw(surface, scene, self.camera, state, selected)
+
+    def _margin(self, surface_height: int) -> int:
+        """[px] free both above and below the arena in the present view."""
+        height = self.source.size[1]
+        y0 = getattr(self.source, "origin", (0.0, 0.0))[1]
+        top = self.camera.to_screen(0.0, y0 + height)[1]
+        bottom = surface_height - self.camera.to_screen(0.0, y0)[1]
+        return max(0, int(min(top, bottom)))
 
 
 def teleop_velocity(spec, forward: int, turn: int, slide: int) -> tuple[float, float, float]:

@@ -100,7 +100,7 @@ def draw_scene(surface: pygame.Surface, scene: Scene, camera: Camera, layers: La
                 prim.polyline(surface, pal.mix(pal.robot_colour(r.index), pal.FLOOR, 0.3),
                               camera.points_to_screen(r.trail), width=2)
     for r in robots:
-        _goal(surface, camera, r)
+        _goal(surface, camera, r, font)
         if layers.paths and r.path is not None and len(r.path) > 1:
             prim.dashed_polyline(surface, pal.robot_colour(r.index),
                                  camera.points_to_screen(r.path))
@@ -245,17 +245,40 @@ def _dot(colour, radius: int) -> pygame.Surface:
     return _DOTS[key]
 
 
-def _goal(surface: pygame.Surface, camera: Camera, r: RobotView) -> None:
-    if r.goal is None:
-        return
+def _goal(surface: pygame.Surface, camera: Camera, r: RobotView,
+          font: pygame.font.Font | None = None) -> None:
+    """The task goal: a solid ring of the goal tolerance with a +, filled once reached. A goal
+    the controller drives to instead (a click, or its own block's goal): a dashed ring with an
+    x. With both on screen, each is labelled, so the one that judges the run is never mistaken
+    for the other."""
     colour = pal.robot_colour(r.index)
-    cx, cy = camera.to_screen(*r.goal)
-    tol = max(camera.length(r.goal_tolerance), 4.0)
-    fill = pal.mix(colour, pal.FLOOR, 0.82) if r.goal_reached else None
-    prim.circle(surface, fill, colour, (cx, cy), tol)
-    arm = max(6.0, 0.6 * tol)
-    prim.line(surface, colour, (cx - arm, cy), (cx + arm, cy), 2)
-    prim.line(surface, colour, (cx, cy - arm), (cx, cy + arm), 2)
+    both = r.goal is not None and r.nav_goal is not None
+    if r.goal is not None:
+        cx, cy = camera.to_screen(*r.goal)
+        tol = max(camera.length(r.goal_tolerance), 4.0)
+        fill = pal.mix(colour, pal.FLOOR, 0.82) if r.goal_reached else None
+        prim.circle(surface, fill, colour, (cx, cy), tol)
+        arm = max(6.0, 0.6 * tol)
+        prim.line(surface, colour, (cx - arm, cy), (cx + arm, cy), 2)
+        prim.line(surface, colour, (cx, cy - arm), (cx, cy + arm), 2)
+        if both and font is not None:
+            _goal_label(surface, font, f"{r.name} task goal", (cx, cy), tol)
+    if r.nav_goal is not None:
+        cx, cy = camera.to_screen(*r.nav_goal)
+        tol = max(camera.length(r.goal_tolerance), 4.0)
+        prim.dashed_ring(surface, colour, (cx, cy), tol)
+        arm = max(5.0, 0.45 * tol)
+        prim.line(surface, colour, (cx - arm, cy - arm), (cx + arm, cy + arm), 2)
+        prim.line(surface, colour, (cx - arm, cy + arm), (cx + arm, cy - arm), 2)
+        if both and font is not None:
+            _goal_label(surface, font, f"{r.name} drive-to goal", (cx, cy), tol)
+
+
+def _goal_label(surface: pygame.Surface, font: pygame.font.Font, text: str,
+                centre: tuple[float, float], radius: float) -> None:
+    rendered = font.render(text, True, pal.OUTLINE)  # above right: the robot may sit on it
+    surface.blit(rendered, (centre[0] + 0.7 * radius + 2, centre[1] - 0.7 * radius - 2
+                            - rendered.get_height()))
 
 
 def _ghost(surface: pygame.Surface, camera: Camera, r: RobotView) -> None:

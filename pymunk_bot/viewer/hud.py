@@ -10,7 +10,7 @@ from .camera import Camera
 from .scene import RobotView, Scene
 
 HELP_LIVE = (
-    ("left click", "set the selected robot's goal (click a robot: select it)"),
+    ("left click", "send the selected robot there (click a robot: select it)"),
     ("drag, wheel", "pan, zoom"),
     ("arrows / WASD", "drive the selected robot by hand (teleop)"),
     ("z / x", "slide left / right (omni robots)"),
@@ -54,6 +54,9 @@ class HudState:
     help: bool = False
     replay: bool = False
     hint: bool = True  # "h: keys" (not in recordings)
+    agents: frozenset[str] = frozenset()  # robots driven by a program (a learning agent)
+    band: int = 0  # [px] above and below the arena: frames put a one-line HUD and the scale
+    # bar there, off the arena; 0: the window's panel, moved off the robots
 
 
 class Hud:
@@ -66,6 +69,9 @@ class Hud:
     def draw(self, surface: pygame.Surface, scene: Scene, camera: Camera, state: HudState,
              selected: RobotView | None) -> None:
         """Overlay the HUD on ``surface``."""
+        if state.band:
+            self._band(surface, scene, camera, state, selected)
+            return
         lines: list[tuple[str, tuple[int, int, int]]] = []
         speed = f"   speed {state.speed_label}" if state.speed_label else ""
         if state.speed_label and state.achieved is not None:
@@ -74,13 +80,8 @@ class Hud:
         lines.append((f"t = {scene.time:7.2f} s{speed}{status}",
                       pal.HUD_WARN if state.paused else pal.HUD_TEXT))
         if selected is not None:
-            v, omega = selected.velocity
-            turn = f"{omega:+.2f}" if abs(omega) >= 0.005 else "0.00"
-            status = f", {selected.status}" if selected.status not in ("", "running") else ""
-            lines.append((f"{selected.name}: {abs(v):.2f} m/s, {turn} rad/s, "
-                          f"{selected.collisions} collision(s)"
-                          + (", goal reached" if selected.goal_reached else "") + status
-                          + ("  TELEOP" if selected.teleop else ""), pal.HUD_TEXT))
+            lines.append((robot_line(selected, state.agents), pal.HUD_TEXT))
+            lines.extend(goal_lines(selected))
         total = sum(r.collisions for r in scene.robots)
         if len(scene.robots) > 1:
             lines.append((f"{len(scene.robots)} robots, {total} collision(s) in all", pal.HUD_DIM))
@@ -98,6 +99,18 @@ class Hud:
                         ((w - text.get_width()) // 2 - 8, h - 40), self.font)
         if state.help:
             self._help(surface, HELP_REPLAY if state.replay else HELP_LIVE)
+
+    def _band(self, surface: pygame.Surface, scene: Scene, camera: Camera, state: HudState,
+              selected: RobotView | None) -> None:
+        """One line in the strip above the arena (a frame or video: nothing is covered)."""
+        if selected is not None:
+            about = robot_line(selected, state.agents)
+        else:
+            total = sum(r.collisions for r in scene.robots)
+            about = f"{len(scene.robots)} robots, {total} collision(s) in all"
+        text = self.small.render(f"t = {scene.time:.2f} s    {about}", True, pal.HUD_TEXT)
+        surface.blit(text, (8, max(1, (state.band - text.get_height()) // 2)))
+        self._scale_bar(surface, camera, band=state.band)
 
     def _panel(self, surface: pygame.Surface, lines, pos: tuple[int, int], font) -> None:
         surface.blit(self._render_panel(lines, font), pos)
@@ -136,8 +149,9 @@ class Hud:
             y += t.get_height() + 2
         return panel
 
-    def _scale_bar(self, surface: pygame.Surface, camera: Camera) -> None:
-        """A bar of a round length near 100 px, bottom left."""
+    def _scale_bar(self, surface: pygame.Surface, camera: Camera, band: int = 0) -> None:
+        """A bar of a round length near 100 px, bottom left: on a panel over the scene, or bare
+        in the ``band`` [px] below the arena."""
         target = 100.0 / camera.scale  # [m]
         length = next((m * 10.0 ** e for e in range(-3, 4) for m in (1, 2, 5)
                        if m * 10.0 ** e >= target * 0.6), 1000.0)
@@ -145,13 +159,16 @@ class Hud:
         _, h = surface.get_size()
         label = f"{length:g} m" if length >= 1 else f"{length * 100:g} cm"
         text = self.small.render(label, True, pal.HUD_TEXT)
-        panel = pygame.Surface((px + 20 + text.get_width() + 8, 26), pygame.SRCALPHA)
-        panel.fill(pal.HUD_BACK)
-        pygame.draw.line(panel, pal.HUD_TEXT, (8, 17), (8 + px, 17), 3)
-        pygame.draw.line(panel, pal.HUD_TEXT, (8, 11), (8, 22), 2)
-        pygame.draw.line(panel, pal.HUD_TEXT, (8 + px, 11), (8 + px, 22), 2)
-        panel.blit(text, (16 + px, 6))
-        surface.blit(panel, (8, h - 34))
+        height = 26 if not band else band
+        panel = pygame.Surface((px + 20 + text.get_width() + 8, height), pygame.SRCALPHA)
+        if not band:
+            panel.fill(pal.HUD_BACK)
+        y = height // 2 + 4 if not band else height // 2
+        pygame.draw.line(panel, pal.HUD_TEXT, (8, y), (8 + px, y), 3)
+        pygame.draw.line(panel, pal.HUD_TEXT, (8, y - 6), (8, y + 5), 2)
+        pygame.draw.line(panel, pal.HUD_TEXT, (8 + px, y - 6), (8 + px, y + 5), 2)
+        panel.blit(text, (16 + px, 6 if not band else y - text.get_height() // 2))
+        surface.blit(panel, (8, h - 34) if not band else (0, h - band))
 
     def _help(self, surface: pygame.Surface, rows) -> None:
         keys = [self.font.render(k, True, pal.HUD_WARN) for k, _ in rows]
@@ -167,3 +184,35 @@ class Hud:
             panel.blit(d, (16 + key_w, 12 + i * row_h))
         w, h = surface.get_size()
         surface.blit(panel, ((w - width) // 2, max(8, (h - height) // 2)))
+
+
+def robot_line(r: RobotView, agents: frozenset[str] = frozenset()) -> str:
+    """The robot's speed, collisions and who drives it. A robot driven by a program (the agent
+    of a Gymnasium env) is labelled so, not as a robot without a controller under teleop."""
+    v, omega = r.velocity
+    turn = f"{omega:+.2f}" if abs(omega) >= 0.005 else "0.00"
+    line = f"{r.name}{' (agent)' if r.name in agents else ''}: {abs(v):.2f} m/s, {turn} rad/s, " \
+           f"{r.collisions} collision(s)"
+    if r.nav_goal is None and r.goal_reached:
+        line += ", goal reached"
+    if r.name in agents:
+        return line
+    if r.nav_goal is None and r.status not in ("", "running"):
+        line += f", {r.status}"  # with a drive-to goal, its own line says
+    return line + ("  TELEOP" if r.teleop else "")
+
+
+def goal_lines(r: RobotView) -> list[tuple[str, tuple[int, int, int]]]:
+    """With a drive-to goal (a click, or the controller block's own goal), one line for it and
+    one for the task goal, saying what each means: the robot drives to the first; the run is
+    judged on the second."""
+    if r.nav_goal is None:
+        return []
+    status = "driving" if r.status in ("", "running") else r.status
+    lines = [(f"drive-to goal ({r.nav_goal[0]:.2f}, {r.nav_goal[1]:.2f}), dashed: {status}",
+              pal.HUD_TEXT)]
+    if r.goal is not None:
+        reached = "reached" if r.goal_reached else "NOT reached"
+        lines.append((f"task goal ({r.goal[0]:.2f}, {r.goal[1]:.2f}), solid: {reached}, "
+                      "judges the run", pal.HUD_TEXT if r.goal_reached else pal.HUD_WARN))
+    return lines

@@ -63,9 +63,11 @@ class RobotView:
     radius: float  # [m]
     odometry: np.ndarray  # the odometry estimate [x, y, theta]
     velocity: tuple[float, float] = (0.0, 0.0)  # true (v [m/s], omega [rad/s])
-    goal: tuple[float, float] | None = None
+    goal: tuple[float, float] | None = None  # the task goal: the run is judged on reaching it
     goal_tolerance: float = 0.2  # [m]
-    goal_reached: bool = False
+    goal_reached: bool = False  # the task goal
+    nav_goal: tuple[float, float] | None = None  # where the controller drives instead (a click,
+    # or its own block's goal), when it differs from the task goal, which still judges the run
     path: np.ndarray | None = None  # (N, 2) the controller's planned path
     trail: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))  # (N, 2) true positions
     scan_origin: np.ndarray | None = None  # sensor position when the latest scan was taken

@@ -121,10 +121,9 @@ class LiveSource:
             robots.append(RobotView(
                 name=name, index=self._index[name], pose=robot.pose, radius=robot.radius,
                 odometry=robot.odometry.pose, velocity=(float(v), float(omega)),
-                # where it is driving (a clicked goal), else the scenario's goal
-                goal=robot.nav_goal if robot.nav_goal is not None else robot.goal,
-                goal_tolerance=robot.goal_tolerance,
-                goal_reached=robot.goal_reached and robot.nav_goal in (None, robot.goal),
+                goal=robot.goal, goal_tolerance=robot.goal_tolerance,
+                goal_reached=robot.goal_reached,
+                nav_goal=robot.nav_goal if robot.nav_goal not in (None, robot.goal) else None,
                 path=None if not path else np.asarray(path, dtype=float).reshape(-1, 2),
                 trail=np.asarray(self._trails[name], dtype=float),
                 scan_origin=origin, scan_points=points, scan_hit=hit,

@@ -100,11 +100,11 @@ def test_rows_are_journalled_as_they_arrive_and_resume_finishes_the_rest(tmp_pat
     reference = run_sweep(sprint(), SPEEDS, seeds=range(4), duration=0.5)
     real, calls = backends.run_chunk, []
 
-    def dies_on_third_chunk(base, source, chunk, duration):
+    def dies_on_third_chunk(base, source, chunk, duration, base_dir=None):
         calls.append([r.index for r in chunk])
         if len(calls) == 3:
             raise RuntimeError("worker died")
-        return real(base, source, chunk, duration)
+        return real(base, source, chunk, duration, base_dir)
 
     monkeypatch.setattr(backends, "run_chunk", dies_on_third_chunk)
     with pytest.raises(RuntimeError):
@@ -303,3 +303,50 @@ def test_a_ros_map_scenario_sweeps_from_any_folder(tmp_path, monkeypatch):
                      duration=1.0)
     assert [row["robots[0].max_wheel_speed"] for row in rows] == [0.5, 1.0]
     assert rows[1]["r1.distance"] > rows[0]["r1.distance"] > 0.1
+
+
+def test_the_plot_says_what_was_swept_and_in_which_units(tmp_path, monkeypatch):
+    import matplotlib.figure
+
+    from pymunk_bot.sweep import plot_summary, summarize
+
+    saved = []
+    original = matplotlib.figure.Figure.savefig
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig",
+                        lambda fig, *a, **k: (saved.append(fig), original(fig, *a, **k))[1])
+    rows = run_sweep(sprint(), SPEEDS, seeds=range(2))
+    plot_summary(summarize(rows, list(SPEEDS)), tmp_path / "plot.png", scenario="sprint.yaml")
+    (fig,) = saved
+    assert fig.get_suptitle() == "Sweep of robots[0].max_wheel_speed on sprint.yaml: 4 runs"
+    axes = {ax.get_title(): ax for ax in fig.axes}
+    assert axes["r1.time_to_goal"].get_ylabel() == "time [s]"
+    assert axes["pass rate"].get_ylabel() == "% of runs"
+    assert all(ax.get_xlabel() == "robots[0].max_wheel_speed [m/s]" for ax in fig.axes)
+
+
+@pytest.mark.parametrize("backend", ["serial", "process"])
+def test_a_python_controller_beside_the_scenario_is_found_from_any_folder(
+        tmp_path, monkeypatch, capsys, backend):
+    """As `run` does: the module is looked for beside the scenario file, not only in the
+    current folder (here the sweep runs from another folder)."""
+    folder = tmp_path / "project"
+    folder.mkdir()
+    (folder / "beside_sweep_ctrl.py").write_text(
+        "from pymunk_bot.controllers import Command, Controller\n\n\n"
+        "class Forward(Controller):\n"
+        "    def compute(self, obs):\n"
+        "        return Command(v=0.5)\n")
+    data = sprint()
+    data["robots"][0]["controller"] = {"type": "python",
+                                       "class_path": "beside_sweep_ctrl:Forward"}
+    data["expect"] = {"r1": {"goal_reached": True}}
+    scenario = folder / "forward.yaml"
+    scenario.write_text(json.dumps(data))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    status = cli_main(["sweep", str(scenario), "--seeds", "0:2", "--backend", backend,
+                       "--workers", "2", "--out", str(tmp_path / "rows.csv"), "--no-progress"])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    assert "2/2 runs passed" in out

@@ -74,9 +74,11 @@ def test_every_output_path_is_checked_before_the_run(tmp_path, capsys, monkeypat
 def test_sigterm_during_record_leaves_no_part_file(tmp_path):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(REPO)}
     video = tmp_path / "maze.mp4"
+    # A long recording, so it is surely still writing when the signal comes, however fast
+    # or loaded the machine.
     proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--record",
-                             str(video)], cwd=REPO, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                             str(video), "--duration", "600"], cwd=REPO, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     while not list(tmp_path.glob("*.part*")) and time.monotonic() < deadline:
         time.sleep(0.1)  # wait until the recording has started writing

@@ -1,0 +1,26 @@
+"""examples/quickstart.ipynb runs from top to bottom, headless, and shows what it says: a run
+that reaches its goal, a plot, and a frame of the scene."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+nbformat = pytest.importorskip("nbformat")
+nbclient = pytest.importorskip("nbclient")
+NOTEBOOK = Path(__file__).resolve().parents[2] / "examples" / "quickstart.ipynb"
+
+
+def test_the_quickstart_notebook_runs_and_shows_a_plot_and_a_frame(tmp_path, monkeypatch):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # the kernel inherits the environment
+    notebook = nbformat.read(NOTEBOOK, as_version=4)
+    assert all(not c.get("outputs") for c in notebook.cells if c.cell_type == "code"), \
+        "commit the notebook without outputs"
+    nbclient.NotebookClient(notebook, timeout=60, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs]
+    text = "".join(o.get("text", "") for o in outputs)
+    images = [o for o in outputs if "image/png" in o.get("data", {})]
+    assert "goal reached: True" in text and "0 collision(s)" in text
+    assert "(492, 640, 3) uint8" in text  # the rgb_array frame
+    assert len(images) == 2  # the path and speed plot, then the frame
