@@ -44,7 +44,9 @@ SAMPLE_RATE = 10.0  # [Hz] error samples
 TRACK_RMSE = 0.10  # [m] success bound of a tracking run
 GLOBAL_POSITION, GLOBAL_HEADING, GLOBAL_TIME = 0.3, math.radians(10.0), 20.0  # [m, rad, s]
 MAX_TIME = 90.0  # [s] per run
-LOCALIZERS = ("mcl", "ekf", "mcl_global", "slam")
+LOCALIZERS = ("mcl", "ekf", "mcl_global", "mcl_kidnap", "slam")
+KIDNAP_TIME = 3.0  # [s] mcl_kidnap: when the robot is teleported
+KIDNAP_CLEARANCE = 0.6  # [m] mcl_kidnap: the least distance of the drop point to the map's obstacles
 SLAM_ATE, SLAM_PRECISION = 0.05, 0.9  # [m], fraction: the issue's bounds for SLAM
 QUICK_SEEDS = 2  # seeds per world and profile in quick mode (a few minutes)
 MAX_SEEDS = 1000
@@ -71,14 +73,16 @@ class Outcome:
     def success(self) -> bool:
         if self.error or self.collisions:
             return False
-        if self.localizer.endswith("global"):
+        if self.localizer in ("mcl_global", "mcl_kidnap"):
             return self.converged_at <= GLOBAL_TIME
         if self.localizer == "slam":
             return self.rmse <= SLAM_ATE and self.map_precision >= SLAM_PRECISION
         return self.rmse <= TRACK_RMSE
 
     def line(self) -> str:
-        what = (f"converged at {self.converged_at:.1f} s" if self.localizer.endswith("global")
+        what = (f"converged at {self.converged_at:.1f} s" if self.localizer == "mcl_global"
+                else f"re-converged {self.converged_at:.1f} s after the kidnapping"
+                if self.localizer == "mcl_kidnap"
                 else f"rmse {100 * self.rmse:.1f} cm, heading {math.degrees(self.heading_rmse):.2f} deg")
         if self.localizer == "slam":
             what += f", map precision {self.map_precision:.3f}"
@@ -125,7 +129,10 @@ def world_for(family: str, seed: int) -> dict | None:
 
 def run_one(localizer: str, family: str, profile: str, seed: int,
             settings: dict | None = None) -> Outcome | None:
-    """One run (``localizer``: mcl, ekf or mcl_global); None when the world is unavailable.
+    """One run (``localizer``: mcl, ekf, mcl_global, mcl_kidnap or slam); None when the world is
+    unavailable. ``mcl_kidnap``: default MCL, the robot teleported at KIDNAP_TIME to a free
+    point (at least KIDNAP_CLEARANCE from the map's obstacles, drawn from the seed), any heading;
+    ``converged_at`` then counts from the kidnapping.
     ``settings``: extra localization keys (for experiments; the benchmark uses none)."""
     from ..sim import Simulation
 
@@ -138,6 +145,7 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     robot["lidar"] = lidar
     robot["odometry"] = odometry_for(profile, seed)
     robot["localization"] = ({"type": "mcl", "initial": "global"} if localizer == "mcl_global"
+                             else {"type": "mcl"} if localizer == "mcl_kidnap"
                              else {"type": localizer})
     robot["localization"].update(settings or {})
     data["seed"] = seed
@@ -148,9 +156,16 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
         out.error = f"{type(exc).__name__}: {exc}"
         return out
     r = sim.robots["r1"]
-    times, errors, headings = [], [], []
+    times: list[float] = []
+    errors: list[float] = []
+    headings: list[float] = []
     next_sample = 0.0
+    kidnap = _kidnap_target(r.localizer, seed) if localizer == "mcl_kidnap" else None
     while sim.time < MAX_TIME:
+        if kidnap is not None and sim.time + 1e-9 >= KIDNAP_TIME:
+            r.teleport(*kidnap)
+            kidnap = None
+            times, errors, headings = [], [], []  # scored from the kidnapping on
         sim.step()
         if sim.time + 1e-9 >= next_sample:
             next_sample += 1.0 / SAMPLE_RATE
@@ -167,6 +182,8 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     t = np.asarray(times)
     out.converged_at = (float(t[0]) if bad.size == 0 else
                         float(t[bad[-1] + 1]) if bad[-1] + 1 < t.size else math.inf)
+    if localizer == "mcl_kidnap":
+        out.converged_at -= KIDNAP_TIME
     out.collisions = int(r.collisions)
     out.goal_reached = bool(r.goal_reached)
     if localizer == "slam":  # the map it built against the scenario's, at its resolution
@@ -178,13 +195,24 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     return out
 
 
+def _kidnap_target(mcl, seed: int) -> tuple[float, float, float]:
+    """A free point at least KIDNAP_CLEARANCE from the map's obstacles and a heading, from the
+    seed (the localizer's map, so the drop point is where the robot fits)."""
+    rng = np.random.default_rng([seed, 22])
+    free = mcl.field.free_xy
+    open_xy = free[mcl.field.distance(free[None])[0] > KIDNAP_CLEARANCE]
+    x, y = open_xy[rng.integers(open_xy.shape[0])]
+    return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
+
+
 def run(localizers=LOCALIZERS, families=FAMILIES, profiles=tuple(PROFILES),
         seeds: int = 10, verbose: bool = True, settings: dict | None = None) -> list[Outcome]:
     """Every combination; prints each failure as a line (and every run when ``verbose``)."""
     outcomes = []
     for localizer in localizers:
         for family in families:
-            for profile in (("typical",) if localizer in ("mcl_global", "slam") else profiles):
+            for profile in (("typical",) if localizer in ("mcl_global", "mcl_kidnap", "slam")
+                            else profiles):
                 for seed in range(seeds):
                     o = run_one(localizer, family, profile, seed, settings)
                     if o is None:
@@ -239,11 +267,18 @@ def verdicts(outcomes: list[Outcome]) -> list[tuple[str, bool | None]]:
         out.append((f"slam, {family}, typical odometry: ATE <= {100 * SLAM_ATE:g} cm and map "
                     f"precision >= {SLAM_PRECISION:g}, no collision (got {ok}/{len(group)})",
                     ok == len(group)))
-    glob = [o for o in outcomes if o.localizer.endswith("global")]
-    for family in sorted({o.family for o in glob}):
-        group = [o for o in glob if o.family == family]
+    for name, what in (("mcl_global", "global localization driving a tour"),
+                       ("mcl_kidnap", "re-localization after a kidnapping")):
+        out.extend(_convergence_verdicts([o for o in outcomes if o.localizer == name], what))
+    return out
+
+
+def _convergence_verdicts(runs: list[Outcome], what: str) -> list[tuple[str, bool | None]]:
+    out: list[tuple[str, bool | None]] = []
+    for family in sorted({o.family for o in runs}):
+        group = [o for o in runs if o.family == family]
         ok = sum(o.success for o in group)
-        out.append((f"global localization driving a tour, {family}: converged within "
+        out.append((f"{what}, {family}: converged within "
                     f"{GLOBAL_POSITION:g} m / {math.degrees(GLOBAL_HEADING):g} deg in <= "
                     f"{GLOBAL_TIME:g} s, no collision, in >= 90 % of seeds (got {ok}/{len(group)})",
                     ok >= 0.9 * len(group)))

@@ -67,8 +67,15 @@ def test_a_kidnapped_robot_stops_driving_on_its_estimate_with_the_defaults(targe
     assert not robot.localizer.localized  # the scan no longer fits the map from the estimate
     assert robot.localizer.scan_fit < 0.7
     assert robot.controller.message == LOCALIZING
-    sim.run(9.0)
-    assert robot.collisions == 0
+    # Until it drives again it collides with nothing, and it drives again only on an estimate
+    # that is right (MCL starts over, tests/localization/test_relocalize.py). After that the
+    # waypoint tour heads straight for its next waypoint from wherever it was put, which may
+    # cross a wall: `waypoints` plans nothing, so no collision bound past that point.
+    while robot.controller.message == LOCALIZING and sim.time < 15.0:
+        sim.step()
+        assert robot.collisions == 0
+    if robot.controller.message != LOCALIZING:
+        assert np.hypot(*(robot.localizer.pose[:2] - robot.pose[:2])) < 0.3
 
 
 def test_teleport_from_python_moves_at_once_and_refuses_a_point_outside():
