@@ -349,10 +349,9 @@ class Robot:
         self._override = True
 
     def follow(self, command: Any) -> None:
-        """The controller's ``command``: driven with it unless a command set by hand holds the
-        robot (the controller's schedule runs on either way)."""
-        if not self._override:
-            self._drive_group.set_command(self._di, command)
+        """Drive with the controller's ``command`` (the simulation asks the controller only
+        while no command set by hand holds the robot: see :attr:`overridden`)."""
+        self._drive_group.set_command(self._di, command)
 
     def count_collision(self) -> None:
         """A contact episode of this robot began (the world's contact handler calls this)."""

@@ -17,22 +17,14 @@ from .config.checks import check_seed
 from .events import EventSchedule
 from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
+from .localization.score import LocalizationScore
 from .propulsion import Propulsion
 from .readings import Observation
 from .robot import Robot, RobotsByName
-from .sensors.lidar import record_all, requests_all
-from .sensors.schedule import TIME_TOLERANCE, Schedule, ScheduleArray
+from .sensors.lidar import Lidar
+from .sensors.schedule import TIME_TOLERANCE, ScheduleArray
 from .substep_gate import SubstepGate
 from .world import World
-
-
-def scan_all(caster: Any, due: list[tuple[Any, float]]) -> None:
-    """Every due LiDAR (with the time [s] its scan is recorded at) casts: one pass for all."""
-    if len(due) > 1:
-        record_all(due, caster.cast_many(*requests_all([lidar for lidar, _ in due])))
-    elif due:
-        lidar, now = due[0]
-        lidar.record(now, lidar.true_ranges())
 
 
 @dataclass(frozen=True)
@@ -46,25 +38,6 @@ class TickPlan:
     reading: tuple["Simulation", ...]
     lidars: bool
     gate: SubstepGate | None  # adaptive substeps (world.substeps: adaptive), else None
-
-
-class LocalizationScore:
-    """The localizer's estimate against the truth, sampled at a fixed rate."""
-
-    def __init__(self, rate: float) -> None:
-        self.schedule = Schedule(rate)
-        self.truth: list[np.ndarray] = []
-        self.estimate: list[np.ndarray] = []
-
-    def add(self, truth: np.ndarray, estimate: np.ndarray) -> None:
-        """One sample: the true pose and the estimate [x, y, theta]."""
-        self.truth.append(np.array(truth, dtype=float))
-        self.estimate.append(np.array(estimate, dtype=float))
-
-    def block(self) -> dict[str, float]:
-        """rmse, max_error, final_error [m] of the position; heading_rmse [rad]."""
-        from .localization.metrics import error_block
-        return error_block(np.array(self.truth), np.array(self.estimate))
 
 
 class Simulation:
@@ -144,7 +117,8 @@ class Simulation:
         self._acts = bool(self._controlled or self.world.actors or self.config.events)
         self._reads = bool(self._sensors or self._mapping or self._localized or self._scores
                            or built.metrics)
-        self._plan = Simulation.plan((self,), self.world)
+        # A copy on a shared ground ticks in its Replicas' plan, never in one of its own.
+        self._plan = None if self._ground is not None else Simulation.plan((self,), self.world)
 
     # ------------------------------------------------------------------ state
     @property
@@ -160,8 +134,8 @@ class Simulation:
     @property
     def single_substep_ticks(self) -> int:
         """Ticks so far (since the last reset) that took one pymunk step, no contact being
-        able to start in them (adaptive substeps; 0 otherwise)."""
-        gate = self._plan.gate
+        able to start in them (adaptive substeps, a run of its own; 0 otherwise)."""
+        gate = self._plan.gate if self._plan is not None else None
         return gate.single_ticks if gate is not None else 0
 
     def __repr__(self) -> str:
@@ -178,7 +152,7 @@ class Simulation:
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
-        if self._ground is not None:
+        if self._plan is None:
             raise RuntimeError("a copy on a shared ground advances with its Replicas.step()")
         Simulation.step_together(self._plan, self._built.propulsion)
 
@@ -238,8 +212,8 @@ class Simulation:
         if plan.lidars:
             caster = first.world.ray_caster()  # the copies share one
             caster.begin_frame()  # every LiDAR of this tick sees one scene
-            scan_all(caster, [(lidar, now) for sim, now in zip(sims, nows)
-                              for lidar in sim._due_lidars(now)])
+            Lidar.scan_all(caster, [(lidar, now) for sim, now in zip(sims, nows)
+                                    for lidar in sim._due_lidars(now)])
         for sim in plan.reading:
             now = sim.time
             sim._read_other_sensors(now)

@@ -13,10 +13,9 @@ import weakref
 from pathlib import Path
 from typing import Any
 
-from ..foxglove.snapshot import (geometry_of_log, geometry_of_sim, movable_bodies, snapshot_of_sim,
-                                 snapshots_of_log)
+from ..foxglove.snapshot import geometry_of_log, snapshots_of_log
 from ..results import temp_beside
-from .messages import Outgoing, RosMessages, typestore
+from .messages import LiveMessages, Outgoing, RosMessages, typestore
 from .names import latched, qos_yaml
 
 PROFILE = "ros2"
@@ -89,8 +88,7 @@ class Ros2BagLogger:
         self.world_map = world_map  # the OccupancyGrid for /map, or None
         self.bag = Ros2Bag(path)
         self.steps = 0
-        self._bodies: list = []
-        self._messages: RosMessages | None = None
+        self._messages: LiveMessages | None = None
 
     def attach(self, sim) -> "Ros2BagLogger":
         """Start recording ``sim`` from its present state."""
@@ -98,17 +96,15 @@ class Ros2BagLogger:
         return self
 
     def on_reset(self, sim) -> None:
-        geometry = geometry_of_sim(sim)
-        self._bodies = movable_bodies(sim, geometry)
-        self._messages = RosMessages(geometry, self.world_map)
-        for message in self._messages.start(snapshot_of_sim(sim, self._bodies)):
+        self._messages = LiveMessages(sim, self.world_map)
+        for message in self._messages.start(sim):
             self.bag.write(message)
 
     def __call__(self, sim) -> None:
         if self._messages is None:
             raise RuntimeError("Ros2BagLogger: attach() it to the simulation first")
         self.steps += 1
-        for message in self._messages.messages(snapshot_of_sim(sim, self._bodies)):
+        for message in self._messages.step(sim):
             self.bag.write(message)
 
     def save(self) -> None:

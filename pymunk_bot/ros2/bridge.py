@@ -23,10 +23,10 @@ from typing import Any, Callable
 
 from ..errors import ScenarioError
 from ..foxglove.frames import DEFAULT_HOST
-from ..foxglove.snapshot import geometry_of_sim, movable_bodies, snapshot_of_sim
+from ..foxglove.snapshot import geometry_of_sim
 from .commands import CommandInbox
 from .jsonmsg import dumps, loads, to_plain
-from .messages import Outgoing, RosMessages, typestore
+from .messages import LiveMessages, Outgoing, typestore
 from .names import DEFAULT_PORT, latched, robot_names
 from .protocol import BadRequest, Catalog, ClientState, Protocol, status
 
@@ -290,17 +290,14 @@ class BridgeObserver:
     def __init__(self, server: RosbridgeServer, world_map: Any = None) -> None:
         self.server = server
         self.world_map = world_map
-        self._messages: RosMessages | None = None
-        self._bodies: list = []
+        self._messages: LiveMessages | None = None
 
     def attach(self, sim) -> "BridgeObserver":
         sim.attach(self)  # on_reset now, then every step
         return self
 
     def on_reset(self, sim) -> None:
-        geometry = geometry_of_sim(sim)
-        self._bodies = movable_bodies(sim, geometry)
-        self._messages = RosMessages(geometry, self.world_map)
+        self._messages = LiveMessages(sim, self.world_map)
         self._every_step = self.server.protocol.catalog.every_step
         # Each sensor with the topic its readings go out on: a reading nobody subscribed to
         # is no reason to sample the run.
@@ -308,7 +305,7 @@ class BridgeObserver:
         self._sensors = [(s, names[r.name].topic("scan" if s is r.lidar else "imu"))
                          for r in sim.robots.values() for s in (r.lidar, r.imu) if s is not None]
         self._readings: list = [None] * len(self._sensors)
-        self.server.publish(self._messages.start(snapshot_of_sim(sim, self._bodies), self._wanted))
+        self.server.publish(self._messages.start(sim, self._wanted))
 
     def _wanted(self, topic: str) -> bool:
         return topic in self.server.subscribed
@@ -319,8 +316,7 @@ class BridgeObserver:
             return  # nobody listens: no snapshot, no messages
         if subscribed.isdisjoint(self._every_step) and not self._new_reading(subscribed):
             return  # only sensor topics wanted, and none of theirs has read since the last step
-        self.server.publish(self._messages.messages(snapshot_of_sim(sim, self._bodies),
-                                                    self._wanted))
+        self.server.publish(self._messages.step(sim, self._wanted))
 
     def _new_reading(self, subscribed: Any) -> bool:
         """Whether a LiDAR or IMU on a subscribed topic has read since the last call."""

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..foxglove.frames import nanoseconds, yaw_quaternion
 from ..foxglove.publisher import heading_along
-from ..foxglove.snapshot import RobotSnapshot, RunGeometry, Snapshot
+from ..foxglove.snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim,
+                                 movable_bodies, snapshot_of_sim)
 from ..maps.grid import OccupancyGrid
 from .names import (CLOCK_TOPIC, MAP_FRAME, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC,
                     TYPES, RobotNames, robot_names)
@@ -377,4 +378,24 @@ def _obstacle_markers(index: int, shapes, pose, t: float) -> list[Any]:
             mesh_resource="", mesh_file=msg_class("visualization_msgs/msg/MeshFile")(
                 filename="", data=np.zeros(0, np.uint8)), mesh_use_embedded_materials=False))
     return out
+
+
+class LiveMessages:
+    """A live run's ROS 2 messages: its geometry read at (re)build, the moving obstacles'
+    bodies, and the :class:`RosMessages` that turns each instant into messages."""
+
+    def __init__(self, sim: Any, world_map: OccupancyGrid | None = None) -> None:
+        geometry = geometry_of_sim(sim)
+        self.bodies = movable_bodies(sim, geometry)
+        self.ros = RosMessages(geometry, world_map)
+
+    def start(self, sim: Any, wanted: Callable[[str], bool] = lambda topic: True
+              ) -> list[Outgoing]:
+        """The latched messages, then the present instant's."""
+        return self.ros.start(snapshot_of_sim(sim, self.bodies), wanted)
+
+    def step(self, sim: Any, wanted: Callable[[str], bool] = lambda topic: True
+             ) -> list[Outgoing]:
+        """The present instant's messages (after a step)."""
+        return self.ros.messages(snapshot_of_sim(sim, self.bodies), wanted)
 

@@ -117,7 +117,7 @@ class Protocol:
         if not isinstance(request, dict):
             raise BadRequest("a request must be a JSON object")
         op = request.get("op")
-        handler = _OPS.get(op) if isinstance(op, str) else None
+        handler = self.OPS.get(op) if isinstance(op, str) else None
         if handler is None:
             raise BadRequest(f"unknown op {op!r}" if op is not None else "request has no 'op'")
         return handler(self, client, request)
@@ -207,6 +207,16 @@ class Protocol:
                              f"{', '.join(SERVICES)})")
         return [reply]
 
+    def _set_level(self, client: ClientState, request: dict) -> list[dict]:
+        return []  # status verbosity: errors are all we send
+
+    # op -> handler: the class's own methods
+    OPS: dict[str, Callable[["Protocol", ClientState, dict], list[dict]]] = {
+        "subscribe": _subscribe, "unsubscribe": _unsubscribe, "advertise": _advertise,
+        "unadvertise": _unadvertise, "publish": _publish, "call_service": _call_service,
+        "set_level": _set_level,
+    }
+
 
 def _string(request: dict, key: str) -> str:
     value = request.get(key)
@@ -221,11 +231,3 @@ def status(level: str, message: str, request_id: Any = None) -> dict:
     if request_id is not None:
         reply["id"] = request_id
     return reply
-
-
-_OPS: dict[str, Callable[[Protocol, ClientState, dict], list[dict]]] = {
-    "subscribe": Protocol._subscribe, "unsubscribe": Protocol._unsubscribe,
-    "advertise": Protocol._advertise, "unadvertise": Protocol._unadvertise,
-    "publish": Protocol._publish, "call_service": Protocol._call_service,
-    "set_level": lambda protocol, client, request: [],  # status verbosity: errors are all we send
-}

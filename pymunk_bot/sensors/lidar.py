@@ -153,6 +153,17 @@ class Lidar:
         return ranges
 
     @staticmethod
+    def scan_all(caster: Any, due: list[tuple["Lidar", float]]) -> None:
+        """Every due LiDAR (with the time [s] its scan is recorded at) casts: one pass of
+        ``caster.cast_many`` for all of them."""
+        if len(due) > 1:
+            requests = Lidar.requests_all([lidar for lidar, _ in due])
+            Lidar.record_all(due, caster.cast_many(*requests))
+        elif due:
+            lidar, now = due[0]
+            lidar.record(now, lidar.true_ranges())
+
+    @staticmethod
     def requests_all(lidars: Sequence["Lidar"]) -> tuple[list, Any, list, list]:
         """:meth:`Lidar.cast_request` of many LiDARs, as the columns ``cast_many`` takes: the same
         origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
