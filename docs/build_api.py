@@ -22,6 +22,8 @@ PUBLIC_MODULES = [
     "pymunk_bot.command", "pymunk_bot.errors", "pymunk_bot.config", "pymunk_bot.plugins",
     "pymunk_bot.registry", "pymunk_bot.controllers", "pymunk_bot.sensors",
     "pymunk_bot.localization", "pymunk_bot.envs", "pymunk_bot.runlog", "pymunk_bot.sweep",
+    "pymunk_bot.policy_io", "pymunk_bot.policy_file", "pymunk_bot.navmetrics",
+    "pymunk_bot.benchmark",
 ]
 DEFAULT_OUT = Path(__file__).resolve().parent / "api"
 

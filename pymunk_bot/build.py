@@ -15,6 +15,7 @@ import pymunk
 
 from . import physics
 from .actors import make_actors
+from .config.metric_bounds import bounds_of
 from .config.schema import ScenarioConfig
 from .config.substeps import mover_speed
 from .errors import ScenarioError
@@ -23,6 +24,7 @@ from .localization.base import LocalizerContext
 from .localization.config import LOCALIZER_MAP_RESOLUTION
 from .maps.grid import OccupancyGrid
 from .metrics import RobotMetrics
+from .navmetrics.recorder import NavMetrics
 from .obstacles import footprint_shapes
 from .planning.map import MapInfo
 from .plugins import controllers, drives, localizers
@@ -136,12 +138,15 @@ def build(config: ScenarioConfig, seed: int, source: str,
                   Propulsion(world.space, [r.body for r in ordered], [r.control for r in ordered],
                              [(g, idx) for g, idx in drive_groups]),
                   schedules, maps)
+    crowd = any(getattr(o, "type", "") == "pedestrian" for o in config.obstacles)
     for robot in ordered:
         expectation = config.expect.get(robot.name)
         robot.metrics = RobotMetrics(
             world.space, robot, expectation.never_enter if expectation else [],
             track_clearance=expectation is not None and expectation.min_clearance is not None)
-        if robot.metrics.active:
+        if crowd or (expectation is not None and bounds_of(expectation)):  # navmetrics/
+            robot.metrics.navigation = NavMetrics(world, robot, ordered, config, maps)
+        if robot.metrics.active or robot.metrics.navigation is not None:
             built.metrics.append(robot.metrics)
     if world.adaptive:
         built.movers = _movers(world, ordered)
@@ -232,7 +237,7 @@ def _make_localizer(robot: Robot, index: int, maps: MapSource, source: str,
     section = robot.config.localization
     factory = localizers.get(section.type)
     needs_map = bool(getattr(factory, "needs_map", False))
-    lidar = robot.lidar
+    lidar = robot.sensor("lidar")
     context = LocalizerContext(
         robot=robot.spec, start_pose=np.array(robot.config.pose, dtype=float), rng=rng,
         arena=config.world.arena, map=maps.grid() if needs_map else None,

@@ -44,3 +44,13 @@ class ControllerError(Exception):
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:  # a sweep's worker reports it whole
         return (type(self), (self.where, self.problem))
+
+
+class SemanticError(Exception):
+    """A problem at a key path (a tuple, as pydantic's locations are), found before the
+    source is known: the loader turns it into a :class:`ScenarioError`."""
+
+    def __init__(self, loc: tuple, problem: str) -> None:
+        super().__init__(problem)
+        self.loc = loc
+        self.problem = problem

@@ -6,7 +6,12 @@ from typing import Any
 
 import numpy as np
 
+from .config.metric_bounds import BOUND_KEYS, bounds_of
 from .geometry import distance_to_polygon, point_in_polygon
+
+# Metric bounds that depend on how the run ends: undecided while it is shorter than planned.
+END_METRICS = frozenset({"success", "spl", "timeout", "time_to_goal", "mean_speed", "min_speed",
+                         "failure_to_progress"})
 
 
 @dataclass(frozen=True)
@@ -80,6 +85,18 @@ def evaluate(expectations: dict, robots: dict) -> list[Check]:
             add(key, value is not None and value <= limit, f"<= {limit:g} m",
                 "not localized" if value is None else value,
                 None if value is None else value - limit, "m")
+        bounds = bounds_of(exp)
+        if bounds:
+            measured = robot.metrics.navigation.values()
+            for key, metric, limit in bounds:
+                value = measured[metric.name]
+                unit = metric.unit
+                if metric.higher_is_better:  # NaN (no goal, no human) never passes
+                    add(key, bool(value >= limit), f">= {limit:g}{' ' + unit if unit else ''}",
+                        value, limit - value, unit)
+                else:
+                    add(key, bool(value <= limit), f"<= {limit:g}{' ' + unit if unit else ''}",
+                        value, value - limit, unit)
         if exp.end_in is not None:
             region = np.asarray(exp.end_in, dtype=float)
             inside = point_in_polygon(robot.pose[:2], region)
@@ -160,6 +177,8 @@ def judge(expectations: dict, checks: list[Check], sim_time: float, planned: flo
             open_ = (not check.passed and sim_time + 0.5 * dt < deadline) or (
                 check.passed and exp.goal_reached is False and short)
         elif check.key == "end_in":
+            open_ = short
+        elif check.key in BOUND_KEYS and BOUND_KEYS[check.key].name in END_METRICS:
             open_ = short
         else:
             open_ = False

@@ -11,6 +11,7 @@ from functools import lru_cache
 from typing import Any, Sequence
 
 import numpy as np
+import shapely
 
 from . import geometry as geo
 
@@ -69,36 +70,26 @@ def _discs(raw: bytes, n: int, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     centred = points - points.mean(axis=0)
     _, _, axes = np.linalg.svd(centred, full_matrices=False)
     axis = axes[0]
+    normal = np.array([-axis[1], axis[0]])
     along = points @ axis
     lo, hi = float(along.min()), float(along.max())
     count = max(1, math.ceil((hi - lo) / spacing))
     step = (hi - lo) / count
-    across = points @ np.array([-axis[1], axis[0]])
+    across = points @ normal
     mid = 0.5 * (across.min() + across.max())
+    reach = float(across.max() - across.min()) + 1.0  # [m] a slab wider than the footprint
+    angle = math.atan2(axis[1], axis[0])
+    shape = geo.polygon(points)
     centres, radii = [], []
     for k in range(count):
-        a = lo + (k + 0.5) * step
-        centre = a * axis + mid * np.array([-axis[1], axis[0]])
-        # The slice [a - step/2, a + step/2] of the outline: the farthest of its points and of
-        # the outline's crossings with the slice's ends bounds the disc needed.
-        sample = _slice_points(points, along, lo + k * step, lo + (k + 1) * step)
+        centre = (lo + (k + 0.5) * step) * axis + mid * normal
+        # The footprint cut to the slab [a - step/2, a + step/2] along the axis: its farthest
+        # corner (a vertex or where the outline crosses the slab's ends) bounds the disc.
+        slab = geo.polygon(geo.box_corners(centre, (step, reach), angle))
+        sample = shapely.get_coordinates(shapely.intersection(shape, slab))
         centres.append(centre)
-        radii.append(float(np.hypot(*(sample - centre).T).max()))
+        radii.append(float(np.hypot(*((sample if len(sample) else points) - centre).T).max()))
     return np.array(centres), np.array(radii)
-
-
-def _slice_points(points: np.ndarray, along: np.ndarray, a0: float, a1: float) -> np.ndarray:
-    """Outline vertices inside [a0, a1] along the axis, plus where edges cross a0 and a1."""
-    out = [points[(along >= a0 - 1e-12) & (along <= a1 + 1e-12)]]
-    n = len(points)
-    for cut in (a0, a1):
-        for i in range(n):
-            j = (i + 1) % n
-            u, w = along[i] - cut, along[j] - cut
-            if u * w < 0:
-                t = u / (u - w)
-                out.append((points[i] + t * (points[j] - points[i]))[None])
-    return np.concatenate(out)
 
 
 def drawn_outline(footprint: "Footprint | None") -> np.ndarray | None:
@@ -135,9 +126,7 @@ def of_robot(rc: Any) -> Footprint:
 
 def polygon_centroid(points: np.ndarray) -> tuple[float, float]:
     """Area centroid of a simple polygon [m]."""
-    x, y = points[:, 0], points[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    area = cross.sum() / 2.0
-    return (float(((x + xn) * cross).sum() / (6 * area)),
-            float(((y + yn) * cross).sum() / (6 * area)))
+    centre = shapely.get_coordinates(shapely.centroid(geo.polygon(points)))
+    if not len(centre):
+        return (math.nan, math.nan)
+    return (float(centre[0, 0]), float(centre[0, 1]))

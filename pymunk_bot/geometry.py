@@ -1,10 +1,18 @@
-"""Plain 2D geometry on numpy arrays (no pymunk): used to validate scenarios and build maps."""
+"""Plane geometry for scenario validation and maps: shapely 2 (GEOS) does the tests, numpy the
+few formulas GEOS has no call for (corners of boxes and walls, a signed area, angle wrapping).
+
+Outlines are (n, 2) arrays [m] of a polygon's corners in order, not closed (the first point is
+not repeated), either winding. Functions here build a shapely geometry per call; code that tests
+many things against one outline should build it once with :func:`polygon`.
+"""
 from __future__ import annotations
 
 import math
+import re
 from typing import Sequence
 
 import numpy as np
+import shapely
 
 Point = Sequence[float] | np.ndarray  # (x, y): a tuple, list or array
 
@@ -26,88 +34,10 @@ def wall_corners(start: Point, end: Point, thickness: float) -> np.ndarray:
 
 
 def signed_area(points: np.ndarray) -> float:
-    """Shoelace area: positive for counter-clockwise outlines."""
+    """Shoelace area [m^2]: positive for counter-clockwise outlines (closed or not). GEOS gives
+    only the unsigned area; the sign is the winding, which maps and pymunk need."""
     x, y = points[:, 0], points[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-
-def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
-
-
-def segments_cross(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> bool:
-    """True when two segments properly intersect (cross at a point interior to both)."""
-    d1, d2 = _cross(q1, q2, p1), _cross(q1, q2, p2)
-    d3, d4 = _cross(p1, p2, q1), _cross(p1, p2, q2)
-    return d1 * d2 < 0 and d3 * d4 < 0
-
-
-def is_simple_polygon(points: np.ndarray) -> bool:
-    """True when no two non-adjacent edges of the closed outline cross.
-
-    Vectorised over edge pairs in blocks of rows, so 2,000 points take well under a second.
-    """
-    pts = np.asarray(points, dtype=float)
-    n = len(pts)
-    a, b = pts, np.roll(pts, -1, axis=0)  # edge k runs from a[k] to b[k]
-    j = np.arange(n)
-    for start in range(0, n, _BLOCK):
-        i = np.arange(start, min(n, start + _BLOCK))[:, None]
-        p1, p2 = a[i[:, 0]][:, None, :], b[i[:, 0]][:, None, :]
-        d1, d2 = _cross_v(a, b, p1), _cross_v(a, b, p2)
-        d3, d4 = _cross_v(p1, p2, a[None]), _cross_v(p1, p2, b[None])
-        crossing = (d1 * d2 < 0) & (d3 * d4 < 0)
-        pairs = (j[None, :] >= i + 2) & ~((i == 0) & (j[None, :] == n - 1))
-        if np.any(crossing & pairs):
-            return False
-    return True
-
-
-_BLOCK = 256  # rows of edge pairs tested at once (256 x n doubles per array)
-
-
-def _cross_v(o: np.ndarray, a: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """z of (a - o) x (p - o), broadcast over leading axes."""
-    return (a[..., 0] - o[..., 0]) * (p[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (
-        p[..., 0] - o[..., 0])
-
-
-def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    ab = b - a
-    denom = float(np.dot(ab, ab))
-    t = 0.0 if denom == 0.0 else min(1.0, max(0.0, float(np.dot(p - a, ab)) / denom))
-    return float(np.hypot(*(p - (a + t * ab))))
-
-
-def point_in_polygon(p: Point, points: np.ndarray) -> bool:
-    """Even-odd rule; works for concave outlines of either winding."""
-    x, y = float(p[0]), float(p[1])
-    pts = np.asarray(points, dtype=float)
-    x1, y1 = pts[:, 0], pts[:, 1]
-    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
-    spans = (y1 > y) != (y2 > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_at = x1 + (y - y1) * (x2 - x1) / (y2 - y1)
-    return bool(np.count_nonzero(spans & (x < x_at)) % 2)
-
-
-def _segment_distances(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance from points ``p`` to segments a-b, broadcast over leading axes."""
-    ab = b - a
-    denom = (ab * ab).sum(axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(denom > 0, ((p - a) * ab).sum(axis=-1) / denom, 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    return np.hypot(*np.moveaxis(p - (a + t[..., None] * ab), -1, 0))
-
-
-def distance_to_polygon(p: Point, points: np.ndarray) -> float:
-    """Distance from a point to a filled polygon: 0 inside, else to the nearest edge."""
-    q = np.asarray(p, dtype=float)
-    pts = np.asarray(points, dtype=float)
-    if point_in_polygon(q, pts):
-        return 0.0
-    return float(_segment_distances(q, pts, np.roll(pts, -1, axis=0)).min())
 
 
 def wrap_angle(angle: float) -> float:
@@ -115,42 +45,92 @@ def wrap_angle(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def thinness(points: np.ndarray) -> float:
-    """A lower bound on a simple polygon's thinnest width: the smallest distance from a vertex to
-    an edge not touching it (equal to the minimum width for convex polygons; across a notch of a
-    concave one it may underestimate, which only errs on the safe side)."""
+def polygon(points: np.ndarray) -> shapely.Polygon:
+    """The filled polygon of an outline (n, 2) [m]."""
+    return shapely.Polygon(np.asarray(points, dtype=float))
+
+
+def polygons(outlines: Sequence[np.ndarray]) -> np.ndarray:
+    """Filled polygons of many outlines (each (n_i, 2) [m], closed or not), built in one
+    vectorised call: an array of shapely polygons."""
+    if not len(outlines):
+        return np.empty(0, dtype=object)
+    arrays = [np.asarray(o, dtype=float) for o in outlines]
+    index = np.repeat(np.arange(len(arrays)), [len(a) for a in arrays])
+    return np.asarray(shapely.polygons(shapely.linearrings(np.concatenate(arrays),
+                                                           indices=index)), dtype=object)
+
+
+_REASON = re.compile(r"^(?P<what>[^\[]*)\[(?P<x>\S+) (?P<y>\S+)\]$")
+
+
+def polygon_problem(points: np.ndarray) -> str | None:
+    """Why an outline is not a usable simple polygon, naming where, or None when it is one.
+
+    GEOS's validity reason says what is wrong and where ("Self-intersection[1.5 2]"); the
+    zero-area and near-pinch tests are ours: GEOS calls a polygon with a repeated neighbour or a
+    vertex 1e-12 m off an edge valid, but pymunk cannot stop anything at a pinch of no width.
+    """
     pts = np.asarray(points, dtype=float)
-    n = len(pts)
-    a, b = pts, np.roll(pts, -1, axis=0)  # edge j runs from vertex j to vertex j + 1
-    j = np.arange(n)
-    best = math.inf
-    for start in range(0, n, _BLOCK):
-        i = np.arange(start, min(n, start + _BLOCK))[:, None]
-        d = _segment_distances(pts[i[:, 0]][:, None, :], a[None], b[None])
-        touching = (j[None, :] == i) | ((j[None, :] + 1) % n == i)
-        d = np.where(touching, np.inf, d)
-        best = min(best, float(d.min()))
-    return best
+    repeats = np.flatnonzero(np.isclose(pts, np.roll(pts, -1, axis=0)).all(axis=1))
+    if len(repeats):
+        return f"point {repeats[0]} repeats its neighbour"
+    shape = polygon(pts)
+    if shapely.area(shapely.convex_hull(shape)) < 1e-9:
+        return "zero area (the points lie on one line)"
+    reason = shapely.is_valid_reason(shape)
+    if reason != "Valid Geometry":
+        match = _REASON.match(str(reason))
+        if match is None:
+            return reason
+        where = _at(float(match["x"]), float(match["y"]))
+        if match["what"] == "Self-intersection":
+            return f"edges cross each other {where}"
+        if match["what"] == "Ring Self-intersection":
+            return (f"the outline touches itself {where} (a point repeats another or lies on "
+                    "an edge)")
+        return f"{match['what'].strip().lower()} {where}"
+    if shapely.area(shape) < 1e-9:
+        return "zero area"
+    if shapely.minimum_clearance(shape) < 1e-9:  # a pinch has no width: nothing stops at it
+        x, y = shapely.get_coordinates(shapely.minimum_clearance_line(shape))[0]
+        return (f"the outline touches itself {_at(x, y)} (a point repeats another or lies on "
+                "an edge)")
+    return None
+
+
+def _at(x: float, y: float) -> str:
+    """'at (x, y)' to the nanometre, for messages (a pinch 1e-12 m wide reads as its place)."""
+    return f"at ({round(x, 9) + 0.0:.6g}, {round(y, 9) + 0.0:.6g})"
+
+
+def thinness(points: np.ndarray) -> float:
+    """A lower bound on a simple polygon's thinnest width [m]: GEOS's minimum clearance, the
+    smallest distance from a vertex to an edge not touching it.
+
+    Not ``shapely.minimum_width``: that is the width of the convex hull, which misses the thin
+    arm of an L (what a wall may skip over). The clearance is exact across a convex polygon's
+    short side and errs low elsewhere (about one side of a many-sided disc), on the safe side.
+    """
+    return float(shapely.minimum_clearance(polygon(points)))
+
+
+def thinnesses(outlines: Sequence[np.ndarray]) -> np.ndarray:
+    """:func:`thinness` of many outlines at once (one vectorised GEOS call) [m]."""
+    return np.asarray(shapely.minimum_clearance(polygons(outlines)), dtype=float)
+
+
+def point_in_polygon(p: Point, points: np.ndarray) -> bool:
+    """Whether a point lies inside or on the outline of a polygon (either winding)."""
+    return bool(shapely.intersects_xy(polygon(points), float(p[0]), float(p[1])))
+
+
+def distance_to_polygon(p: Point, points: np.ndarray) -> float:
+    """Distance [m] from a point to a filled polygon: 0 inside, else to the nearest edge."""
+    return float(shapely.distance(polygon(points), shapely.Point(float(p[0]), float(p[1]))))
 
 
 def polygons_overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    """True when two simple polygons (either winding, concave allowed) share interior area:
-    an edge of one properly crosses an edge of the other, or one holds a vertex of the other."""
-    na, nb = len(a), len(b)
-    for i in range(na):
-        for j in range(nb):
-            if segments_cross(a[i], a[(i + 1) % na], b[j], b[(j + 1) % nb]):
-                return True
-    # Vertices and edge midpoints of one inside the other (midpoints catch equal outlines).
-    mid_a = (a + np.roll(a, -1, axis=0)) / 2.0
-    mid_b = (b + np.roll(b, -1, axis=0)) / 2.0
-    return (any(point_in_polygon(p, b) and distance_to_outline(p, b) > 1e-9 for p in np.vstack([a, mid_a]))
-            or any(point_in_polygon(p, a) and distance_to_outline(p, a) > 1e-9
-                   for p in np.vstack([b, mid_b])))
-
-
-def distance_to_outline(p: Point, points: np.ndarray) -> float:
-    """Distance from a point to the nearest edge of a closed outline (inside or out)."""
-    q = np.asarray(p, dtype=float)
-    n = len(points)
-    return min(point_segment_distance(q, points[i], points[(i + 1) % n]) for i in range(n))
+    """True when two simple polygons (either winding, concave allowed) share interior area;
+    touching along an edge or at a corner is not an overlap."""
+    return bool(shapely.relate_pattern(polygon(a), polygon(b), "T********"))

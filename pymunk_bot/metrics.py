@@ -17,13 +17,18 @@ class RobotMetrics:
     """Closest approach to anything and entries into ``never_enter`` regions.
 
     ``min_clearance`` is measured only when ``track_clearance`` is set; the query then looks no
-    farther than the closest approach so far, so it costs little once something came near."""
+    farther than the closest approach so far, so it costs little once something came near.
+    ``shape_filter``: what the clearance query sees (default: the robot's own filter).
+    ``navigation``: the robot's :class:`~pymunk_bot.navmetrics.NavMetrics` when the run
+    measures them (a crowd, or an expectation bounding one), updated with the rest."""
 
     def __init__(self, space: pymunk.Space, robot: Any, never_enter: list,
-                 track_clearance: bool = True) -> None:
+                 track_clearance: bool = True,
+                 shape_filter: pymunk.ShapeFilter | None = None) -> None:
         self._space = space
         self._robot = robot
-        self._filter = robot.shape.filter
+        self._filter = robot.shape.filter if shape_filter is None else shape_filter
+        self.navigation: Any = None
         self._radius = robot.radius
         self._regions = [np.asarray(poly, dtype=float) for poly in never_enter]
         self.track_clearance = track_clearance
@@ -35,6 +40,8 @@ class RobotMetrics:
         self._outline = None if footprint is None else outline_samples(footprint)
 
     def update(self, time: float) -> None:
+        if self.navigation is not None:
+            self.navigation.update(time)
         position = self._robot.body.position
         if self.min_clearance is not None and self._outline is not None:
             body = self._robot.body

@@ -1,6 +1,8 @@
 """pymunk settings for SI units, collision types, and the substep count that prevents tunnelling."""
 from __future__ import annotations
 
+import atexit
+import gc
 import math
 
 import pymunk
@@ -37,6 +39,14 @@ def replica_filter(replica: int, group: int = 0) -> pymunk.ShapeFilter:
     own = 1 << replica
     return pymunk.ShapeFilter(group=group, categories=own,
                               mask=pymunk.ShapeFilter.ALL_MASKS() ^ (_REPLICA_BITS ^ own))
+
+
+# pymunk frees a Body or Space through Python callbacks (cffi ``extern "Python"``), which stop
+# working while the interpreter shuts down. A run left in a reference cycle at exit (a module
+# global after a server thread ran) was collected then, and the exit crashed with SIGSEGV or
+# SIGBUS. At exit every object still tracked is frozen out of the last collections: the OS
+# takes the memory back instead (tests/ros2/test_rosbridge.py has the script that crashed).
+atexit.register(gc.freeze)
 
 
 def new_space(pushable: bool = False) -> pymunk.Space:

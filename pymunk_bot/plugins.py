@@ -96,7 +96,10 @@ def _register_builtins() -> None:
             ("waypoints", "waypoints:WaypointsController", c.WaypointsControllerConfig),
             ("avoid", "avoid:AvoidController", c.AvoidControllerConfig),
             ("navigate", "navigate_any:make_navigate", c.NavigateControllerConfig),
-            ("python", "python:PythonController", c.PythonControllerConfig))
+            ("social_force", "social_force:SocialForceController", c.SocialForceControllerConfig),
+            ("orca", "orca:OrcaController", c.OrcaControllerConfig),
+            ("python", "python:PythonController", c.PythonControllerConfig),
+            ("policy", "policy:PolicyController", c.PolicyControllerConfig))
     for name, cls, model in builtin_controllers:
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
     from .localization import config as lc

@@ -161,6 +161,16 @@ class Fleet:
             self._refresh_targets()
 
 
+class MissingSensorError(AttributeError):
+    """A robot read for a sensor it was not given (``hasattr(robot, "lidar")`` is then False)."""
+
+    def __init__(self, robot: str, kind: str, fitted: list[str]) -> None:
+        have = ", ".join(fitted) if fitted else "none"
+        super().__init__(f"robot '{robot}' has no {kind}: add `{kind}:` to its entry under "
+                         f"`robots:` in the scenario (its sensors: {have})")
+        self.robot, self.kind = robot, kind
+
+
 class Robot:
     """A simulated robot: ``pose`` is ground truth; its sensors and localizer give what it knows.
 
@@ -197,9 +207,7 @@ class Robot:
         self._fleet, self._i = fleet, index
         self._drive_group, self._di = drive_group, drive_index
         self.sensors: list = []  # everything with update(time), in the order they read
-        self.lidar: Any = None
-        self.imu: Any = None
-        self.bumper: Any = None
+        self._fitted: dict[str, Any] = {}  # "lidar", "imu", "bumper" -> the sensor
         self.controller = None
         self.localizer = None
         self.mapper: Any = None  # builds an occupancy grid from this robot's LiDAR, if configured
@@ -207,6 +215,38 @@ class Robot:
         self.localization_score: Any = None  # estimate vs truth, when the scenario names a localizer
         self.nav_goal: tuple[float, float] | None = None  # where the controller drives
         self._override = False
+
+    # ------------------------------------------------------------------ sensors
+    def sensor(self, kind: str) -> Any | None:
+        """The robot's sensor of this kind ("lidar", "imu", "bumper"), or None if it has none
+        (``robot.lidar`` raises instead: for code that handles robots without one)."""
+        return self._fitted.get(kind)
+
+    def fit(self, kind: str, sensor: Any) -> None:
+        """Mount ``sensor`` as the robot's ``kind`` (the sensor factories call this)."""
+        self._fitted[kind] = sensor
+
+    def _fitted_sensor(self, kind: str) -> Any:
+        sensor = self._fitted.get(kind)
+        if sensor is None:
+            raise MissingSensorError(self.name, kind, sorted(self._fitted))
+        return sensor
+
+    @property
+    def lidar(self) -> Any:
+        """The robot's LiDAR (``lidar.latest``, ``lidar.scan()``); MissingSensorError, an
+        AttributeError naming the scenario key to add, if it has none."""
+        return self._fitted_sensor("lidar")
+
+    @property
+    def imu(self) -> Any:
+        """The robot's IMU (``imu.reading``); MissingSensorError if it has none."""
+        return self._fitted_sensor("imu")
+
+    @property
+    def bumper(self) -> Any:
+        """The robot's bumper (every robot has one)."""
+        return self._fitted_sensor("bumper")
 
     # ------------------------------------------------------------------ state
     @property
@@ -316,7 +356,8 @@ class Robot:
 
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""
-        return {s.name: s.reading for s in self.sensors if s is not self.lidar}
+        lidar = self.sensor("lidar")
+        return {s.name: s.reading for s in self.sensors if s is not lidar}
 
     # ------------------------------------------------------------------ commands
     def set_velocity(self, v: float, omega: float, vy: float = 0.0) -> None:

@@ -141,7 +141,7 @@ class RunLogger:
         self._movable = [sim.world.obstacles[i].body for i, _ in movable]
         robots = []
         for robot in sim.robots.values():
-            lidar = robot.lidar
+            lidar = robot.sensor("lidar")
             robots.append({
                 "name": robot.name, "radius": robot.radius,
                 "drive": robot.config.drive,
@@ -161,7 +161,7 @@ class RunLogger:
                         for i, shapes in movable],
         }
         self._rows = {name: [] for name in ("time", *_PER_STEP)}
-        self._scan_rows = {r.name: [] for r in sim.robots.values() if r.lidar is not None}
+        self._scan_rows = {r.name: [] for r in sim.robots.values() if r.sensor("lidar") is not None}
         self._last_scan = {}
         from .localization.recording import LocalizationRecorder
 
@@ -186,7 +186,8 @@ class RunLogger:
         rows["teleop"].append([r.overridden for r in robots])
         rows["obstacle_pose"].append([body_pose(b) for b in self._movable])
         for robot in robots:
-            scan = robot.lidar.latest if robot.lidar is not None else None
+            lidar = robot.sensor("lidar")
+            scan = lidar.latest if lidar is not None else None
             if scan is not None and scan is not self._last_scan.get(robot.name):
                 self._last_scan[robot.name] = scan
                 self._scan_rows[robot.name].append((scan, robot.pose))

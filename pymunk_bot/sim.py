@@ -96,12 +96,14 @@ class Simulation:
                           in zip(built.drive_groups, built.odometry_groups)]
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
-        self._lidars = [r.lidar for r in self._robots if r.lidar is not None]
+        self._lidars = [lidar for lidar in (r.sensor("lidar") for r in self._robots)
+                        if lidar is not None]
         self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self._lidars])
         self._sensors = [s for r in self._robots for s in r.sensors
-                         if s is not r.lidar and not getattr(s, "passive", False)]
+                         if s is not r.sensor("lidar") and not getattr(s, "passive", False)]
         self._localized = [r for r in self._robots if not getattr(r.localizer, "passive", False)]
-        self._mapping = [r for r in self._robots if r.mapper is not None and r.lidar is not None]
+        self._mapping = [r for r in self._robots
+                         if r.mapper is not None and r.sensor("lidar") is not None]
         self._events = EventSchedule(self.config.events)
         # Robots whose scenario names a localizer are scored against the truth (result JSON's
         # "localization" block), sampled at their controller's rate (10 Hz without one).
@@ -338,16 +340,18 @@ class Simulation:
                 score.add(robot.pose, robot.localizer.pose)
 
     def _localizer_inputs(self, robot: Robot, now: float) -> LocalizerInputs:
-        imu = robot.imu.reading if robot.imu is not None else None
-        scan = robot.lidar.latest if robot.lidar is not None else None
+        imu, lidar = robot.sensor("imu"), robot.sensor("lidar")
+        imu = imu.reading if imu is not None else None
+        scan = lidar.latest if lidar is not None else None
         return LocalizerInputs(time=now, odometry=robot.odometry.pose, scan=scan, imu=imu)
 
     def observe(self, robot: Robot) -> Observation:
         """What ``robot``'s controller knows now."""
+        lidar = robot.sensor("lidar")
         return Observation(
             time=self.time, pose=robot.localizer.pose, odometry=robot.odometry.pose,
             goal=robot.nav_goal, goal_tolerance=robot.goal_tolerance, robot=robot.spec,
-            scan=robot.lidar.latest if robot.lidar is not None else None,
+            scan=lidar.latest if lidar is not None else None,
             read_extra=robot.readings,
             localized=getattr(robot.localizer, "localized", True))  # a plugin's: trusted
 
@@ -396,6 +400,8 @@ class Simulation:
             }
             if name in self._scores:
                 robots[name]["localization"] = self._scores[name].block()
+            if r.metrics.navigation is not None:  # a crowd, or expect bounds (navmetrics/)
+                robots[name]["metrics"] = r.metrics.navigation.values()
         return {
             "scenario": self.config.name,
             "seed": self.seed,

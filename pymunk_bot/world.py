@@ -38,12 +38,15 @@ class World:
             self.substeps = named if isinstance(named, int) else required_substeps(config)
             self._caster: Any = None
             self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
+            # Robot shapes whose contact impulses someone reads (navmetrics); empty: no cost.
+            self._on_solved: dict[pymunk.Shape, list[Callable[[pymunk.Arbiter], None]]] = {}
             for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
                 self.space.on_collision(physics.ROBOT, other, begin=self._begin)
             self._fixed: dict[int, Obstacle] = {}
         else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
             self.space, self.map, self.arena_shapes = ground.space, ground.map, ground.arena_shapes
             self.substeps, self._on_contact = ground.substeps, ground._on_contact
+            self._on_solved = ground._on_solved
             self._ground = ground
             self._fixed = ground._fixed
         self.obstacles: list[Obstacle] = []
@@ -106,6 +109,7 @@ class World:
             gone.update(dict.fromkeys(body.constraints))
             for shape in body.shapes:
                 self._on_contact.pop(shape, None)
+                self._on_solved.pop(shape, None)
                 gone[shape] = None
             gone[body] = None
         self.space.remove(*gone)
@@ -148,6 +152,22 @@ class World:
     def count_contacts(self, shape: pymunk.Shape, on_begin: Callable[[], None]) -> None:
         """Call ``on_begin`` whenever a contact episode of ``shape`` (a robot's) begins."""
         self._on_contact[shape] = on_begin
+
+    def watch_contacts(self, shape: pymunk.Shape,
+                       on_solved: Callable[[pymunk.Arbiter], None]) -> None:
+        """Call ``on_solved(arbiter)`` after every pymunk step in which ``shape`` (a robot's)
+        touches something, once its impulse is solved (``arbiter.total_impulse``). Worlds where
+        nobody asks never pay for a post-solve callback."""
+        if not self._on_solved:
+            for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
+                self.space.on_collision(physics.ROBOT, other, begin=self._begin,
+                                        post_solve=self._solved)
+        self._on_solved.setdefault(shape, []).append(on_solved)
+
+    def _solved(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
+        for shape in arbiter.shapes:
+            for on_solved in self._on_solved.get(shape, ()):
+                on_solved(arbiter)
 
     def _begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
         """A contact episode starts: count it for every robot in it (both, robot on robot)."""

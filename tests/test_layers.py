@@ -7,16 +7,6 @@ import grimp
 from pymunk_bot.benchmarks import SECTIONS
 from pymunk_bot.benchmarks.names import SECTION_NAMES
 
-# The one knot left (docs/architecture.md): config's modules call each other, and through the
-# registries, maps and planning, back. A cycle outside it, or a module pulled into it, fails.
-CONFIG_KNOT = {
-    "config.assemble", "config.checks", "config.drives", "config.loader", "config.movers",
-    "config.schema", "config.semantics", "config.substeps", "config.world_map",
-    "localization.checks", "maps.files", "maps.geometry", "maps.svg", "planning.grid",
-    "planning.map", "plugins",
-}
-
-
 def _cycles(graph: grimp.ImportGraph) -> list[set[str]]:
     """The strongly connected components of more than one module (Tarjan, iteratively)."""
     edges = {m: sorted(graph.find_modules_directly_imported_by(m)) for m in graph.modules}
@@ -60,11 +50,11 @@ def _cycles(graph: grimp.ImportGraph) -> list[set[str]]:
     return found
 
 
-def test_no_import_cycle_but_the_known_config_knot():
+def test_no_import_cycle_anywhere():
+    # Imports inside functions count (grimp sees them); only ``if TYPE_CHECKING:`` ones do not.
     graph = grimp.build_graph("pymunk_bot", exclude_type_checking_imports=True)
-    cycles = [{m.removeprefix("pymunk_bot.") for m in c} for c in _cycles(graph)]
-    assert all(cycle <= CONFIG_KNOT for cycle in cycles), cycles
-    assert len(cycles) <= 1
+    cycles = [sorted(m.removeprefix("pymunk_bot.") for m in c) for c in _cycles(graph)]
+    assert cycles == []
 
 
 def test_the_bench_names_its_sections_in_the_order_they_run():

@@ -14,6 +14,10 @@ Per unit mass, walker a feels
 - optionally a random fluctuation, from the run's seeded generator;
 - a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
   walker back is turned to its right, so head-on encounters resolve the way people do.
+A walker with ``policy: orca`` takes its velocity from ORCA instead (:mod:`.orca`), toward the
+same wished velocity. One that does not ``react_to_robot`` leaves robots out of both. Walkers
+of one ``group`` share its slowest pace, and each is pulled back toward the group's centre
+when it strays farther than GROUP_SPACING per companion (Moussaid et al. 2010's cohesion).
 All walkers are updated together as numpy arrays. Each walker is a dynamic disc: contacts push
 it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0.
 """
@@ -28,6 +32,8 @@ import pymunk
 from .. import physics
 from ..config.motion import MAX_SPEED_FACTOR
 from ..obstacles import Obstacle
+from .body_state import BodyStates
+from .orca import Orca, nearest_surfaces
 
 STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
 SIGHT_COS = math.cos(math.radians(100.0))  # half the field of view
@@ -44,6 +50,9 @@ SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are l
 # Walkers carry their own category bit, so the wall queries can skip them in C.
 WALKER_CATEGORY = 1 << 30
 _NOT_WALKERS = pymunk.ShapeFilter(mask=pymunk.ShapeFilter.ALL_MASKS() ^ WALKER_CATEGORY)
+BOX_TEST_LIMIT = 200_000  # walkers x shapes beyond which the bounding-box test is skipped
+GROUP_SPACING = 0.8  # [m] a companion's share of the group's spread (two walk ~0.8 m apart)
+GROUP_PULL = 1.0  # [1/s] wished speed toward the group's centre per metre strayed beyond it
 
 
 def build_pedestrian(space: pymunk.Space, config: Any) -> Obstacle:
@@ -81,33 +90,83 @@ class Crowd:
         self.u0 = np.array([c.wall_strength for c in cfg])  # [m^2/s^2]
         self.wall_range = np.array([c.wall_range for c in cfg])  # [m]
         self.fluctuation = np.array([c.fluctuation for c in cfg])  # [m/s^2]
+        self.reacts = np.array([c.react_to_robot for c in cfg], dtype=bool)
+        self._robot_bodies = {r.body for r in self.robots}
+        self._states = BodyStates(space, [w.body for w in self.walkers])
+        # What the wall forces can come from, by bounding box: a walker whose reach meets no box
+        # skips its queries (exact: a shape within reach has its box within reach too).
+        mine = {shape for w in self.walkers for shape in w.shapes}
+        others = [s for s in space.shapes if s not in mine and s.body is not None]
+        static = [s for s in others if s.body is not None
+                  and s.body.body_type == pymunk.Body.STATIC]
+        self._static_boxes = np.array([(s.bb.left, s.bb.bottom, s.bb.right, s.bb.top)
+                                       for s in static], dtype=float).reshape(-1, 4)
+        fixed = set(static)
+        self._moving_shapes = [s for s in others if s not in fixed]
+        names = sorted({c.group for c in cfg if c.group is not None})
+        self.groups = [np.array([i for i, c in enumerate(cfg) if c.group == g]) for g in names]
+        self.groups = [g for g in self.groups if len(g) > 1]
+        for members in self.groups:  # a group walks at its slowest member's pace
+            self.desired[members] = self.desired[members].min()
+        orca = np.array([c.policy == "orca" for c in cfg], dtype=bool)
+        self.social = ~orca
+        self.orca = Orca(np.flatnonzero(orca), cfg) if orca.any() else None
         self.goals = [np.asarray(c.goals, dtype=float) for c in cfg]
         self.target = [0] * n  # index of the current goal
         self.direction = [1] * n  # +1 forward through the goals, -1 back (pingpong)
         self.done = np.zeros(n, dtype=bool)  # a "once" walker at its last goal
+        self._tolerance = np.array([c.goal_tolerance for c in cfg])  # [m]
         self._robot_radius = np.array([r.spec.radius for r in self.robots])
         # Walkers feel each other through the elliptical potential only (the wall queries skip
         # them by category); robots also repel like walls, from their real footprint.
 
     # ------------------------------------------------------------------ state
     def positions(self) -> np.ndarray:
-        return np.array([tuple(w.body.position) for w in self.walkers]).reshape(-1, 2)
+        """Every walker's position [m], shape (n, 2)."""
+        return self._states.read()[:, :2]
 
     def velocities(self) -> np.ndarray:
-        return np.array([tuple(w.body.velocity) for w in self.walkers]).reshape(-1, 2)
+        """Every walker's velocity [m/s], shape (n, 2)."""
+        return self._states.read()[:, 2:]
 
     def goal_points(self) -> np.ndarray:
         return np.array([g[k] for g, k in zip(self.goals, self.target)]).reshape(-1, 2)
 
     # ------------------------------------------------------------------ the tick
     def before_step(self, time: float, dt: float) -> None:
-        pos, vel = self.positions(), self.velocities()
+        state = self._states.read()
+        pos, vel = state[:, :2], state[:, 2:]
         self._advance_goals(pos)
         to_goal = self.goal_points() - pos
         dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
         e = to_goal / np.maximum(dist, 1e-9)[:, None]
         wish = np.where(self.done, 0.0, self.desired)
-        force = (wish[:, None] * e - vel) / self.tau[:, None]
+        pref = wish[:, None] * e + self._cohesion(pos)  # the wished velocity [m/s]
+        cap = MAX_SPEED_FACTOR * self.desired
+        new = vel.copy()
+        if self.social.any():
+            new[self.social] = self._social_force(pos, vel, e, pref, dt)[self.social]
+        if self.orca is not None:
+            new[self.orca.agents] = self._orca(pos, vel, pref, cap, dt)
+        speed = np.hypot(new[:, 0], new[:, 1])
+        new *= np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
+        for walker, (vx, vy) in zip(self.walkers, new.tolist()):
+            walker.body.velocity = (vx, vy)
+
+    def _cohesion(self, pos: np.ndarray) -> np.ndarray:
+        """Wished velocity [m/s] back toward each walker's group centre, beyond its spread."""
+        pull = np.zeros_like(pos)
+        for members in self.groups:
+            off = pos[members].mean(axis=0) - pos[members]
+            dist = np.maximum(np.hypot(off[:, 0], off[:, 1]), 1e-9)
+            stray = np.maximum(dist - 0.5 * GROUP_SPACING * (len(members) - 1), 0.0)
+            pull[members] = (GROUP_PULL * stray / dist)[:, None] * off
+        return pull
+
+    def _social_force(self, pos: np.ndarray, vel: np.ndarray, e: np.ndarray, pref: np.ndarray,
+                      dt: float) -> np.ndarray:
+        """Velocities after one step of the social force model (every walker)."""
+        force = (pref - vel) / self.tau[:, None]
         social = self._social(pos, vel, e)
         against = np.maximum(-(social * e).sum(axis=1), 0.0)  # the part that holds us back
         social += KEEP_RIGHT * against[:, None] * np.column_stack([e[:, 1], -e[:, 0]])
@@ -115,19 +174,40 @@ class Crowd:
         force += self._walls(pos)
         if self.fluctuation.any():
             force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
-        new = vel + force * dt
-        speed = np.hypot(new[:, 0], new[:, 1])
-        cap = MAX_SPEED_FACTOR * self.desired
-        new *= np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
-        for walker, (vx, vy) in zip(self.walkers, new.tolist()):
-            walker.body.velocity = (vx, vy)
+        return vel + force * dt
+
+    def _orca(self, pos: np.ndarray, vel: np.ndarray, pref: np.ndarray, cap: np.ndarray,
+              dt: float) -> np.ndarray:
+        """Velocities of the ORCA walkers."""
+        assert self.orca is not None
+        agents = self.orca.agents
+        opos, ovel, orad = self._others(pos, vel)
+        n, m = len(pos), len(opos)
+        visible = np.ones((len(agents), m), dtype=bool)
+        visible[np.arange(len(agents)), agents] = False
+        visible[:, n:] &= self.reacts[agents][:, None]
+        walls: list[list[tuple[float, float, float]]] = []
+        # farther surfaces than this never bind: (d - r) / tau_obst exceeds the speed cap
+        reach = self.radius[agents] + cap[agents] * self.orca.wall_horizon
+        near = self._near_boxes(pos[agents], reach)
+        for k, a in enumerate(agents.tolist()):
+            if not near[k]:
+                walls.append([])
+                continue
+            skip = self._robot_bodies  # robots are neighbours (or ignored), not walls
+            walls.append(nearest_surfaces(self.space, (float(pos[a, 0]), float(pos[a, 1])),
+                                          float(reach[k]), _NOT_WALKERS, skip))
+        return self.orca.velocities(pos[agents], vel[agents], self.radius[agents],
+                                    (opos, ovel, orad), n,
+                                    visible, pref[agents], cap[agents], dt, walls)
 
     def _advance_goals(self, pos: np.ndarray) -> None:
-        for i, walker in enumerate(self.walkers):
+        off = self.goal_points() - pos
+        arrived = (np.hypot(off[:, 0], off[:, 1]) <= self._tolerance) & ~self.done
+        for i in np.flatnonzero(arrived).tolist():  # most ticks: nobody
+            walker = self.walkers[i]
             goals, k = self.goals[i], self.target[i]
             config: Any = walker.config
-            if self.done[i] or math.dist(pos[i], goals[k]) > config.goal_tolerance:
-                continue
             mode, last = config.mode, len(goals) - 1
             if mode == "loop":
                 self.target[i] = (k + 1) % len(goals)
@@ -165,6 +245,7 @@ class Crowd:
         reach = np.hypot(step[:, 0], step[:, 1]) + SOCIAL_CUTOFF + orad
         near = (d[..., 0] ** 2 + d[..., 1] ** 2) < reach[None, :] ** 2
         near[np.arange(n), np.arange(n)] = False  # no force on oneself
+        near[:, n:] &= self.reacts[:, None]  # robots, for walkers that react to them
         a, b = np.nonzero(near)
         force = np.zeros_like(pos)
         if not len(a):
@@ -186,12 +267,34 @@ class Crowd:
         force[:, 1] = np.bincount(a, pair[:, 1], minlength=n)
         return force
 
+    def _near_boxes(self, pos: np.ndarray, reach: np.ndarray) -> np.ndarray:
+        """Whether each point's square of half-side ``reach`` [m] meets the bounding box of
+        any non-walker shape (static boxes from the build, moving ones as they are now)."""
+        boxes = self._static_boxes
+        if self._moving_shapes:
+            boxes = np.vstack([boxes, [(s.bb.left, s.bb.bottom, s.bb.right, s.bb.top)
+                                       for s in self._moving_shapes]])
+        if len(pos) * len(boxes) > BOX_TEST_LIMIT:  # a huge map: let the queries sort it out
+            return np.ones(len(pos), dtype=bool)
+        x, y, r = pos[:, :1], pos[:, 1:], reach[:, None]
+        return ((boxes[:, 0] <= x + r) & (boxes[:, 2] >= x - r)
+                & (boxes[:, 1] <= y + r) & (boxes[:, 3] >= y - r)).any(axis=1)
+
     def _walls(self, pos: np.ndarray) -> np.ndarray:
         """Repulsion from the nearest surface of each wall, obstacle, robot and arena side."""
         force = np.zeros_like(pos)
+        near = self._near_boxes(pos, WALL_REACH * self.wall_range + self.radius)
         for i, (x, y) in enumerate(pos.tolist()):
+            if not near[i]:
+                continue
             reach = WALL_REACH * self.wall_range[i] + self.radius[i]
+            # One C call says whether anything is in reach at all (most walkers, most ticks:
+            # nothing), before the query that reports every shape through a Python callback.
+            if self.space.point_query_nearest((x, y), reach, _NOT_WALKERS) is None:
+                continue
             for hit in self.space.point_query((x, y), reach, _NOT_WALKERS):
+                if not self.reacts[i] and hit.shape.body in self._robot_bodies:
+                    continue
                 gap = max(hit.distance - (self.radius[i] - NOMINAL_RADIUS), 0.0)
                 push = self.u0[i] / self.wall_range[i] * math.exp(-gap / self.wall_range[i])
                 gx, gy = hit.gradient

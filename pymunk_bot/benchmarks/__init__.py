@@ -96,6 +96,19 @@ def _irsim(quick: bool) -> list[Verdict]:
     return [(f"{target} (got {result['ratio']:.1f}x)", result["passed"])]
 
 
+def _crowds(quick: bool) -> list[Verdict]:
+    from . import crowds
+    print("crowd navigation: a LiDAR robot among pedestrians, the pedestrian policies, and a "
+          "1,000-episode benchmark (estimated from a sample, CPU time)")
+    result = crowds.main(quick=True)  # under a minute; `python -m ...crowds` for the full sample
+    env, estimate = result["env"], result["episodes"]["estimate_s"]
+    return [(f"1 robot, 360-beam LiDAR, 20 pedestrians: >= {crowds.ENV_TARGET:g} env steps/s "
+             f"(got {env['env_steps_per_s']:.0f})", env["env_steps_per_s"] >= crowds.ENV_TARGET),
+            (f"{crowds.EPISODES} 30 s episodes on {crowds.CORES} cores: <= "
+             f"{crowds.EPISODES_TARGET:g} s (estimated {estimate:.0f} s)",
+             estimate <= crowds.EPISODES_TARGET)]
+
+
 def _maps(quick: bool) -> list[Verdict]:
     from . import maps
     print("build time; LiDAR on a map world vs the same world as boxes")
@@ -169,6 +182,7 @@ SECTIONS: dict[str, tuple[str, Callable[[bool], list[Verdict]]]] = {
     "learning_loop": ("Learning loop against bare pymunk", _learning_loop),
     "irsim": ("Against IR-SIM", _irsim),
     "movers": ("Pedestrians and scripted obstacles", _movers),
+    "crowds": ("Crowd navigation", _crowds),
     "maps": ("Maps", _maps),
     "localization": ("Localization (quick)", _localization),
     "localization_robustness": ("Localization with defaults on unseen worlds",

@@ -127,7 +127,7 @@ def real_time(n_robots: int, beams: int, sim_seconds: float, repeats: int = 1,
         cpu.append(_ticks(sim, ticks))
         if not beams:
             bare.append(_bare_ticks(sim, ticks))
-        scans = [r.lidar.latest for r in sim.robots.values() if r.lidar is not None]
+        scans = [r.lidar.latest for r in sim.robots.values() if r.sensor("lidar") is not None]
         if any(s is None or sim.time - s.time > 0.1 + 1e-9 for s in scans):
             raise RuntimeError("a LiDAR did not keep its 10 Hz")
     factor = ticks * sim.dt / statistics.median(cpu)

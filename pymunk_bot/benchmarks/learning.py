@@ -44,6 +44,7 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     the space, cast every beam with ``segment_query_first``, build the same observation."""
 
     from pymunk_bot.envs import NavigationEnv
+    from pymunk_bot.policy_io import GOAL_SCALE, PROXIMITY_SCALE
 
     env = NavigationEnv(**_env_kwargs(beams))
     env.reset(seed=0)  # only to build the identical world; the loop below never calls it
@@ -61,9 +62,9 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
     goal = robot.goal
     if goal is None:
         raise RuntimeError(f"robot '{task.name}' has no goal: the observation needs one")
-    diagonal = math.hypot(sim.world.width, sim.world.height)
     v, omega = ACTION[0] * task.v_max, ACTION[1] * task.omega_max
-    obs = np.empty(beams + 5, np.float32)
+    near = PROXIMITY_SCALE / max_range  # proximity = near * (R - r) / (s + r), 0 for no return
+    obs = np.empty(beams + 8, np.float32)
     started = time.process_time()
     for _ in range(steps):
         for _ in range(substeps):
@@ -73,16 +74,21 @@ def bare_pymunk_steps_per_second(steps: int = 600, beams: int = 180) -> float:
             space.step(h)
         x, y = body.position
         theta = body.angle
+        closest, closest_angle = 0.0, 0.0
         for i, a in enumerate(angles):
             end = (x + max_range * math.cos(theta + a), y + max_range * math.sin(theta + a))
             hit = space.segment_query_first((x, y), end, 0.0, shape_filter)
-            obs[i] = 1.0 if hit is None else hit.alpha
+            r = max_range if hit is None else hit.alpha * max_range
+            obs[i] = proximity = near * (max_range - r) / (PROXIMITY_SCALE + r)
+            if proximity > closest:
+                closest, closest_angle = proximity, a
+        obs[beams], obs[beams + 1], obs[beams + 2] = (closest, math.cos(closest_angle),
+                                                      math.sin(closest_angle))
+        distance = math.hypot(goal[0] - x, goal[1] - y)
         bearing = math.atan2(goal[1] - y, goal[0] - x) - theta
-        obs[beams] = math.hypot(goal[0] - x, goal[1] - y) / diagonal
-        obs[beams + 1], obs[beams + 2] = math.cos(bearing), math.sin(bearing)
-        vx, vy = body.velocity
-        obs[beams + 3] = (math.cos(theta) * vx + math.sin(theta) * vy) / task.v_max
-        obs[beams + 4] = body.angular_velocity / task.omega_max
+        obs[beams + 3] = distance / (distance + GOAL_SCALE)
+        obs[beams + 4], obs[beams + 5] = math.cos(bearing), math.sin(bearing)
+        obs[beams + 6], obs[beams + 7] = ACTION  # the previous action
     return steps / (time.process_time() - started)
 
 

@@ -6,4 +6,4 @@ benchmarks, which exercise the command line themselves and so sit above it.
 from __future__ import annotations
 
 SECTION_NAMES = ("simulation", "lidar", "contacts", "fleet", "learning_loop", "irsim", "movers",
-                 "maps", "localization", "localization_robustness", "learning", "fuzz")
+                 "crowds", "maps", "localization", "localization_robustness", "learning", "fuzz")

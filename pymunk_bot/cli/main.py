@@ -250,9 +250,15 @@ def build_parser() -> argparse.ArgumentParser:
     from .maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
 
     add_map_parsers(sub)
+    from .benchmark import add_parser as add_benchmark_parser  # `pymunk-bot benchmark`
+
+    add_benchmark_parser(sub)
     from .sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
 
     add_sweep_parser(sub)
+    from .evaluate import add_parser as add_evaluate_parser  # `pymunk-bot evaluate`
+
+    add_evaluate_parser(sub)
     return parser
 
 

@@ -1,7 +1,7 @@
 """Checks a file's keys allow but its meaning does not: things outside the arena, controllers
 that cannot work with what the robot carries, grids too big for memory, angles in degrees.
 
-``check(scenario)`` raises :class:`~.semantics.SemanticError` (exit 2); ``angle_warnings``
+``check(scenario)`` raises :class:`~pymunk_bot.errors.SemanticError` (exit 2); ``angle_warnings``
 returns the doubtful angles (a warning, the run goes on). ``check_seed`` guards the Python API.
 """
 from __future__ import annotations
@@ -11,12 +11,13 @@ import numbers
 
 import numpy as np
 
+from ..errors import SemanticError
 from .controllers import (
     AvoidControllerConfig, GoToGoalControllerConfig, NavigateControllerConfig,
-    WaypointsControllerConfig,
+    PolicyControllerConfig, WaypointsControllerConfig,
 )
 from .schema import RobotConfig, ScenarioConfig
-from .semantics import SemanticError, distance_to_obstacle, is_round, obstacle_outline
+from .outlines import distance_to_obstacle, is_round, obstacle_outline
 
 MAX_GRID_CELLS = 4_000_000  # planning grid cells (a 200 m x 200 m arena at 0.1 m): ~100 MB
 MAX_SEED = 2**63 - 1
@@ -119,6 +120,8 @@ def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) 
         raise SemanticError(loc, "avoid steers by the LiDAR: add a 'lidar' to the robot")
     if isinstance(controller, NavigateControllerConfig):
         _check_navigate(index, robot, controller, scenario)
+    if isinstance(controller, PolicyControllerConfig) and (problem := controller.misfit(robot)):
+        raise SemanticError(loc, problem)
 
 
 def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControllerConfig,

@@ -7,7 +7,9 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, Field, PrivateAttr, ValidationInfo, model_validator
+from pydantic import (
+    AfterValidator, Field, PrivateAttr, ValidationInfo, field_serializer, model_validator,
+)
 
 from .class_path import check_class_path
 from .types import (
@@ -135,6 +137,33 @@ class NavigateControllerConfig(_GoalConfig):
     hybrid: HybridConfig = HybridConfig()
 
 
+class _CrowdConfig(_GoalConfig):
+    """Keys the crowd-navigation baselines share (controllers/crowd_nav.py)."""
+
+    resolution: Annotated[Distance, Field(ge=0.01, le=10)] = 0.1  # [m] planning grid cell size
+    margin: Short = 0.1  # [m] beyond the radius: kept from obstacles (plan and avoidance)
+    lookahead: PositiveShort = 1.0  # [m] steering point ahead on the path
+
+
+class SocialForceControllerConfig(_CrowdConfig):
+    """A social force robot (Helbing & Molnar 1995) following its global path."""
+
+    type: Literal["social_force"]
+    relaxation_time: PositiveShort = 0.5  # tau [s]: how fast it reaches its wished velocity
+    # A and B of Helbing, Farkas & Vicsek 2000 (2000 N and 0.08 m for an 80 kg person)
+    strength: Gain = 25.0  # A [m/s^2]: repulsion of an obstacle point at the margin
+    range: PositiveShort = 0.08  # B [m]: how fast the repulsion decays with distance
+    anticipation: Short = 1.0  # [s] a moving point repels from where it will be this soon
+
+
+class OrcaControllerConfig(_CrowdConfig):
+    """An ORCA robot (van den Berg et al. 2011) following its global path."""
+
+    type: Literal["orca"]
+    time_horizon: PositiveShort = 3.0  # [s] moving points may not be met within this
+    obstacle_time_horizon: PositiveShort = 1.0  # [s] static points may not be met within this
+
+
 _CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
 
 
@@ -166,3 +195,76 @@ class PythonControllerConfig(Section):
         """The scenario file's folder (None for data not read from a file)."""
         return self._base_dir
 
+
+def _policy_file(value: str, info: ValidationInfo) -> str:
+    """The policy file loads (relative paths from the scenario's folder); its size against
+    the robot's LiDAR is checked when the controller is built."""
+    from ..policy_file import PolicyFileError, load_policy
+
+    try:
+        load_policy(resolve_policy_path(value, (info.context or {}).get("base_dir")))
+    except PolicyFileError as exc:
+        raise ValueError(f"'{value}': {exc}") from None
+    return value
+
+
+def resolve_policy_path(path: str, base_dir: str | None) -> str:
+    """``path`` as given if absolute, else relative to the scenario file's folder (the current
+    folder for a scenario not read from a file)."""
+    from pathlib import Path
+
+    file = Path(path).expanduser()
+    return str(file if file.is_absolute() or base_dir is None else Path(base_dir) / file)
+
+
+class PolicyControllerConfig(Section):
+    """A trained policy (``.npz`` MLP or ``.onnx``) seeing what ``pymunk_bot/Navigation-v0``
+    shows it (pymunk_bot/policy_io.py) and driving as the env scales its action."""
+
+    type: Literal["policy"]
+    path: Annotated[str, AfterValidator(_policy_file)]
+    rate: Rate = 10.0  # [Hz]; the env's control period is 1 / rate (0.1 s by default)
+    goal: Vec2 | None = None  # [m]; None = the robot's goal
+    tolerance: Distance | None = None  # [m] stop radius; None = the goal's tolerance
+    _base_dir: str | None = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _remember_base_dir(self, info: ValidationInfo) -> "PolicyControllerConfig":
+        self._base_dir = (info.context or {}).get("base_dir")
+        return self
+
+    @property
+    def resolved_path(self) -> str:
+        """The policy file's path (relative paths from the scenario file's folder)."""
+        return resolve_policy_path(self.path, self._base_dir)
+
+    @field_serializer("path")
+    def _dump_resolved(self, path: str) -> str:
+        """Dumped as the resolved path, so the data parses back to the same file from any
+        folder (as ``world.map`` is: config.scenario_data)."""
+        return self.resolved_path
+
+    def misfit(self, robot) -> str | None:
+        """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
+        and a goal, takes the observation of the robot's beams and gives its action."""
+        from ..policy_file import PolicyFileError, load_policy
+        from ..policy_io import action_size, observation_size
+
+        if robot.lidar is None:
+            return "a policy sees the LiDAR: add a 'lidar' to the robot"
+        if self.goal is None and robot.goal is None:
+            return "policy needs a goal: set controller.goal or the robot's goal"
+        holonomic = getattr(robot, "drive", "diff") == "omni"
+        inputs = observation_size(robot.lidar.beams, holonomic)
+        outputs = action_size(holonomic)
+        try:
+            policy = load_policy(self.resolved_path)
+        except PolicyFileError as exc:
+            return f"'{self.path}': {exc}"
+        if policy.inputs is not None and policy.inputs != inputs:
+            return (f"'{self.path}' takes {policy.inputs} inputs, but a robot with "
+                    f"{robot.lidar.beams} LiDAR beams gives {inputs} (beams + "
+                    f"{inputs - robot.lidar.beams}): was it trained with another LiDAR?")
+        if policy.outputs is not None and policy.outputs != outputs:
+            return f"'{self.path}' gives {policy.outputs} outputs; a {robot.drive} drive takes {outputs}"
+        return None

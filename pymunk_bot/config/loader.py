@@ -7,7 +7,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from ..errors import ScenarioError, ScenarioWarning
+from ..errors import ScenarioError, ScenarioWarning, SemanticError
 from . import semantics
 from .assemble import scenario_model
 from .checks import angle_warnings
@@ -82,7 +82,7 @@ def parse_scenario(data: Any, source: str, node=None,
     config = attach_map(config, source, node)
     try:
         semantics.check(config)
-    except semantics.SemanticError as exc:
+    except SemanticError as exc:
         path, clean_loc, _ = walk(model, exc.loc)
         raise ScenarioError(source, path, exc.problem, line_of(node, clean_loc)) from None
     for loc, problem in angle_warnings(config):
@@ -122,3 +122,6 @@ def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
     text = read_text(path, source)
     data, node = parse_yaml(text, source)
     return parse_scenario(data, source, node, base_dir=path.resolve().parent)
+
+
+ScenarioConfig.full_validation = parse_scenario  # ScenarioConfig.model_validate(data) validates fully

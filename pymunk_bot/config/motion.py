@@ -8,7 +8,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from .types import Float, Length, Mass, NonNegativeFloat, PositiveFloat, Section, Vec2
+from .types import (Float, Length, Mass, Name, NonNegativeFloat, PositiveFloat, PositiveInt,
+                    Section, Vec2)
 
 MAX_PATH_POINTS = 256
 MAX_SCRIPTED_SPEED = 20.0  # [m/s]
@@ -30,8 +31,12 @@ class MotionConfig(Section):
     angular_speed: Float = 0.0  # [rad/s] the obstacle spins at while it moves (0: keeps its angle)
 
 
+MAX_NEIGHBORS = 64  # ORCA: half-planes per walker at most (bounds the per-step cost)
+
+
 class PedestrianObstacle(Section):
-    """A person walking between ``goals`` with the social force model (Helbing & Molnar 1995)."""
+    """A person walking between ``goals`` with the social force model (Helbing & Molnar 1995)
+    or ORCA (van den Berg et al. 2011)."""
 
     type: Literal["pedestrian"]
     center: Vec2  # start position [m]
@@ -51,3 +56,12 @@ class PedestrianObstacle(Section):
     wall_strength: NonNegativeFloat = 10.0  # U0 [m^2/s^2]
     wall_range: PositiveFloat = 0.2  # R [m]
     fluctuation: NonNegativeFloat = 0.0  # std of a random force per unit mass [m/s^2]
+    # social_force: the forces above; orca: the velocity closest to the wished one that no
+    # neighbour can collide with within time_horizon (the keys below)
+    policy: Literal["social_force", "orca"] = "social_force"
+    react_to_robot: bool = True  # false: robots are ignored (walked through, pushed aside)
+    group: Name | None = None  # walkers with the same group keep together (and its slowest pace)
+    time_horizon: Annotated[PositiveFloat, Field(le=60.0)] = 5.0  # [s] ORCA: other walkers, robots
+    obstacle_time_horizon: Annotated[PositiveFloat, Field(le=60.0)] = 2.0  # [s] ORCA: walls
+    neighbor_distance: Annotated[PositiveFloat, Field(le=100.0)] = 10.0  # [m] ORCA: who counts
+    max_neighbors: Annotated[PositiveInt, Field(le=MAX_NEIGHBORS)] = 10  # ORCA: nearest this many

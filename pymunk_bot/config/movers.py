@@ -5,6 +5,9 @@ import math
 
 import numpy as np
 
+from ..errors import SemanticError
+from .outlines import obstacle_outline
+
 PATH_START_TOLERANCE = 1e-3  # [m] a box's or circle's path starts at its center within this
 
 
@@ -23,8 +26,6 @@ def _span(extent: tuple[float, float, float, float]) -> str:
 def check_mover(index: int, obstacle, scenario) -> None:
     """A scripted path stays inside the arena and starts at the obstacle; a pedestrian's start
     and goals lie inside the arena (a map's arena where its ``origin`` puts it)."""
-    from .semantics import SemanticError, obstacle_outline
-
     extent = scenario.world.extent  # (x0, y0, x1, y1) [m]
     x0, y0, x1, y1 = extent
     if getattr(obstacle, "type", "") == "pedestrian":

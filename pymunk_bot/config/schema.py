@@ -5,13 +5,14 @@ docs/scenario-format.md documents each key; keep the two in step.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Callable, ClassVar, Literal
 
 from pydantic import Field, PrivateAttr
 
 from .events import EventList
 from ..localization.config import MappingConfig
 from .footprint import FootprintConfig
+from .metric_bounds import MetricBounds
 from .motion import MotionConfig
 from .types import (
     MAX_BEAMS, MAX_OBSTACLES, MAX_ROBOTS, Accel, Angle, Bias, Distance, Duration, Float,
@@ -195,7 +196,7 @@ class DiffRobotConfig(RobotConfig):
 # ---------------------------------------------------------------------------- expectations
 
 
-class RobotExpectation(Section):
+class RobotExpectation(MetricBounds):  # + bounds on navigation metrics (metric_bounds.py)
     goal_reached: bool | None = None
     max_collisions: Annotated[Int, Field(ge=0, le=10**9)] | None = None
     within: Duration | None = None  # goal reached by this simulated time [s]
@@ -225,10 +226,13 @@ class ScenarioConfig(Section):
     expect: dict[str, RobotExpectation] = {}
     events: EventList = []  # things that happen at a simulated time (config/events.py)
 
+    # The full validation (the schema assembled from the registries, then the checks across
+    # keys) lives above this module; config/loader.py installs it here when it is imported.
+    full_validation: ClassVar[Callable[[Any, str], "ScenarioConfig"] | None] = None
+
     @classmethod
     def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> "ScenarioConfig":
         """On this base class: the full validation a file gets (a ScenarioError on bad data)."""
-        if cls is ScenarioConfig:
-            from .loader import parse_scenario
-            return parse_scenario(obj, "<data>")
+        if cls is ScenarioConfig and ScenarioConfig.full_validation is not None:
+            return ScenarioConfig.full_validation(obj, "<data>")
         return super().model_validate(obj, *args, **kwargs)

@@ -7,81 +7,15 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import geometry as geo
+from ..errors import SemanticError
 from ..footprint import of_robot, transform
+from .checks import check as check_more
 from .movers import check_mover
-from .schema import (
-    BoxObstacle, PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle,
+from .outlines import (  # noqa: F401 (obstacle_outline, is_round: this module's API before)
+    distance_to_obstacle, footprint_hits, footprints_overlap, is_round, obstacle_outline,
+    polygon_of,
 )
-
-
-class SemanticError(Exception):
-    """A problem at a key path (a tuple, as pydantic's locations are)."""
-
-    def __init__(self, loc: tuple, problem: str) -> None:
-        super().__init__(problem)
-        self.loc = loc
-        self.problem = problem
-
-
-def obstacle_outline(obstacle) -> np.ndarray | None:
-    """Polygon outline of an obstacle [m], or None for circles. A plugin's obstacle kind gives
-    its own through an ``outline()`` method."""
-    if hasattr(obstacle, "outline"):
-        return np.asarray(obstacle.outline(), dtype=float)
-    if isinstance(obstacle, BoxObstacle):
-        return geo.box_corners(obstacle.center, obstacle.size, obstacle.angle)
-    if isinstance(obstacle, WallObstacle):
-        return geo.wall_corners(obstacle.start, obstacle.end, obstacle.thickness)
-    if isinstance(obstacle, PolygonObstacle):
-        return np.asarray(obstacle.points, dtype=float)
-    return None
-
-
-def is_round(obstacle) -> bool:
-    """A disc: a circle obstacle or a pedestrian (``center``, ``radius``)."""
-    return getattr(obstacle, "type", "") in ("circle", "pedestrian")
-
-
-def distance_to_obstacle(point, obstacle) -> float:
-    """Distance from a point to an obstacle's surface (0 inside)."""
-    if is_round(obstacle):
-        return max(0.0, math.dist(point, obstacle.center) - obstacle.radius)
-    return geo.distance_to_polygon(point, polygon_of(obstacle))
-
-
-def polygon_of(obstacle) -> np.ndarray:
-    """The outline of an obstacle that is not a circle (TypeError if it has none)."""
-    outline = obstacle_outline(obstacle)
-    if outline is None:
-        raise TypeError(f"obstacle type '{obstacle.type}' has no outline: give its config "
-                        "model an outline() method")
-    return outline
-
-
-def footprint_hits(footprint, pose, obstacle) -> bool:
-    """True when a robot footprint at ``pose`` overlaps an obstacle (touching is fine)."""
-    if footprint.points is None:
-        centre = transform(np.array([footprint.center]), pose)[0]
-        return distance_to_obstacle(centre, obstacle) < footprint.radius - 1e-9
-    outline = footprint.at(pose)
-    if is_round(obstacle):
-        return geo.distance_to_polygon(obstacle.center, outline) < obstacle.radius - 1e-9
-    other = obstacle_outline(obstacle)
-    return other is not None and geo.polygons_overlap(outline, other)
-
-
-def footprints_overlap(a, pose_a, b, pose_b) -> bool:
-    """True when two robot footprints overlap at their poses."""
-    if a.points is None and b.points is None:
-        ca = transform(np.array([a.center]), pose_a)[0]
-        cb = transform(np.array([b.center]), pose_b)[0]
-        return math.dist(ca, cb) < a.radius + b.radius - 1e-9
-    if a.points is None:
-        a, pose_a, b, pose_b = b, pose_b, a, pose_a
-    if b.points is None:
-        cb = transform(np.array([b.center]), pose_b)[0]
-        return geo.distance_to_polygon(cb, a.at(pose_a)) < b.radius - 1e-9
-    return geo.polygons_overlap(a.at(pose_a), b.at(pose_b))
+from .schema import PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle
 
 
 def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
@@ -90,17 +24,9 @@ def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
 
 def check_footprint_polygon(loc: tuple, points) -> None:
     """A polygon outline must be simple, with no repeated points and non-zero area."""
-    points = np.asarray(points, dtype=float)
-    for i in range(len(points)):
-        if np.allclose(points[i], points[(i + 1) % len(points)]):
-            raise SemanticError(loc, f"degenerate polygon: point {i} repeats its neighbour")
-    if not geo.is_simple_polygon(points):
-        raise SemanticError(loc, "degenerate polygon: edges cross each other")
-    if abs(geo.signed_area(points)) < 1e-9:
-        raise SemanticError(loc, "degenerate polygon: zero area")
-    if geo.thinness(points) < 1e-9:  # a pinch has no width: nothing could stop at it
-        raise SemanticError(loc, "degenerate polygon: the outline touches itself (a point repeats "
-                                 "another or lies on an edge)")
+    problem = geo.polygon_problem(np.asarray(points, dtype=float))
+    if problem is not None:
+        raise SemanticError(loc, f"degenerate polygon: {problem}")
 
 
 def _check_wall(index: int, wall: WallObstacle) -> None:
@@ -296,4 +222,4 @@ def check(scenario: ScenarioConfig) -> None:
         needs_goal = expectation.goal_reached is not None or expectation.within is not None
         if needs_goal and scenario.robots[names[name]].goal is None:
             raise SemanticError(("expect", name), "expects a goal but the robot has no 'goal'")
-    from .checks import check as check_more; check_more(scenario)  # noqa: E702 (issue 9)
+    check_more(scenario)

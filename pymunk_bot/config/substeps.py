@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import geometry as geo
+from .outlines import is_round, obstacle_outline, polygon_of
 from .schema import ScenarioConfig
 
 ARENA_WALL_THICKNESS = 1.0  # [m]; thick so that nothing can tunnel out of the arena
@@ -28,7 +29,6 @@ def substeps_against_tunnelling(dt: float, max_speed: float, robot_radius: float
 
 def half_width(obstacle) -> float:
     """Half the thinnest extent of an obstacle: what a fast robot must not skip over."""
-    from .semantics import is_round, polygon_of
     if is_round(obstacle):
         return obstacle.radius
     return geo.thinness(polygon_of(obstacle)) / 2.0
@@ -91,7 +91,7 @@ def map_half_widths(scenario: ScenarioConfig) -> list[float]:
     geometry = scenario.world.map_geometry()
     if geometry is None:
         return []
-    widths = [geo.thinness(piece) / 2.0 for piece in geometry.polygons]
+    widths = (geo.thinnesses(geometry.polygons) / 2.0).tolist()
     if len(geometry.segment_radius):
         widths.append(float(geometry.segment_radius.min()))
     return widths
@@ -107,7 +107,6 @@ def mover_speed(obstacle) -> float:
         return 0.0
     reach = 0.0
     if motion.angular_speed:
-        from .semantics import obstacle_outline
         outline = obstacle_outline(obstacle)
         if outline is not None:
             reach = float(np.hypot(*(outline - outline.mean(axis=0)).T).max())

@@ -14,12 +14,14 @@ import functools
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import ScenarioError
-from .schema import ScenarioConfig, WorldConfig
+
+if TYPE_CHECKING:
+    from .schema import ScenarioConfig, WorldConfig
 
 MAX_EXTENT = 1e4  # [m] a map's width or height, as any arena side (types.Length)
 _CACHED_MAPS = 8

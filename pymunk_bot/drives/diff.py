@@ -104,17 +104,13 @@ class DiffDriveGroup(DriveGroup):
         copies, see :mod:`pymunk_bot.stacking`), with the same arithmetic."""
         if self.small:
             return self._advance_each(h)
-        if rows is not None:
-            commanded = self.commanded[rows]
-            self.turning[rows] = commanded
-            self._travel[rows] += commanded * h
-            limit_step(commanded, self.target[rows], (self.max_accel[rows] * h)[:, None])
-            self.commanded[rows] = commanded
-            return self._twists_of(commanded, rows)
-        self.turning[:] = self.commanded
-        self._travel += self.turning * h
-        limit_step(self.commanded, self.target, (self.max_accel * h)[:, None])
-        return self._twists_of(self.commanded, None)
+        at = slice(None) if rows is None else rows  # every robot: views, changed in place
+        commanded = self.commanded[at]
+        self.turning[at] = commanded
+        self._travel[at] += commanded * h
+        limit_step(commanded, self.target[at], (self.max_accel[at] * h)[:, None])
+        self.commanded[at] = commanded
+        return self._twists_of(commanded, rows)
 
     def _twists_of(self, commanded: np.ndarray, rows: np.ndarray | None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -158,11 +154,6 @@ class DiffDriveGroup(DriveGroup):
               ) -> tuple[Any, Any, Any]:
         """See :meth:`DriveGroup.coast`; ``rows``: as in :meth:`advance`."""
         span = h * substeps  # [s] the wheels turn at their commanded speeds throughout
-        if rows is not None:
-            commanded = self.commanded[rows]
-            self.turning[rows] = commanded
-            self._travel[rows] += commanded * span
-            return self._twists_of(commanded, rows)
         if self.small:
             for wheels, turning, travel in zip(self.commanded, self.turning, self._travel):
                 turning[:] = wheels
@@ -171,9 +162,11 @@ class DiffDriveGroup(DriveGroup):
             if self._twists is None:  # settled: the same until the commanded speeds change
                 self._twists = self._twists_each()
             return self._twists
-        self.turning[:] = self.commanded
-        self._travel += self.commanded * span
-        return self._twists_of(self.commanded, None)
+        at = slice(None) if rows is None else rows
+        commanded = self.commanded[at]
+        self.turning[at] = commanded
+        self._travel[at] += commanded * span
+        return self._twists_of(commanded, rows)
 
     def take_travel(self) -> Any:
         travel = self._travel

@@ -8,11 +8,13 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..config import ScenarioConfig
+from ..config import ScenarioConfig, parse_scenario, scenario_data
+from ..errors import ScenarioError
 from ..replicas import Replicas
 from ..sim import Simulation
-from .task import RewardWeights, RobotTask, arena_size, load_config, prepare_scenario, \
-    robot_result, sample_goal
+from .randomize import Randomization, start_pose
+from .robot_task import RobotTask
+from .task import RewardWeights, end_info, load_config, prepare_scenario, sample_goal
 
 MAX_CONTROL_PERIOD = 10.0  # [s]
 MAX_EPISODE_TIME = 24 * 3600.0  # [s] of simulated time
@@ -58,7 +60,8 @@ class NavigationEpisode:
                  lidar: Mapping[str, Any] | None = None,
                  reward: RewardWeights | Mapping[str, float] | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
-                 terminate_on_collision: bool = False) -> None:
+                 terminate_on_collision: bool = False,
+                 randomize: Mapping[str, Any] | Randomization | None = None) -> None:
         config, self.source = load_config(scenario)
         # control period and time limit [s]
         self.steps_per_action, self.control_period, self.time_limit = episode_timing(
@@ -69,8 +72,15 @@ class NavigationEpisode:
         self.random_goal = bool(random_goal)
         self.terminate_on_collision = bool(terminate_on_collision)
         robot_config = next(r for r in self.config.robots if r.name == self.robot_name)
-        self.task = RobotTask(robot_config, arena_size(self.config),
-                              RewardWeights.from_any(reward), pose_source)
+        self.task = RobotTask(robot_config, RewardWeights.from_any(reward), pose_source)
+        self._lidar = dict(lidar or {})
+        self._base = scenario_data(config, exclude_unset=True)  # what each draw starts from
+        self.randomize: Randomization | None = None
+        if isinstance(randomize, Randomization):  # checked already (the vector env's copies)
+            self.randomize = randomize
+        elif randomize is not None:
+            self.randomize = Randomization.parse(randomize, self.source)
+            self.randomize.check(self._base, self.robot_name, self.source)
         self.sim: Simulation | None = None
         self.done = True  # no episode under way until reset
         self._copy: tuple[Replicas, int] | None = None
@@ -84,7 +94,9 @@ class NavigationEpisode:
     def reset(self, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         """Start an episode: the simulation seed (and a random goal) come from ``rng``."""
         seed = int(rng.integers(SEED_BOUND))
-        if self._copy is not None:
+        if self.randomize is not None and self.randomize.changes_world:
+            self.sim = self._drawn_simulation(rng, seed)
+        elif self._copy is not None:
             replicas, index = self._copy
             replicas.reset(index, seed)
             self.sim = replicas.sims[index]
@@ -101,13 +113,39 @@ class NavigationEpisode:
                                      "distance_to_goal": self.task.goal_distance(),
                                      "collisions": robot.collisions}
 
+    def _drawn_simulation(self, rng: np.random.Generator, seed: int) -> Simulation:
+        """A simulation of this episode's drawn scenario (``randomize``), its start pose drawn
+        in the drawn world when ``randomize.start``."""
+        assert self.randomize is not None
+        data = self.randomize.scenario(self._base, self.robot_name, rng, self.source)
+        sim = Simulation(self._prepared(data), seed=seed, source=self.source)
+        if self.randomize.start:
+            x, y, theta = start_pose(sim, sim.robots[self.robot_name], rng)
+            learner = next(r for r in data["robots"] if r["name"] == self.robot_name)
+            learner["pose"] = [x, y, theta]
+            sim = Simulation(self._prepared(data), seed=seed, source=self.source)
+        return sim
+
+    def _prepared(self, data: dict) -> ScenarioConfig:
+        """A drawn scenario made ready for the agent, as the constructor's; its observation
+        must keep the size the spaces were made for."""
+        config, _ = prepare_scenario(parse_scenario(data, self.source), self.source,
+                                     [self.robot_name], self._lidar, self.control_period,
+                                     need_goal=not self.random_goal)
+        robot = next(r for r in config.robots if r.name == self.robot_name)
+        if robot.lidar is None or robot.lidar.beams != self.task.beams or (
+                robot.lidar.max_range != self.task.max_range):
+            raise ScenarioError(self.source, "randomize", "a drawn scenario changes the "
+                                "learning robot's LiDAR beams or range (the observation's size)")
+        return config
+
     def act(self, action: np.ndarray) -> None:
         self.task.act(action)
 
-    def finish(self, out: np.ndarray | None = None, ranges: bool = True
+    def finish(self, out: np.ndarray | None = None
                ) -> tuple[np.ndarray, float, bool, bool, dict]:
-        """(obs, reward, terminated, truncated, info) once the physics has advanced;
-        ``ranges``: see :meth:`RobotTask.observe`."""
+        """(obs, reward, terminated, truncated, info) once the physics has advanced, the
+        observation written into ``out`` if given."""
         if self.sim is None:
             raise RuntimeError("call reset() before finish()")
         where = self.task.where()
@@ -117,6 +155,6 @@ class NavigationEpisode:
         truncated = not terminated and time >= self.time_limit - 1e-9
         info["time"] = time
         if terminated or truncated:
-            info["result"] = robot_result(self.sim, self.robot_name)
+            info.update(end_info(self.sim, self.robot_name))
             self.done = True
-        return self.task.observe(out, where, ranges), reward, terminated, truncated, info
+        return self.task.observe(out, where), reward, terminated, truncated, info

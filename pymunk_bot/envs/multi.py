@@ -23,8 +23,8 @@ from ..config import ScenarioConfig
 from ..sim import Simulation
 from .episode import SEED_BOUND, advance, episode_timing
 from .navigation import RENDER_MODES, make_spaces
-from .task import RewardWeights, RobotTask, arena_size, load_config, prepare_scenario, \
-    robot_result
+from .robot_task import RobotTask
+from .task import RewardWeights, end_info, load_config, prepare_scenario
 
 if TYPE_CHECKING:
     from .render import FrameRenderer
@@ -57,8 +57,7 @@ class MultiRobotEnv(ParallelEnv):
         names = [r.name for r in config.robots]
         self.config, _ = prepare_scenario(config, self.source, names, lidar, self.control_period)
         weights = RewardWeights.from_any(reward)
-        arena = arena_size(self.config)
-        self.tasks = {r.name: RobotTask(r, arena, weights, pose_source)
+        self.tasks = {r.name: RobotTask(r, weights, pose_source)
                       for r in self.config.robots}
         self.terminate_on_collision = bool(terminate_on_collision)
         self.possible_agents = names
@@ -115,7 +114,7 @@ class MultiRobotEnv(ParallelEnv):
             observations[name] = task.observe()
             infos[name]["time"] = self.sim.time
             if terminations[name] or truncations[name]:
-                infos[name]["result"] = robot_result(self.sim, name)
+                infos[name].update(end_info(self.sim, name))
                 task.stop()
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self.render_mode == "human":

@@ -43,7 +43,12 @@ class NavigationEnv(gym.Env):
         reward: weights (see :class:`~pymunk_bot.envs.task.RewardWeights`).
         random_goal: draw a free goal position each episode instead of the scenario's.
         pose_source: "ground_truth" (default) or "odometry": the pose the goal is seen from.
-        terminate_on_collision: end the episode at the first new contact.
+        terminate_on_collision: end the episode at the first contact.
+        randomize: what to draw anew every episode: a generated world, a start pose, scenario
+            keys (see :mod:`pymunk_bot.envs.randomize`).
+
+    ``info["is_success"]`` is true when the robot reached its goal without any contact on
+    the way; ``info["contact_time"]`` counts the episode's seconds in contact.
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
@@ -54,13 +59,14 @@ class NavigationEnv(gym.Env):
                  lidar: Mapping[str, Any] | None = None,
                  reward: RewardWeights | Mapping[str, float] | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
-                 terminate_on_collision: bool = False) -> None:
+                 terminate_on_collision: bool = False,
+                 randomize: Mapping[str, Any] | None = None) -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
         self.episode = NavigationEpisode(scenario, robot, control_period, max_episode_time,
                                          lidar, reward, random_goal, pose_source,
-                                         terminate_on_collision)
+                                         terminate_on_collision, randomize)
         self.observation_space, self.action_space = make_spaces(self.episode.task)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.episode.control_period}
@@ -99,6 +105,9 @@ class NavigationEnv(gym.Env):
     def _render_frame(self) -> np.ndarray | None:
         if self.episode.sim is None:
             self.episode.reset(self.np_random)  # a frame before the first reset
+        if self._renderer is not None and self._renderer.sim is not self.episode.sim:
+            self._renderer.close()  # a world drawn for this episode (randomize): a new view
+            self._renderer = None
         if self._renderer is None:
             from .render import FrameRenderer
 

@@ -6,7 +6,9 @@
 Sub-env i reset with seed s + i plays the episode a single env reset with that seed plays:
 exactly, as long as no two moving bodies of its world touch (see docs/learning.md). Autoreset follows
 Gymnasium 1.x (NEXT_STEP by default: the step after an episode ends resets that slot, ignores
-its action and returns reward 0; SAME_STEP and DISABLED also work).
+its action and returns reward 0; SAME_STEP and DISABLED also work). With DISABLED, a slot whose
+episode has ended is not stepped until it is reset (``options={"reset_mask": ...}``): its
+robot holds still, its observation stays the final one and its reward is 0.
 """
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ from ..physics import MAX_REPLICAS
 from ..replicas import NotShareable, Replicas
 from .episode import NavigationEpisode, advance
 from .navigation import make_spaces
-from .task import RobotTask, outcomes, robot_result
+from .robot_task import outcomes
+from .task import end_info
 
 if TYPE_CHECKING:
     from ..sim import Simulation
@@ -53,16 +56,19 @@ class NavigationVectorEnv(VectorEnv):
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         first = NavigationEpisode(**kwargs)
-        # The others share the prepared (validated) scenario: no parsing per copy.
-        kwargs = {**kwargs, "scenario": first.config}
+        # The others share the prepared (validated) scenario and the checked randomization.
+        kwargs = {**kwargs, "scenario": first.config, "randomize": first.randomize}
         self.episodes = [first] + [NavigationEpisode(**kwargs) for _ in range(num_envs - 1)]
         for episode in self.episodes[1:]:
             episode.source = first.source
         self._slots: list[list[int]] = []
-        self._shards = self._share_spaces(first) if share_space and num_envs > 1 else []
+        drawn = first.randomize is not None and first.randomize.changes_world
+        # A world drawn per episode cannot share a space with the others' worlds.
+        self._shards = self._share_spaces(first) if share_space and num_envs > 1 \
+            and not drawn else []
         # Step results read in one call per shared space where the task allows it.
         self._together = bool(self._shards) and all(s.stacked for s in self._shards) \
-            and first.task.pose_source == "ground_truth" and first.task.vy_max is None \
+            and first.task.pose_source == "ground_truth" and not first.task.holonomic \
             and self.autoreset_mode != AutoresetMode.SAME_STEP
         self.num_envs = num_envs
         self.render_mode = render_mode
@@ -112,7 +118,10 @@ class NavigationVectorEnv(VectorEnv):
         rewards = np.zeros(n, dtype=np.float64)
         terminated = np.zeros(n, dtype=np.bool_)
         truncated = np.zeros(n, dtype=np.bool_)
-        stepping = [i for i in range(n) if not self._autoreset[i]]
+        stepping = [i for i in range(n) if not (self._autoreset[i] or self.episodes[i].done)]
+        for i in range(n):  # DISABLED: an ended episode waits for its reset, holding still
+            if self.episodes[i].done and not self._autoreset[i]:
+                self.episodes[i].task.stop()
         shared = self._stepping_copies(stepping)
         checked = actions.astype(np.float64)
         if checked.shape[1] == self.episodes[0].task.action_size and np.isfinite(checked).all():
@@ -163,7 +172,6 @@ class NavigationVectorEnv(VectorEnv):
         block = self._obs if every else self._obs[stepping]  # fancy indexing: a copy
         rewards[stepping], terminated[stepping], info = outcomes(
             tasks, states, first.control_period, first.terminate_on_collision, block)
-        RobotTask.fill_ranges(block, tasks)
         if not every:
             self._obs[stepping] = block
         info["time"] = states["time"]
@@ -178,8 +186,7 @@ class NavigationVectorEnv(VectorEnv):
             if terminated[i] or truncated[i]:
                 episode = self.episodes[i]
                 assert episode.sim is not None
-                infos = self._add_info(infos, {"result": robot_result(episode.sim,
-                                                                      episode.robot_name)}, i)
+                infos = self._add_info(infos, end_info(episode.sim, episode.robot_name), i)
                 episode.done = True
         return infos
 
@@ -189,28 +196,21 @@ class NavigationVectorEnv(VectorEnv):
         n = self.num_envs
         each: list[dict] = []
         final: list[tuple[int, dict]] = []
-        # The LiDAR parts of the observations in one pass, after (SAME_STEP keeps final_obs).
-        later = self.autoreset_mode != AutoresetMode.SAME_STEP
+        moving = set(stepping)
         for i in range(n):
             episode = self.episodes[i]
             if self._autoreset[i]:  # NEXT_STEP: this step is the reset
                 self._obs[i], info = episode.reset(self._rngs[i])
+            elif i not in moving:  # DISABLED: ended, waiting for its reset
+                info = {}
             else:
                 (self._obs[i], rewards[i], terminated[i], truncated[i],
-                 info) = episode.finish(self._obs[i], ranges=not later)
+                 info) = episode.finish(self._obs[i])
                 if self.autoreset_mode == AutoresetMode.SAME_STEP and (terminated[i] or
                                                                        truncated[i]):
                     final.append((i, {"final_obs": self._obs[i].copy(), "final_info": info}))
                     self._obs[i], info = episode.reset(self._rngs[i])
             each.append(info)
-        if later and stepping:
-            tasks = [self.episodes[i].task for i in stepping]
-            if len(stepping) == n:
-                RobotTask.fill_ranges(self._obs, tasks)
-            else:  # a copy of those rows (fancy indexing), written back
-                block = self._obs[stepping]
-                RobotTask.fill_ranges(block, tasks)
-                self._obs[stepping] = block
         infos = self._gather_infos(each)
         for i, info in final:
             infos = self._add_info(infos, info, i)
@@ -221,7 +221,7 @@ class NavigationVectorEnv(VectorEnv):
         """Each stepping slot's checked, clipped action to its robot: as ``task.command``
         does slot by slot, one call per shared space for a diff drive's (v, omega)."""
         task = self.episodes[0].task
-        if not self._shards or task.vy_max is not None:
+        if not self._shards or task.holonomic:
             rows = clipped.tolist()
             for i in stepping:
                 self.episodes[i].task.command(rows[i])
@@ -229,6 +229,8 @@ class NavigationVectorEnv(VectorEnv):
         for shard, copies, chosen in shared:
             shard.set_velocities(task.name, copies, clipped[chosen, 0] * task.v_max,
                                  clipped[chosen, 1] * task.omega_max)
+            for slot in chosen:  # each slot's next observation shows the action it took
+                self.episodes[slot].task.previous[0] = clipped[slot]
 
     def _stepping_copies(self, stepping: list[int]) -> list[tuple[Replicas, list[int], list[int]]]:
         """Per shared space: the copies whose slots are stepping, and those slots (none
@@ -284,6 +286,9 @@ class NavigationVectorEnv(VectorEnv):
         return tuple(r.rgb() for r in self._renderers)
 
     def _attach_renderers(self) -> None:
+        if self._renderers is not None and any(r.sim is not e.sim for r, e in
+                                               zip(self._renderers, self.episodes)):
+            self.close_extras()  # worlds drawn per episode (randomize): new views
         if self.render_mode is not None and self._renderers is None:
             from .render import FrameRenderer
 

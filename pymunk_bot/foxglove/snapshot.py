@@ -74,7 +74,7 @@ def geometry_of_sim(sim) -> RunGeometry:
     fixed, movable = world_geometry(sim.world)
     robots = []
     for robot in sim.robots.values():
-        lidar = robot.lidar
+        lidar = robot.sensor("lidar")
         robots.append({
             "name": robot.name, "radius": float(robot.radius),
             "footprint": outline_json(robot),
@@ -114,7 +114,7 @@ def _robot_of_sim(robot) -> RobotSnapshot:
         localizer = None  # ground truth or odometry: already on their own topics
     mapper = getattr(robot, "mapper", None)
     drive = getattr(robot, "drive", None)  # the diff drive's wheel state, when there is one
-    lidar, imu, belief = robot.lidar, robot.imu, robot.localizer
+    lidar, imu, belief = robot.sensor("lidar"), robot.sensor("imu"), robot.localizer
     return RobotSnapshot(
         name=robot.name, radius=float(robot.radius),
         pose=np.array(robot.pose, dtype=float), odometry=np.array(robot.odometry.pose, dtype=float),

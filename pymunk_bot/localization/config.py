@@ -99,7 +99,7 @@ class EkfConfig(Section):
     huber: Distance = 0.1  # [m] residuals beyond this count linearly (robust to clutter)
     iterations: Annotated[Int, Field(ge=1, le=100)] = 10  # Gauss-Newton iterations per match
     max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 120
-    match_cov_scale: Annotated[Float, Field(ge=1.0, le=1e6)] = 5.0  # inflates the match covariance
+    match_cov_scale: Annotated[Float, Field(ge=1.0, le=1e6)] = 3.0  # inflates the match covariance
     map_std: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.0  # [m] how far off the map's walls may be
     gate: Annotated[Float, Field(gt=0.0, le=1e6)] = 16.27  # Mahalanobis gate (chi^2_3, 99.9 %)
 

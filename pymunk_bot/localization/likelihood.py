@@ -1,4 +1,4 @@
-"""The likelihood field of a map: distance from any point to the nearest occupied cell.
+"""The likelihood field of a map: distance from any point to the nearest surface of an obstacle.
 
 Built once with scipy's exact Euclidean distance transform. Distances are measured to the
 *edge* of the occupied region, where a LiDAR beam stops in this project's maps: the scenario
@@ -6,6 +6,10 @@ rasterizer and a ROS map turned into geometry both make occupied cells solid, su
 boundary. (ROS AMCL measures to cell centres, which puts every wall half a cell too far.) The
 occupied mask is upsampled before the transform so that the edge is found to within half a
 sub-cell; points off the grid read ``max_dist`` (as AMCL's beams ending off the map do).
+Inside an obstacle the distance is to its surface, not 0: a ROS map's shelves and walls are
+solid here (occupied and unknown cells alike), and a field that read 0 everywhere inside them
+let an estimate slide half a metre into a shelf with every beam still "on" the map (measured in
+Nav2's warehouse map, where AMCL's field, built from the occupied outline alone, would not).
 """
 from __future__ import annotations
 
@@ -36,11 +40,16 @@ class LikelihoodField:
         self.resolution = grid.resolution / upsample  # [m] per field cell
         self.origin = np.asarray(grid.origin, dtype=float)
         occupied = grid.occupied()
+        fine = np.kron(occupied, np.ones((upsample, upsample), dtype=bool))
         if occupied.any():
-            fine = np.kron(occupied, np.ones((upsample, upsample), dtype=bool))
-            # From a sub-cell centre to the nearest occupied sub-cell's edge.
+            # From a sub-cell centre to the nearest occupied sub-cell's edge; inside a solid
+            # region, to its surface (the nearest free sub-cell's edge): a beam stops at the
+            # surface, so an end point deep inside a shelf is as wrong as one in the open.
             if to_edges:
                 dist = distance_transform_edt(~fine) * self.resolution - 0.5 * self.resolution
+                if not fine.all():
+                    depth = distance_transform_edt(fine) * self.resolution - 0.5 * self.resolution
+                    dist[fine] = depth[fine]
             else:  # the outermost sub-cell centre lies (res - res/k) / 2 past the cell's centre
                 dist = distance_transform_edt(~fine) * self.resolution + 0.5 * (
                     grid.resolution - self.resolution)
@@ -50,6 +59,7 @@ class LikelihoodField:
             self.field = np.full((grid.rows * upsample, grid.cols * upsample), self.max_dist)
         # Padded with max_dist so off-grid lookups need no special case.
         self._padded = np.pad(self.field, 1, constant_values=self.max_dist)
+        self._solid = np.pad(fine, 1, constant_values=False)  # inside an obstacle
         self.free_xy = self._free_cell_centres(grid)
 
     @staticmethod
@@ -62,13 +72,23 @@ class LikelihoodField:
 
     def distance(self, xy: np.ndarray) -> np.ndarray:
         """Distance [m] at points ``xy`` (..., 2) from the containing field cell (fast, MCL)."""
+        return self._padded[self._cells(xy)]
+
+    def clearance(self, xy: np.ndarray) -> np.ndarray:
+        """:meth:`distance` outside obstacles and 0 inside them: how far a ray from ``xy``
+        may go before it could hit something (a sphere tracer's step)."""
+        cells = self._cells(xy)
+        return np.where(self._solid[cells], 0.0, self._padded[cells])
+
+    def _cells(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(row, col) of the padded field's cell holding each point of ``xy`` (..., 2)."""
         xy = np.asarray(xy, dtype=float)
         rows, cols = self._padded.shape
         col = np.floor((xy[..., 0] - self.origin[0]) / self.resolution).astype(np.intp) + 1
         row = np.floor((xy[..., 1] - self.origin[1]) / self.resolution).astype(np.intp) + 1
         np.clip(col, 0, cols - 1, out=col)
         np.clip(row, 0, rows - 1, out=row)
-        return self._padded[row, col]
+        return row, col
 
     def distance_and_gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear distance [m] at ``xy`` (n, 2) and its gradient d/d(x, y) (n, 2)."""

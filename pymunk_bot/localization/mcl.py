@@ -294,7 +294,7 @@ class MclLocalizer(Localizer):
             if not active.any():
                 break
             pts = origin[:, None, :] + t[..., None] * direction
-            d = self.field.distance(pts)
+            d = self.field.clearance(pts)
             hit = d < 0.5 * eps
             active &= ~hit & (t < max_range)
             t = np.where(active, t + np.maximum(d, 0.5 * eps), t)

@@ -46,7 +46,8 @@ class Trial:
 def make_context(sim, robot_name: str, seed: int, grid: OccupancyGrid | None) -> LocalizerContext:
     """The context the core builds: spec, true start pose, own RNG stream, arena, map, mount."""
     robot = sim.robots[robot_name]
-    offset = robot.lidar.offset if robot.lidar is not None else (0.0, 0.0, 0.0)
+    lidar = robot.sensor("lidar")
+    offset = lidar.offset if lidar is not None else (0.0, 0.0, 0.0)
     return LocalizerContext(robot=robot.spec, start_pose=robot.pose.copy(),
                             rng=np.random.default_rng([seed, 11]),
                             arena=(sim.world.width, sim.world.height), map=grid,
@@ -65,9 +66,10 @@ def run_trial(sim, localizer: Localizer, route: list[tuple[float, float]], max_t
     done = False
 
     def feed() -> None:
-        scan = robot.lidar.latest if robot.lidar is not None else None
+        lidar, imu = robot.sensor("lidar"), robot.sensor("imu")
+        scan = lidar.latest if lidar is not None else None
+        imu = imu.reading if imu is not None else None
         started = wallclock.perf_counter()
-        imu = robot.imu.reading if robot.imu is not None else None
         localizer.update(LocalizerInputs(time=sim.time, odometry=robot.odometry.pose, scan=scan,
                                          imu=imu))
         trial.wall_time += wallclock.perf_counter() - started

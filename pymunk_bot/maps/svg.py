@@ -23,8 +23,10 @@ import math
 from pathlib import Path
 
 import numpy as np
+import shapely
 
 from ..errors import ScenarioError
+from ..geometry import signed_area
 from .geometry import FilledArea, MapGeometry, convex_pieces, edge_chain
 
 CURVE_TOLERANCE = 0.01  # [m] largest distance between a sampled curve and its chords
@@ -215,8 +217,9 @@ def _geometry(shapes: list[dict], canvas, scale: float, fail) -> MapGeometry:
                 nested = any(_inside(o, outline) or _inside(outline, o)
                              for j, o in enumerate(outlines) if j != i)
                 ring = np.vstack([outline, outline[:1]])
-                pieces = None if nested or _area(outline) == 0 else convex_pieces(ring if _area(outline) > 0
-                                                           else ring[::-1])
+                area = signed_area(outline)
+                pieces = None if nested or area == 0 else convex_pieces(ring if area > 0
+                                                                        else ring[::-1])
                 if pieces is None:
                     segments.append(edge_chain(ring))
                     radii.append(np.zeros(len(ring) - 1))
@@ -230,16 +233,9 @@ def _geometry(shapes: list[dict], canvas, scale: float, fail) -> MapGeometry:
                        (0.0, 0.0, width, height), filled=tuple(filled))
 
 
-def _area(points: np.ndarray) -> float:
-    x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
 def _inside(inner: np.ndarray, outer: np.ndarray) -> bool:
     """Whether outline ``inner`` lies inside ``outer`` (tested with its first point)."""
-    from ..planning.grid import points_in_polygon
-
     lo, hi = outer.min(axis=0), outer.max(axis=0)
     if (inner.min(axis=0) < lo).any() or (inner.max(axis=0) > hi).any():
         return False
-    return bool(points_in_polygon(inner[:1, 0], inner[:1, 1], outer)[0])
+    return bool(shapely.contains_xy(shapely.Polygon(outer), inner[0, 0], inner[0, 1]))

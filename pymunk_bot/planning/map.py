@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..config.schema import CircleObstacle, ScenarioConfig
-from ..config.semantics import obstacle_outline
+from ..config.outlines import obstacle_outline
 from ..maps.grid import OccupancyGrid
 
 

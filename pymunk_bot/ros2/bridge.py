@@ -302,8 +302,9 @@ class BridgeObserver:
         # Each sensor with the topic its readings go out on: a reading nobody subscribed to
         # is no reason to sample the run.
         names = robot_names(list(sim.robots))
-        self._sensors = [(s, names[r.name].topic("scan" if s is r.lidar else "imu"))
-                         for r in sim.robots.values() for s in (r.lidar, r.imu) if s is not None]
+        self._sensors = [(sensor, names[r.name].topic(kind)) for r in sim.robots.values()
+                         for kind, sensor in (("scan", r.sensor("lidar")), ("imu", r.sensor("imu")))
+                         if sensor is not None]
         self._readings: list = [None] * len(self._sensors)
         self.server.publish(self._messages.start(sim, self._wanted))
 

@@ -242,7 +242,7 @@ class RosMessages:
                 yield Outgoing(topic("scan"), TYPES["scan"],
                                laser_scan(scan, names.laser, self._rates.get(robot.name, 0.0)),
                                nanoseconds(scan.time))
-        imu = robot.imu
+        imu = robot.imu  # a snapshot's latest reading (None: no IMU)
         if imu is not None and self._last_imu.get(robot.name) != imu.time:
             self._last_imu[robot.name] = imu.time
             if wanted(topic("imu")):

@@ -18,13 +18,13 @@ if TYPE_CHECKING:
 def make_lidar(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Lidar:
     """A LiDAR on the robot's body; it never sees the robot itself (the shape filter)."""
     lidar = Lidar(config, robot.body, robot.shape.filter, world.ray_caster(), rng)
-    robot.lidar = lidar
+    robot.fit("lidar", lidar)
     return lidar
 
 
 def make_imu(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Imu:
     imu = Imu(config, robot.body, rng, substep=lambda: world.substep)
-    robot.imu = imu
+    robot.fit("imu", imu)
     return imu
 
 
@@ -40,7 +40,8 @@ def attach_sensors(robot: "Robot", world: "World", rng: np.random.Generator) -> 
         config = getattr(robot.config, entry.name, None)
         if config is not None:
             robot.sensors.append(sensor_kinds.get(entry.name)(config, robot, world, child))
-    robot.bumper = Bumper(robot.body, lambda: robot.collisions, clock=lambda: world.time)
-    robot.sensors.append(robot.bumper)
+    bumper = Bumper(robot.body, lambda: robot.collisions, clock=lambda: world.time)
+    robot.fit("bumper", bumper)
+    robot.sensors.append(bumper)
     for sensor in robot.sensors:
         sensor.update(0.0)

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import logging
 import os
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator, Sequence
 
-from .grid import Run
 from .runner import run_chunk
 
 BACKENDS = ("serial", "process", "dask", "ray")
@@ -27,26 +26,31 @@ def default_workers() -> int:
                else (os.cpu_count() or 1))
 
 
-def run_chunks(backend: str, base: dict, source: str, chunks: list[list[Run]],
+def run_chunks(backend: str, base: dict, source: str, chunks: Sequence[Sequence[Any]],
                duration: float | None, workers: int | None, address: str | None,
-               base_dir: str | None = None) -> Iterator[Rows]:
+               base_dir: str | None = None, task: Callable[..., Rows] | None = None
+               ) -> Iterator[Rows]:
     """Rows of each chunk, in completion order (``base_dir``: where the scenario's Python
-    controllers are looked for, as :func:`~pymunk_bot.config.parse_scenario` takes it)."""
+    controllers are looked for, as :func:`~pymunk_bot.config.parse_scenario` takes it).
+    ``task(base, source, chunk, duration, base_dir)`` runs one chunk (a top-level function,
+    so every backend can ship it: the sweep's :func:`run_chunk` by default, or another front
+    end's, e.g. the benchmark's)."""
     runners: dict[str, Callable[..., Iterator[Rows]]] = {
         "serial": _serial, "process": _process, "dask": _dask, "ray": _ray}
     if backend not in runners:
         raise ValueError(f"unknown backend '{backend}' (choose from {', '.join(BACKENDS)})")
     if address is not None and backend not in ("dask", "ray"):
         raise ValueError(f"--address is for the dask and ray backends, not '{backend}'")
-    yield from runners[backend](base, source, chunks, duration, workers, address, base_dir)
+    yield from runners[backend](base, source, chunks, duration, workers, address, base_dir,
+                                task or run_chunk)
 
 
-def _serial(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
+def _serial(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
     for chunk in chunks:
-        yield run_chunk(base, source, chunk, duration, base_dir)
+        yield task(base, source, chunk, duration, base_dir)
 
 
-def _process(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
+def _process(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -54,7 +58,7 @@ def _process(base, source, chunks, duration, workers, address, base_dir) -> Iter
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers or default_workers(),
                              mp_context=context) as pool:
-        futures = [pool.submit(run_chunk, base, source, chunk, duration, base_dir)
+        futures = [pool.submit(task, base, source, chunk, duration, base_dir)
                    for chunk in chunks]
         try:
             for future in as_completed(futures):
@@ -64,7 +68,7 @@ def _process(base, source, chunks, duration, workers, address, base_dir) -> Iter
                 future.cancel()
 
 
-def _dask(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
+def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -86,7 +90,7 @@ def _dask(base, source, chunks, duration, workers, address, base_dir) -> Iterato
         raise BackendUnavailable(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
         base_future = client.scatter(base, broadcast=True)
-        futures = [client.submit(run_chunk, base_future, source, chunk, duration, base_dir,
+        futures = [client.submit(task, base_future, source, chunk, duration, base_dir,
                                  pure=False)
                    for chunk in chunks]
         try:
@@ -100,7 +104,7 @@ def _dask(base, source, chunks, duration, workers, address, base_dir) -> Iterato
             cluster.close()
 
 
-def _ray(base, source, chunks, duration, workers, address, base_dir) -> Iterator[Rows]:
+def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
     try:
         import ray
     except ImportError:
@@ -116,7 +120,7 @@ def _ray(base, source, chunks, duration, workers, address, base_dir) -> Iterator
             ray.init(address=address, log_to_driver=False)
         started = True
     try:
-        remote = ray.remote(num_cpus=1)(run_chunk)
+        remote = ray.remote(num_cpus=1)(task)
         base_ref = ray.put(base)
         pending = [remote.remote(base_ref, source, chunk, duration, base_dir) for chunk in chunks]
         try:

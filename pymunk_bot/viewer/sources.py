@@ -94,7 +94,7 @@ class LiveSource:
                 if len(trail) > TRAIL_MAX_POINTS:
                     half = len(trail) // 2
                     trail[:half] = trail[:half:2]
-            lidar = robot.lidar
+            lidar = robot.sensor("lidar")
             scan = getattr(lidar, "latest", None) if lidar is not None else None
             if scan is not None and scan is not self._seen_scan.get(name):
                 self._seen_scan[name] = scan

@@ -44,15 +44,23 @@ def test_check_env_passes_without_warnings():
 def test_observation_means_what_the_docs_say():
     env = NavigationEnv(corridor())
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (8 + 5,)
-    # Beam 4 of 8 looks straight ahead at the wall 4 m away (max_range 8 m).
-    assert obs[4] == pytest.approx(4.0 / 8.0, abs=1e-6)
-    assert obs[0] == pytest.approx(1.0 / 8.0, abs=1e-6)  # straight behind: the wall at x=0
-    assert obs[8] == pytest.approx(3.0 / math.hypot(5.0, 4.0), abs=1e-6)  # goal 3 m away
-    assert obs[9] == pytest.approx(1.0) and obs[10] == pytest.approx(0.0, abs=1e-9)
-    assert obs[11] == 0.0 and obs[12] == 0.0  # standing still
+    assert obs.shape == (8 + 8,)
+
+    def proximity(r, max_range=8.0, scale=0.5):
+        return scale / max_range * (max_range - r) / (scale + r)
+
+    # Beam 4 of 8 looks straight ahead at the wall 4 m away, beam 0 behind at the wall 1 m away.
+    assert obs[4] == pytest.approx(proximity(4.0), abs=1e-6)
+    assert obs[0] == pytest.approx(proximity(1.0), abs=1e-6)
+    assert obs[0] > 0.25 > obs[4] > 0.05  # near returns stand out, far ones fade
+    assert obs[8] == pytest.approx(proximity(1.0), abs=1e-6)  # the nearest return: behind
+    assert obs[9] == pytest.approx(-1.0) and obs[10] == pytest.approx(0.0, abs=1e-6)
+    assert obs[11] == pytest.approx(3.0 / (3.0 + 1.0), abs=1e-6)  # goal 3 m away
+    assert obs[12] == pytest.approx(1.0) and obs[13] == pytest.approx(0.0, abs=1e-9)
+    assert obs[14] == 0.0 and obs[15] == 0.0  # no previous action yet
     assert env.observation_space.contains(obs)
-    env.step(np.zeros(2, np.float32))
+    obs, *_ = env.step(np.array([0.5, -2.0], np.float32))
+    assert obs[14] == 0.5 and obs[15] == -1.0  # the previous action, clipped
     scan = env.sim.robots["r1"].lidar.latest
     assert scan.time == pytest.approx(env.sim.time) == pytest.approx(0.1)  # fresh every step
 
@@ -69,15 +77,16 @@ def test_full_speed_ahead_reaches_the_goal_with_the_documented_reward():
             break
     assert terminated and not truncated
     assert info["goal_reached"] and info["result"]["goal_reached"]
-    assert info["collisions"] == 0
-    # progress 3 m - remaining distance, success 10, time cost 0.1 per second
+    assert info["collisions"] == 0 and info["contact_time"] == 0.0 and info["is_success"]
+    # progress 3 m - remaining distance, success 10, time cost 0.1 per second (the walls stay
+    # beyond the clearance margin: no clearance cost)
     expected = (3.0 - info["distance_to_goal"]) + 10.0 - 0.1 * steps * env.episode.control_period
     assert total == pytest.approx(expected, abs=1e-6)
-    assert obs[11] == pytest.approx(1.0, abs=0.02)  # cruising at v_max = 1 m/s
+    assert obs[14] == 1.0 and obs[15] == 0.0  # full speed ahead was the last action
     assert info["distance_to_goal"] <= 0.2 + 0.1  # inside the tolerance (moved on a bit)
 
 
-def test_collision_is_counted_penalised_and_reported():
+def test_contact_is_counted_in_time_and_penalised():
     env = NavigationEnv(corridor(goal=(1.0, 3.5)))  # goal to the left, drive right into the wall
     env.reset(seed=0)
     rewards, infos = [], []
@@ -87,9 +96,39 @@ def test_collision_is_counted_penalised_and_reported():
         infos.append(info)
     hit = next(i for i, info in enumerate(infos) if info["new_collisions"])
     assert infos[-1]["collisions"] == 1
-    assert rewards[hit] < -0.9  # the -1 collision penalty dominates
+    assert rewards[hit] < -0.5  # 5 per second in contact, and no clearance
+    # Pressed against the wall from then on: every period counts, not the one episode.
+    assert infos[-1]["contact_time"] == pytest.approx(0.1 * (60 - hit), abs=1e-9)
+    assert rewards[-1] < -0.5
     assert env.sim.result()["robots"]["r1"]["collisions"] == 1
     assert env.sim.robots["r1"].pose[0] == pytest.approx(5.0 - 0.2, abs=0.01)  # held by the wall
+
+
+def test_success_is_arriving_without_any_contact():
+    env = NavigationEnv(corridor())
+    env.reset(seed=0)
+    for _ in range(15):  # back into the wall behind, then on to the goal ahead
+        env.step(np.array([-1.0, 0.0], np.float32))
+    for _ in range(100):
+        _, reward, terminated, truncated, info = env.step(np.array([1.0, 0.0], np.float32))
+        if terminated or truncated:
+            break
+    assert terminated and info["goal_reached"] and info["contact_time"] > 0
+    assert not info["is_success"] and reward < 5.0  # arrived, but touched: no success bonus
+
+
+def test_clearance_costs_near_obstacles_only():
+    near = NavigationEnv(corridor(goal=(4.0, 0.35)), reward={"time": 0.0, "progress": 0.0})
+    near.reset(seed=0)
+    far = NavigationEnv(corridor(), reward={"time": 0.0, "progress": 0.0})
+    far.reset(seed=0)
+    zero = np.zeros(2, np.float32)
+    assert far.step(zero)[1] == 0.0
+    near.sim.robots["r1"].teleport(1.0, 0.35, 0.0)  # 0.15 m from the wall below
+    near.step(zero)
+    _, reward, *_, info = near.step(zero)
+    assert info["clearance"] == pytest.approx(0.15, abs=0.02)
+    assert reward == pytest.approx(-1.0 * 0.1 * (1 - info["clearance"] / 0.3), abs=1e-9)
 
 
 def test_truncated_at_the_time_limit_not_terminated():
@@ -124,11 +163,11 @@ def test_random_goal_is_free_and_repeatable():
 def test_lidar_override_and_action_scaling():
     env = NavigationEnv(corridor(max_wheel_speed=0.5, track_width=0.4), lidar={"beams": 16})
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (16 + 5,)
+    assert obs.shape == (16 + 8,)
     for _ in range(20):
         obs, *_ = env.step(np.array([0.0, 1.0], np.float32))  # spin on the spot
     assert env.sim.robots["r1"].velocity[1] == pytest.approx(2 * 0.5 / 0.4, rel=0.02)
-    assert obs[16 + 4] == pytest.approx(1.0, abs=0.02)
+    assert obs[16 + 7] == 1.0
 
 
 @pytest.mark.parametrize("kwargs, path", [
@@ -207,4 +246,4 @@ def test_registered_by_module_prefix_without_import():
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                          env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=120)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "(365,)"
+    assert out.stdout.strip() == "(368,)"  # 360 beams + 8

@@ -29,7 +29,7 @@ def test_make_vec_uses_the_native_vector_env():
                         vectorization_mode="vector_entry_point", lidar={"beams": 30})
     assert isinstance(envs.unwrapped, NavigationVectorEnv)
     obs, info = envs.reset(seed=5)
-    assert obs.shape == (3, 35) and obs.dtype == np.float32
+    assert obs.shape == (3, 30 + 8) and obs.dtype == np.float32
     assert envs.observation_space.contains(obs)
     obs, rewards, terminated, truncated, info = envs.step(envs.action_space.sample())
     assert rewards.shape == (3,) and terminated.dtype == np.bool_
@@ -105,7 +105,8 @@ def test_next_step_autoreset_follows_gymnasium():
     obs, rewards, terminated, truncated, info = history[k + 1]  # slot 0's reset step
     assert rewards[0] == 0.0 and not terminated[0] and not truncated[0]
     assert info["_sim_seed"][0] and not info["_sim_seed"][1]  # only slot 0 was reset
-    assert obs[0, 12] == pytest.approx(0.6 / np.hypot(4.0, 3.0), abs=1e-6)  # back at the start
+    assert obs[0, 12 + 3] == pytest.approx(0.6 / 1.6, abs=1e-6)  # back at the start: d / (d + 1 m)
+    assert (obs[0, 12 + 6:] == 0.0).all()  # no previous action after a reset
 
 
 def test_same_step_autoreset_returns_the_final_observation():
@@ -167,7 +168,7 @@ def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
 
     env = MultiRobotEnv(two_robots())
     obs, _ = env.reset(seed=0)
-    assert env.agents == ["a", "b"] and obs["a"].shape == (13,)
+    assert env.agents == ["a", "b"] and obs["a"].shape == (8 + 8,)
     for _ in range(30):
         obs, rewards, terminations, truncations, infos = env.step(
             {a: np.array([1.0, 0.0], np.float32) for a in env.agents})

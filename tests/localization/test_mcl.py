@@ -102,3 +102,19 @@ def test_roughening_a_cloud_of_equal_headings_gives_finite_poses():
 
     poses = np.tile([1.0, 2.0, 0.3], (1000, 1))
     assert np.isfinite(roughen(poses, np.random.default_rng(0))).all()
+
+
+def test_a_point_inside_a_thick_obstacle_is_as_far_from_the_map_as_its_surface():
+    # A 2 m thick shelf (x in [2, 4] m) in a 6 x 2 m room, 5 cm cells. A beam stops at the
+    # shelf's face, so an end point 0.4 m inside it comes from an estimate 0.4 m off: the field
+    # must say so (it read 0 inside, and MCL slid 0.5 m into Nav2's warehouse shelves).
+    from pymunk_bot.localization.likelihood import LikelihoodField
+    from pymunk_bot.maps.grid import OccupancyGrid
+
+    data = np.zeros((40, 120), dtype=np.int8)
+    data[:, 40:80] = 100
+    field = LikelihoodField(OccupancyGrid(data, 0.05), max_dist=2.0)
+    assert field.distance(np.array([[2.4, 1.0]]))[0] == pytest.approx(0.4, abs=0.02)  # inside
+    assert field.distance(np.array([[1.6, 1.0]]))[0] == pytest.approx(0.4, abs=0.02)  # outside
+    assert field.distance(np.array([[3.0, 1.0]]))[0] == pytest.approx(1.0, abs=0.02)  # the middle
+    assert field.distance(np.array([[2.0, 1.0]]))[0] <= 0.02  # on the face

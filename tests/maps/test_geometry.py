@@ -122,3 +122,34 @@ def test_shipped_office_map_and_floor_plan():
     assert free_disc(geometry, *robot["pose"][:2], 0.2)
     assert free_disc(geometry, *robot["goal"]["position"], 0.2)
     assert not free_disc(geometry, -0.8, -0.8, 0.1)  # the unknown border
+
+
+def test_a_solid_block_with_a_room_inside_keeps_the_room():
+    """A 2 m solid square with a 1 m free room in it (and a 2-cell pinhole elsewhere): the room
+    stays free, so the block is segments (convex pieces would fill it), the pinhole is filled."""
+    data = np.zeros((60, 60), np.int8)
+    data[10:50, 10:50] = 100
+    data[20:40, 20:40] = 0  # the room: 20 x 20 cells, x and y in [1, 2] m
+    data[44:46, 44] = 0  # a pinhole: no robot fits, it becomes solid
+    geometry = geometry_from_grid(OccupancyGrid(data, RES))
+    assert not geometry.polygons  # the block encloses the room: kept as outlines
+    assert free_disc(geometry, 1.5, 1.5, 0.45)  # the room's middle, a cell from its walls
+    assert not free_disc(geometry, 1.5, 1.5, 0.55)  # reaches into its walls
+    assert not free_disc(geometry, 0.75, 1.5, 0.1)  # inside the block's wall
+    space = pymunk.Space()
+    add_to_space(space, geometry)
+    assert cast(space, (1.5, 1.5), 0.0) == pytest.approx(0.5, abs=1e-9)  # the room's east wall
+    assert cast(space, (1.5, 1.5), math.pi / 2) == pytest.approx(0.5, abs=1e-9)
+    # the pinhole's cells are inside solid: no segment runs around them
+    assert not space.point_query((2.225, 2.25), 0.1, pymunk.ShapeFilter())
+
+
+def test_a_point_on_a_convex_piece_is_not_free():
+    data = np.zeros((40, 40), np.int8)
+    data[15:25, 15:25] = 100  # a 0.5 m pillar, x and y in [0.75, 1.25] m
+    geometry = geometry_from_grid(OccupancyGrid(data, RES))
+    assert len(geometry.polygons) == 1
+    assert not free_disc(geometry, 1.0, 1.0, 0.0)  # a point inside the piece
+    assert not free_disc(geometry, 1.25, 1.0, 0.0)  # on its outline
+    assert free_disc(geometry, 1.3, 1.0, 0.0) and free_disc(geometry, 1.3, 1.0, 0.049)
+    assert not free_disc(geometry, 1.3, 1.0, 0.051)

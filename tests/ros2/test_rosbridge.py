@@ -245,3 +245,30 @@ def test_several_robots_are_namespaced(serve):
     served.run(0.3)
     served.wait()
     assert frames[-1] == {"r1/odom", "r1/base_link", "r2/odom", "r2/base_link"}
+
+
+EXIT_SCRIPT = """
+import roslibpy
+from pymunk_bot import Simulation
+from pymunk_bot.ros2.bridge import serve_sim
+sim = Simulation.from_file("default")  # a module-level run, kept until the interpreter exits
+server = serve_sim(sim, port=0, report=lambda line: None)
+ros = roslibpy.Ros(host="127.0.0.1", port=server.port)
+ros.run(timeout=5)
+roslibpy.Topic(ros, "/odom", "nav_msgs/msg/Odometry").subscribe(lambda message: None)
+sim.run(0.5)
+ros.terminate()
+server.stop()
+print("stopped")
+"""
+
+
+def test_a_script_that_keeps_its_run_after_stopping_the_server_exits_cleanly():
+    # A served run that outlives its server used to crash the interpreter's teardown (a pymunk
+    # Space freed after cffi had gone, exit status -11): the server now lets go of the run.
+    import subprocess
+    import sys
+    done = subprocess.run([sys.executable, "-c", EXIT_SCRIPT], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().endswith("stopped")

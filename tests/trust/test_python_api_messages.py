@@ -70,3 +70,23 @@ def test_a_simulation_names_its_robots_when_asked_for_a_missing_one_and_in_its_r
     sim.step()
     assert repr(sim) == ("Simulation('api', seed=0, t=0.017 s of 30 s, dt=0.01667 s x "
                          f"{sim.substeps} substeps, robots: r1, r2)")
+
+
+def test_a_sensor_the_robot_was_not_given_names_the_key_to_add(robot):
+    # The default robot has no LiDAR and no IMU: reading one says which key to add, not
+    # "'NoneType' object has no attribute 'scan'".
+    with pytest.raises(AttributeError) as caught:
+        robot.lidar.scan()
+    message = str(caught.value)
+    assert "robot 'r1' has no lidar: add `lidar:` to its entry under `robots:`" in message
+    assert "(its sensors: bumper)" in message
+    assert not hasattr(robot, "imu") and robot.sensor("imu") is None
+    assert robot.bumper is robot.sensor("bumper")
+
+
+def test_a_fitted_lidar_is_there_by_either_name():
+    sim = pb.Simulation.from_dict({"name": "api", "world": {"size": [6.0, 4.0]},
+                                   "robots": [{"name": "r1", "pose": [1.0, 1.0, 0.0],
+                                               "lidar": {"beams": 8}}]})
+    r = sim.robots["r1"]
+    assert r.lidar is r.sensor("lidar") and len(r.lidar.scan()) == 8

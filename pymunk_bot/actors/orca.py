@@ -1,0 +1,138 @@
+"""ORCA: optimal reciprocal collision avoidance (van den Berg, Guy, Lin & Manocha, "Reciprocal
+n-body collision avoidance", ISRR 2011), the pedestrian policy of CrowdNav and IR-SIM.
+
+For walker A and each of its nearest neighbours B (other walkers, robots), the velocities that
+would bring A within r_A + r_B of B in ``time_horizon`` (B keeping its velocity) form a
+truncated cone, the velocity obstacle. u is the smallest change of the relative velocity that
+leaves it and n the cone's outward normal there; A takes its share of u (half against another
+walker, who does the other half; all of it against a robot, which may not) and must keep to
+the half-plane {v : (v - (v_A + share u)) . n >= 0}. A wall at distance d from A's centre
+(its nearest point, ``space.point_query``) gives {v : v . g >= -max(d - r_A, 0) / tau_obst},
+g pointing away from it: a hard constraint. A then takes the velocity closest to its wish
+inside all of them (``orca_lp.solve_all``, compiled), turned KEEP_RIGHT_ANGLE to its right
+(see there). The cones are built for all walkers at
+once with numpy.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+import pymunk
+
+MAX_WALL_LINES = 4  # nearest wall points per walker that constrain it
+ROBOT_SHARE = 1.0  # of u a walker takes against a robot
+# [rad] the wished velocity is turned this much to the walker's right. Two walkers that meet
+# exactly head-on from rest get half-planes normal to the line between them, which ORCA alone
+# never leaves (a known degenerate case); people keep right, and so do these.
+KEEP_RIGHT_ANGLE = 0.1
+WALKER_SHARE = 0.5  # ... and against another walker
+
+
+def _det(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def neighbour_lines(pos: np.ndarray, vel: np.ndarray, radius: np.ndarray, opos: np.ndarray,
+                    ovel: np.ndarray, orad: np.ndarray, share: np.ndarray, horizon: np.ndarray,
+                    dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Half-planes (q, n), each (k, K, 2), of k agents against K neighbours each: agent a at
+    ``pos[a]`` with ``vel[a]``, ``radius[a]``; its neighbours at ``opos[a, j]`` ... with
+    ``share[a, j]`` of the avoidance; ``horizon[a]`` [s]; ``dt`` [s] the step (for a pair
+    already overlapping, which must part within it)."""
+    p = opos - pos[:, None, :]  # to the neighbour [m]
+    v = vel[:, None, :] - ovel  # relative velocity [m/s]
+    r = radius[:, None] + orad  # [m]
+    tau = horizon[:, None]
+    dist2 = (p ** 2).sum(axis=-1)
+    r2 = r * r
+    apart = dist2 > r2
+    # The cutoff disc: centre p / tau (p / dt when overlapping), radius r / tau (r / dt).
+    scale = np.where(apart, tau, dt)
+    w = v - p / scale[..., None]
+    wl = np.sqrt((w ** 2).sum(axis=-1))
+    dot = (w * p).sum(axis=-1)
+    on_disc = ~apart | ((dot < 0.0) & (dot * dot > r2 * wl * wl))
+    safe_wl = np.where(wl > 1e-12, wl, 1.0)
+    disc_n = np.where((wl > 1e-12)[..., None], w / safe_wl[..., None], np.array([1.0, 0.0]))
+    disc_u = (r / scale - wl)[..., None] * disc_n
+    # The legs: tangents from the origin to the disc of radius r about p.
+    leg = np.sqrt(np.maximum(dist2 - r2, 0.0))
+    inv = 1.0 / np.maximum(dist2, 1e-12)
+    left = _det(p, w) > 0.0
+    px, py = p[..., 0], p[..., 1]
+    d_left = np.stack([px * leg - py * r, px * r + py * leg], axis=-1) * inv[..., None]
+    d_right = np.stack([px * leg + py * r, -px * r + py * leg], axis=-1) * inv[..., None]
+    d = np.where(left[..., None], d_left, d_right)
+    leg_u = (v * d).sum(axis=-1)[..., None] * d - v
+    leg_n = np.where(left[..., None], np.stack([-d[..., 1], d[..., 0]], axis=-1),
+                     np.stack([d[..., 1], -d[..., 0]], axis=-1))
+    u = np.where(on_disc[..., None], disc_u, leg_u)
+    n = np.where(on_disc[..., None], disc_n, leg_n)
+    q = vel[:, None, :] + share[..., None] * u
+    return q, n
+
+
+class Orca:
+    """ORCA velocities for the walkers ``agents`` (indices into the crowd)."""
+
+    def __init__(self, agents: np.ndarray, configs: Sequence[Any]) -> None:
+        self.agents = agents
+        self.horizon = np.array([configs[i].time_horizon for i in agents], dtype=float)
+        self.wall_horizon = np.array([configs[i].obstacle_time_horizon for i in agents])
+        self.reach = np.array([configs[i].neighbor_distance for i in agents], dtype=float)
+        self.limit = np.array([configs[i].max_neighbors for i in agents], dtype=np.int64)
+
+    def velocities(self, pos: np.ndarray, vel: np.ndarray, radius: np.ndarray,
+                   others: tuple[np.ndarray, np.ndarray, np.ndarray], walkers: int,
+                   visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray, dt: float,
+                   walls: list[list[tuple[float, float, float]]]) -> np.ndarray:
+        """New velocities (k, 2) [m/s] of the agents, at ``pos``, ``vel``, ``radius`` (k, ...),
+        wishing ``pref`` (k, 2) within ``vmax`` (k,). ``others``: positions, velocities and
+        radii of everything avoided (the first ``walkers`` are walkers, the rest robots);
+        ``visible`` (k, m): who each agent takes into account (not itself); ``walls``: per
+        agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces."""
+        from .orca_lp import solve_all
+
+        c, s = np.cos(KEEP_RIGHT_ANGLE), np.sin(KEEP_RIGHT_ANGLE)
+        pref = np.column_stack([c * pref[:, 0] + s * pref[:, 1], -s * pref[:, 0] + c * pref[:, 1]])
+        opos, ovel, orad = others
+        k, m = len(pos), len(opos)
+        d2 = ((opos[None, :, :] - pos[:, None, :]) ** 2).sum(axis=-1)
+        d2 = np.where(visible & (d2 <= (self.reach ** 2)[:, None]), d2, np.inf)
+        width = int(min(m, self.limit.max())) if m else 0
+        order = np.argsort(d2, axis=1, kind="stable")[:, :width]
+        valid = np.isfinite(np.take_along_axis(d2, order, axis=1))
+        valid &= np.arange(width)[None, :] < self.limit[:, None]
+        share = np.where(order < walkers, WALKER_SHARE, ROBOT_SHARE)
+        q_n, n_n = neighbour_lines(pos, vel, radius, opos[order], ovel[order], orad[order],
+                                   share, self.horizon, dt)
+        q_w = np.zeros((k, MAX_WALL_LINES, 2))
+        n_w = np.zeros((k, MAX_WALL_LINES, 2))
+        wall_valid = np.zeros((k, MAX_WALL_LINES), dtype=bool)
+        for a, hits in enumerate(walls):
+            for j, (distance, gx, gy) in enumerate(hits[:MAX_WALL_LINES]):
+                room = max(distance - radius[a], 0.0) / self.wall_horizon[a]
+                n_w[a, j] = gx, gy
+                q_w[a, j] = -gx * room, -gy * room
+                wall_valid[a, j] = True
+        q = np.concatenate([q_w, q_n], axis=1)
+        n = np.concatenate([n_w, n_n], axis=1)
+        ok = np.concatenate([wall_valid, valid], axis=1)
+        first = np.argsort(~ok, axis=1, kind="stable")  # valid half-planes first, walls first
+        q = np.ascontiguousarray(np.take_along_axis(q, first[..., None], axis=1))
+        n = np.ascontiguousarray(np.take_along_axis(n, first[..., None], axis=1))
+        return solve_all(q, n, ok.sum(axis=1).astype(np.int64),
+                         wall_valid.sum(axis=1).astype(np.int64),
+                         np.ascontiguousarray(vmax, dtype=float),
+                         np.ascontiguousarray(pref, dtype=float))
+
+
+def nearest_surfaces(space: pymunk.Space, point: tuple[float, float], reach: float,
+                     query_filter: pymunk.ShapeFilter, skip: set) -> list[tuple[float, float, float]]:
+    """Up to MAX_WALL_LINES nearest surfaces within ``reach`` [m] of ``point``, as (distance
+    [m], unit gradient away from the surface), bodies in ``skip`` left out."""
+    hits = [(h.distance, h.gradient.x, h.gradient.y)
+            for h in space.point_query(point, reach, query_filter) if h.shape.body not in skip]
+    hits.sort()
+    return hits[:MAX_WALL_LINES]

@@ -1,0 +1,120 @@
+"""`pymunk-bot evaluate POLICY SCENARIO --episodes N`: a trained policy's success rate,
+contacts and time to goal, with 95 % confidence intervals.
+
+Each episode is the scenario in ``pymunk_bot/Navigation-v0`` (the policy drives its first
+robot, or ``--robot``) reset with seed ``--seed + k``; ``--random-goal``, ``--random-start``
+and ``--generate KIND`` draw a new goal, start pose or generated world per episode
+(:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import sys
+from pathlib import Path
+
+from ..errors import ScenarioError
+from .arguments import EXIT_BAD_INPUT, EXIT_OK, check_output, duration_seconds, jobs_count, \
+    seed_number
+
+MAX_EPISODES = 100_000
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("evaluate", help="success rate, contacts and time to goal of a trained "
+                                        "policy (.npz or .onnx) over many episodes")
+    p.add_argument("policy", type=Path, help="the policy file (.npz MLP or .onnx)")
+    p.add_argument("scenario", help="scenario file or shipped name")
+    p.add_argument("--episodes", type=_episodes, default=100, help="episodes (default 100)")
+    p.add_argument("--seed", type=seed_number, default=0, help="episode k is reset with seed+k")
+    p.add_argument("--robot", default=None, help="the robot the policy drives (default: first)")
+    p.add_argument("--random-goal", action="store_true", help="a random free goal per episode")
+    p.add_argument("--random-start", action="store_true", help="a random free start per episode")
+    p.add_argument("--generate", choices=("maze", "clutter", "office"), default=None,
+                   help="a generated world per episode (the scenario's robot in it)")
+    p.add_argument("--world-seeds", default=None, metavar="LOW:HIGH",
+                   help="generated worlds' seeds are drawn from [LOW, HIGH)")
+    p.add_argument("--max-time", type=duration_seconds, default=None,
+                   help="episode time limit [s] (default: the scenario's world.duration)")
+    p.add_argument("--control-period", type=duration_seconds, default=0.1,
+                   help="seconds per action (the policy controller's 1 / rate), default 0.1")
+    p.add_argument("--workers", type=jobs_count, default=1, help="processes (default 1)")
+    p.add_argument("--out", type=Path, default=None, help="one row per episode (.csv)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=command)
+
+
+def _episodes(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
+    if not 1 <= value <= MAX_EPISODES:
+        raise argparse.ArgumentTypeError(f"must be in 1..{MAX_EPISODES} (got {value})")
+    return value
+
+
+def env_kwargs(args: argparse.Namespace) -> dict:
+    """Navigation-v0's keyword arguments for the command's options."""
+    randomize: dict = {}
+    if args.generate is not None:
+        randomize["generate"] = args.generate
+    if args.world_seeds is not None:
+        low, _, high = args.world_seeds.partition(":")
+        try:
+            randomize["world_seeds"] = [int(low), int(high)]
+        except ValueError:
+            raise ScenarioError("--world-seeds", "", f"must be LOW:HIGH, whole numbers "
+                                                     f"(got '{args.world_seeds}')") from None
+    if args.random_start:
+        randomize["start"] = True
+    return {"scenario": args.scenario, "robot": args.robot, "random_goal": args.random_goal,
+            "max_episode_time": args.max_time, "control_period": args.control_period,
+            "randomize": randomize or None}
+
+
+def command(args: argparse.Namespace) -> int:
+    try:
+        from ..envs import NavigationEnv
+    except ImportError as exc:
+        print(f"error: evaluate: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    from ..envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
+    from ..policy_file import PolicyFileError, load_policy
+
+    if args.out is not None:
+        check_output("--out", args.out, (".csv",))
+    try:
+        policy = load_policy(args.policy)
+    except PolicyFileError as exc:
+        print(f"error: {args.policy}: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    kwargs = env_kwargs(args)
+    try:
+        env = NavigationEnv(**kwargs)
+    except ValueError as exc:  # a bad option value (ScenarioError is raised as it is)
+        print(f"error: evaluate: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    inputs, outputs = env.episode.task.obs_size, env.episode.task.action_size
+    env.close()
+    if policy.inputs not in (None, inputs) or policy.outputs not in (None, outputs):
+        print(f"error: {args.policy}: takes {policy.inputs} inputs and gives {policy.outputs} "
+              f"outputs; robot '{env.episode.robot_name}' of {args.scenario} gives {inputs} "
+              f"and takes {outputs} (was it trained with another LiDAR or drive?)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    outcomes = evaluate_policy(args.policy, kwargs, args.episodes, args.seed, args.workers)
+    summary = summarize(outcomes)
+    print(json.dumps(summary, indent=2) if args.json else format_summary(summary))
+    if args.out is not None:
+        from ..results import write_atomic
+
+        text = io.StringIO()
+        rows = outcome_rows(outcomes)
+        writer = csv.DictWriter(text, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+        write_atomic(args.out, text.getvalue().encode("utf-8"))
+    return EXIT_OK

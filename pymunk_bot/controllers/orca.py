@@ -1,0 +1,50 @@
+"""A robot driven by ORCA (van den Berg et al. 2011), CrowdNav's baseline: the velocity
+closest to the one toward its look-ahead point that no obstacle point its LiDAR sees can
+collide with within ``time_horizon`` (moving points, at their tracked velocity) or
+``obstacle_time_horizon`` (static points). Unlike a pedestrian it takes all
+of the avoidance: the people it meets may not reciprocate."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..actors.orca import neighbour_lines
+from ..config.controllers import OrcaControllerConfig
+from .base import RobotSpec
+from .crowd_nav import CrowdController
+
+MOVING = 0.05  # [m/s] points faster than this are moving obstacles (soft constraints)
+
+
+class OrcaController(CrowdController):
+    """ORCA toward the path, around what the LiDAR sees."""
+
+    def __init__(self, config: OrcaControllerConfig, robot: RobotSpec) -> None:
+        super().__init__(config, robot)
+
+    def velocity(self, xy: np.ndarray, carrot: np.ndarray, points: np.ndarray,
+                 point_velocities: np.ndarray, period: float) -> np.ndarray:
+        from ..actors.orca_lp import solve_all
+
+        c = self.config
+        to_carrot = carrot - xy
+        pref = to_carrot / max(float(np.hypot(*to_carrot)), 1e-9) * self.max_speed
+        radius = np.array([self.robot.radius + c.margin])
+        moving = np.hypot(*point_velocities.T) > MOVING if len(points) else np.zeros(0, bool)
+        lines_q, lines_n = [], []
+        for mask, horizon in ((~moving, c.obstacle_time_horizon), (moving, c.time_horizon)):
+            if mask.any():
+                q, n = neighbour_lines(xy[None], self.last[None], radius, points[mask][None],
+                                       point_velocities[mask][None],
+                                       np.zeros((1, int(mask.sum()))),
+                                       np.ones((1, int(mask.sum()))), np.array([horizon]),
+                                       period)
+                lines_q.append(q[0])
+                lines_n.append(n[0])
+        if not lines_q:
+            return pref
+        q = np.ascontiguousarray(np.concatenate(lines_q)[None])
+        n = np.ascontiguousarray(np.concatenate(lines_n)[None])
+        # Static points first; none is hard: when they leave no room (a doorway, a crowd at a
+        # wall), the velocity that violates the half-planes least is taken.
+        return solve_all(q, n, np.array([q.shape[1]]), np.array([0]),
+                         np.array([self.max_speed]), pref[None])[0]

@@ -1,0 +1,72 @@
+"""``controller: {type: policy, path: nav.npz}``: a trained policy drives the robot.
+
+At every tick (``rate``, 10 Hz by default: the env's 0.1 s control period) the policy sees the
+observation ``pymunk_bot/Navigation-v0`` builds (:mod:`pymunk_bot.policy_io`: the latest LiDAR
+scan, the goal from the pose estimate, its previous action) and its action is scaled as the env
+scales it. Give the robot ``localization: ground_truth`` to see the pose the env shows by
+default (``pose_source="ground_truth"``); with the default odometry it sees what the env shows
+with ``pose_source="odometry"``. Within the stop radius of the goal it stops ("arrived").
+
+A policy that returns a NaN or infinite action fails the run (status "failed", the reason in
+the result's ``controller_message``); a file that cannot drive the robot (missing, malformed,
+the wrong input size for the robot's LiDAR) is refused when the scenario is checked.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..config.controllers import PolicyControllerConfig
+from ..policy_file import PolicyFileError, load_policy
+from ..policy_io import ActionScale, ObservationBuilder, goal_features
+from .base import STOP, Command, Controller, Observation, RobotSpec
+
+
+class PolicyController(Controller):
+    """Runs a policy file (``.npz`` MLP or ``.onnx``) on the env's observation."""
+
+    def __init__(self, config: PolicyControllerConfig, robot: RobotSpec) -> None:
+        super().__init__(config)
+        self.rate = float(config.rate)
+        self.path = config.path
+        try:
+            self.policy = load_policy(config.resolved_path)
+        except PolicyFileError as exc:  # the file changed since the scenario was checked
+            raise ValueError(f"policy '{config.path}': {exc}") from None
+        self.scale = ActionScale.of(robot)
+        self.tolerance = config.tolerance  # [m]; None: the goal's
+        self.previous = np.zeros((1, self.scale.size))  # the last clipped action
+        self._builder: ObservationBuilder | None = None
+        self._obs: np.ndarray | None = None
+
+    def compute(self, obs: Observation) -> Command:
+        if self.status == "failed":
+            return STOP
+        if obs.scan is None or obs.goal is None:
+            return self._fail("a policy needs a LiDAR scan and a goal")
+        x, y, theta = obs.pose.tolist()
+        features = goal_features(x, y, theta, obs.goal[0], obs.goal[1])
+        tolerance = obs.goal_tolerance if self.tolerance is None else self.tolerance
+        if features[0] <= tolerance:
+            self.status, self.message = "arrived", ""
+            return STOP
+        self.status = "running"
+        if self._builder is None or self._obs is None:
+            self._builder = ObservationBuilder(obs.scan.angles, obs.scan.max_range,
+                                               self.scale.vy_max is not None)
+            self._obs = np.empty((1, self._builder.size), dtype=np.float32)
+        if obs.scan.ranges.size != self._builder.beams:
+            return self._fail(f"the scan has {obs.scan.ranges.size} beams, the policy was "
+                              f"built for {self._builder.beams}")
+        self._builder.fill(self._obs, obs.scan.ranges[None], [features], self.previous)
+        action = self.policy.act(self._obs)[0]
+        try:
+            clipped = self.scale.clipped(action)
+        except ValueError:
+            return self._fail(f"policy '{self.path}' returned {np.array2string(action)}: "
+                              f"not {self.scale.size} finite numbers")
+        self.previous[0] = clipped
+        return self.scale.command(clipped)
+
+    def _fail(self, reason: str) -> Command:
+        self.status, self.message = "failed", reason
+        return STOP

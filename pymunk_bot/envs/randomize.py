@@ -1,0 +1,212 @@
+"""Domain randomization: a new scenario drawn for every episode (``randomize=`` of the envs).
+
+    gym.make("pymunk_bot/Navigation-v0", random_goal=True, randomize={
+        "generate": "clutter",             # a generated world per episode (maze | clutter | office)
+        "world_seeds": [0, 1000],          # its seed drawn from [0, 1000) (default [0, 2**31-1))
+        "size": [8.0, 6.0],                # of the generated arena [m] (default: the kind's)
+        "start": True,                     # a random free start pose
+        "set": {"robots[0].max_wheel_speed": [0.5, 1.0],        # a range: uniform draw
+                "robots[0].lidar.noise_std": {"choices": [0.0, 0.02]}},
+    })
+
+``set`` takes the key paths of ``sweep --set`` and is checked the same way: each range's ends
+and each choice must give a valid scenario. A range of two integers draws integers (both ends
+included). A generated world keeps the scenario's learning robot (drive, size, sensors) and
+takes the world's arena, obstacles, start and goal; other robots and a ``world.map`` are left
+out. Every draw comes from the episode's generator: a seed gives the same episodes.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..config import parse_scenario
+from ..errors import ScenarioError
+from ..maps.generate import KINDS, generate
+from ..sweep.grid import apply_override, parse_key_path
+
+KEYS = ("generate", "world_seeds", "size", "start", "set")
+MAX_CHOICES = 1000
+MAX_SEED = 2**31 - 1
+WORLD_CACHE = 256  # generated worlds kept (drawing one runs a solvability check)
+START_TRIES = 200  # random start poses tried before giving up on a crowded world
+START_CLEARANCE = 0.15  # [m] free space around a random start, beyond the robot's radius
+START_GOAL_GAP = 1.0  # [m] a random start at least this far from the goal
+
+
+@dataclass(frozen=True)
+class Draw:
+    """How one scenario key is drawn: uniformly from [low, high] or from ``choices``."""
+
+    path: str
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[Any, ...] = ()
+    integer: bool = False
+
+    def values(self) -> list[Any]:
+        """The values that bound what a draw gives (each is checked against the scenario)."""
+        return list(self.choices) if self.choices else [self.low, self.high]
+
+    def sample(self, rng: np.random.Generator) -> Any:
+        """One draw from ``rng``."""
+        if self.choices:
+            return copy.deepcopy(self.choices[int(rng.integers(len(self.choices)))])
+        assert self.low is not None and self.high is not None
+        if self.integer:
+            return int(rng.integers(int(self.low), int(self.high) + 1))
+        return float(rng.uniform(self.low, self.high))
+
+
+@dataclass(frozen=True)
+class Randomization:
+    """What is drawn anew every episode (see the module docstring)."""
+
+    generate: str | None = None
+    world_seeds: tuple[int, int] = (0, MAX_SEED)
+    size: tuple[float, float] | None = None  # [m]
+    start: bool = False
+    draws: tuple[Draw, ...] = ()
+    _worlds: OrderedDict = field(default_factory=OrderedDict, compare=False, repr=False)
+
+    @classmethod
+    def parse(cls, value: Mapping[str, Any], source: str) -> "Randomization":
+        """From the ``randomize`` mapping; ScenarioError naming ``randomize.<key>`` if bad."""
+        if not isinstance(value, Mapping):
+            raise ScenarioError(source, "randomize", f"must be a mapping (got {value!r:.60})")
+        unknown = sorted(set(value) - set(KEYS))
+        if unknown:
+            raise ScenarioError(source, f"randomize.{unknown[0]}",
+                                f"unknown key; valid: {', '.join(KEYS)}")
+        kind = value.get("generate")
+        if kind is not None and kind not in KINDS:
+            raise ScenarioError(source, "randomize.generate",
+                                f"must be one of {', '.join(KINDS)} (got {kind!r})")
+        seeds = value.get("world_seeds", (0, MAX_SEED))
+        if not (isinstance(seeds, (list, tuple)) and len(seeds) == 2
+                and all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)
+                and 0 <= seeds[0] < seeds[1] <= MAX_SEED):
+            raise ScenarioError(source, "randomize.world_seeds", "must be [low, high) with "
+                                f"0 <= low < high <= {MAX_SEED} (got {seeds!r:.60})")
+        size = value.get("size")
+        if size is not None and not (isinstance(size, (list, tuple)) and len(size) == 2 and all(
+                isinstance(s, (int, float)) and math.isfinite(s) for s in size)):
+            raise ScenarioError(source, "randomize.size", f"must be [width, height] in metres "
+                                                          f"(got {size!r:.60})")
+        start = value.get("start", False)
+        if not isinstance(start, bool):
+            raise ScenarioError(source, "randomize.start", f"must be true or false (got {start!r})")
+        keys = value.get("set") or {}
+        if not isinstance(keys, Mapping):
+            raise ScenarioError(source, "randomize.set", "must map key paths to [low, high] "
+                                                         "or {choices: [...]}")
+        draws = tuple(_draw(path, spec, source) for path, spec in keys.items())
+        return cls(kind, (int(seeds[0]), int(seeds[1])),
+                   None if size is None else (float(size[0]), float(size[1])), start, draws)
+
+    @property
+    def changes_world(self) -> bool:
+        """Whether an episode's scenario differs from the next one's in more than its seed."""
+        return self.generate is not None or self.start or bool(self.draws)
+
+    def check(self, base: dict, robot: str, source: str) -> None:
+        """Every range end and choice, applied to ``base`` (or a generated world), parses:
+        a ScenarioError naming the key otherwise, before any episode runs."""
+        world = self.world(base, robot, self.world_seeds[0], source)
+        for draw in self.draws:
+            for value in draw.values():
+                data = copy.deepcopy(world)
+                _apply(data, draw.path, value, source)
+                try:
+                    parse_scenario(data, source)
+                except ScenarioError as exc:
+                    raise ScenarioError(source, f"randomize.set.{draw.path}",
+                                        f"{value!r}: {exc.path}: {exc.problem}") from None
+
+    def scenario(self, base: dict, robot: str, rng: np.random.Generator, source: str) -> dict:
+        """One episode's scenario data (before the start pose, see :meth:`start_pose`)."""
+        seed = int(rng.integers(*self.world_seeds)) if self.generate is not None else 0
+        data = copy.deepcopy(self.world(base, robot, seed, source))
+        for draw in self.draws:
+            _apply(data, draw.path, draw.sample(rng), source)
+        return data
+
+    def world(self, base: dict, robot: str, seed: int, source: str) -> dict:
+        """``base`` with the generated world of ``seed`` in it (``base`` without ``generate``)."""
+        if self.generate is None:
+            return base
+        world = self._worlds.get(seed)
+        if world is None:
+            world = generate(self.generate, seed, self.size)
+            self._worlds[seed] = world
+            if len(self._worlds) > WORLD_CACHE:
+                self._worlds.popitem(last=False)
+        data = copy.deepcopy(base)
+        learner = next(r for r in data["robots"] if r["name"] == robot)
+        made = world["robots"][0]
+        learner["pose"] = list(made["pose"])
+        learner["goal"] = {**(learner.get("goal") or {}), "position": list(made["goal"]["position"])}
+        data["robots"] = [learner]
+        data["world"] = {**{k: v for k, v in data["world"].items() if k not in ("map", "map_scale")},
+                         "size": list(world["world"]["size"])}
+        data["obstacles"] = copy.deepcopy(world["obstacles"])
+        data.pop("expect", None)
+        data.pop("events", None)
+        return data
+
+
+def start_pose(sim, robot, rng: np.random.Generator) -> tuple[float, float, float]:
+    """A free pose for ``robot`` in ``sim``'s world: clear of everything but the robot itself by
+    START_CLEARANCE, START_GOAL_GAP from its goal, heading uniform."""
+    import pymunk
+
+    world, body = sim.world, robot.body
+    clearance = robot.radius + START_CLEARANCE  # [m]
+    goal = robot.goal
+    everything = pymunk.ShapeFilter()
+    for _ in range(START_TRIES):
+        x = float(rng.uniform(clearance, world.width - clearance))
+        y = float(rng.uniform(clearance, world.height - clearance))
+        theta = float(rng.uniform(-math.pi, math.pi))
+        if goal is not None and math.hypot(x - goal[0], y - goal[1]) < START_GOAL_GAP:
+            continue
+        hits = world.space.point_query((x, y), clearance, everything)
+        if all(hit.shape is not None and hit.shape.body is body for hit in hits):
+            return x, y, theta
+    raise RuntimeError(f"no free start pose found in {START_TRIES} tries: the arena is too "
+                       "crowded for randomize.start")
+
+
+def _apply(data: dict, path: str, value: Any, source: str) -> None:
+    try:
+        apply_override(data, path, value)
+    except KeyError as exc:
+        where, problem = exc.args
+        raise ScenarioError(source, f"randomize.set.{where}", problem) from None
+
+
+def _draw(path: Any, spec: Any, source: str) -> Draw:
+    where = f"randomize.set.{path}"
+    try:
+        parse_key_path(str(path))
+    except ValueError as exc:
+        raise ScenarioError(source, where, str(exc)) from None
+    if isinstance(spec, Mapping):
+        choices = spec.get("choices")
+        if set(spec) != {"choices"} or not isinstance(choices, (list, tuple)) or not (
+                0 < len(choices) <= MAX_CHOICES):
+            raise ScenarioError(source, where, f"{{choices: [...]}} takes 1 to {MAX_CHOICES} "
+                                               f"values (got {spec!r:.60})")
+        return Draw(str(path), choices=tuple(choices))
+    numbers = isinstance(spec, (list, tuple)) and len(spec) == 2 and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in spec)
+    if not numbers or spec[0] > spec[1]:
+        raise ScenarioError(source, where, f"must be [low, high] (low <= high) or "
+                                           f"{{choices: [...]}} (got {spec!r:.60})")
+    integer = all(isinstance(v, int) for v in spec)
+    return Draw(str(path), float(spec[0]), float(spec[1]), integer=integer)
