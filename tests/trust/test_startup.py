@@ -17,9 +17,12 @@ REPO = Path(__file__).resolve().parents[2]
 @pytest.mark.parametrize("delay", [0.15, 0.2, 0.3, 0.45, 0.7])
 def test_ctrl_c_during_start_up_is_one_line(delay):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(REPO)}
+    # The default Ctrl-C disposition, as in a terminal: a test runner's worker (pytest-xdist)
+    # may ignore SIGINT, and a child inherits an ignored signal.
     proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless"],
                             cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=lambda: signal.signal(signal.SIGINT,
+                                                                        signal.SIG_DFL))
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
