@@ -5,6 +5,7 @@ import argparse
 import math
 import re
 from pathlib import Path
+from typing import Callable
 
 from ..errors import ScenarioError
 from ..results import writable_problem
@@ -64,15 +65,20 @@ def duration_seconds(text: str) -> float:
     return value
 
 
-def jobs_count(text: str) -> int:
-    """argparse type: 1..MAX_JOBS processes."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
-    if not 1 <= value <= MAX_JOBS:
-        raise argparse.ArgumentTypeError(f"must be in 1..{MAX_JOBS} (got {value})")
-    return value
+def count_up_to(most: int) -> Callable[[str], int]:
+    """argparse type: a whole number in 1..``most``."""
+    def count(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
+        if not 1 <= value <= most:
+            raise argparse.ArgumentTypeError(f"must be in 1..{most} (got {value})")
+        return value
+    return count
+
+
+jobs_count = count_up_to(MAX_JOBS)  # processes
 
 
 def check_output(option: str, path: Path, formats: tuple[str, ...]) -> Path:

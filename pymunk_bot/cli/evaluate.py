@@ -16,8 +16,9 @@ import sys
 from pathlib import Path
 
 from ..errors import ScenarioError
-from .arguments import EXIT_BAD_INPUT, EXIT_OK, check_output, duration_seconds, jobs_count, \
-    seed_number
+from .arguments import (
+    EXIT_BAD_INPUT, EXIT_OK, check_output, count_up_to, duration_seconds, jobs_count, seed_number,
+)
 
 MAX_EPISODES = 100_000
 
@@ -27,7 +28,7 @@ def add_parser(sub) -> None:
                                         "policy (.npz or .onnx) over many episodes")
     p.add_argument("policy", type=Path, help="the policy file (.npz MLP or .onnx)")
     p.add_argument("scenario", help="scenario file or shipped name")
-    p.add_argument("--episodes", type=_episodes, default=100, help="episodes (default 100)")
+    p.add_argument("--episodes", type=count_up_to(MAX_EPISODES), default=100, help="episodes (default 100)")
     p.add_argument("--seed", type=seed_number, default=0, help="episode k is reset with seed+k")
     p.add_argument("--robot", default=None, help="the robot the policy drives (default: first)")
     p.add_argument("--random-goal", action="store_true", help="a random free goal per episode")
@@ -44,16 +45,6 @@ def add_parser(sub) -> None:
     p.add_argument("--out", type=Path, default=None, help="one row per episode (.csv)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=command)
-
-
-def _episodes(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number (got '{text}')") from None
-    if not 1 <= value <= MAX_EPISODES:
-        raise argparse.ArgumentTypeError(f"must be in 1..{MAX_EPISODES} (got {value})")
-    return value
 
 
 def env_kwargs(args: argparse.Namespace) -> dict:

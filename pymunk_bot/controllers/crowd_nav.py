@@ -109,6 +109,12 @@ class CrowdController(Controller):
         rotate = np.array([[c, -s], [s, c]])
         return points[first] @ rotate.T + (x, y), velocities[first] @ rotate.T
 
+    @staticmethod
+    def heading_to(xy: np.ndarray, carrot: np.ndarray) -> np.ndarray:
+        """The unit vector from ``xy`` toward ``carrot`` (the preferred direction)."""
+        to_carrot = carrot - xy
+        return to_carrot / max(float(np.hypot(*to_carrot)), 1e-9)
+
     def velocity(self, xy: np.ndarray, carrot: np.ndarray, points: np.ndarray,
                  point_velocities: np.ndarray, period: float) -> np.ndarray:
         """The world-frame velocity [m/s] to drive at (subclasses)."""

@@ -9,7 +9,6 @@ import numpy as np
 
 from ..actors.orca import neighbour_lines
 from ..config.controllers import OrcaControllerConfig
-from .base import RobotSpec
 from .crowd_nav import CrowdController
 
 MOVING = 0.05  # [m/s] points faster than this are moving obstacles (soft constraints)
@@ -18,16 +17,14 @@ MOVING = 0.05  # [m/s] points faster than this are moving obstacles (soft constr
 class OrcaController(CrowdController):
     """ORCA toward the path, around what the LiDAR sees."""
 
-    def __init__(self, config: OrcaControllerConfig, robot: RobotSpec) -> None:
-        super().__init__(config, robot)
+    config: OrcaControllerConfig
 
     def velocity(self, xy: np.ndarray, carrot: np.ndarray, points: np.ndarray,
                  point_velocities: np.ndarray, period: float) -> np.ndarray:
         from ..actors.orca_lp import solve_all
 
         c = self.config
-        to_carrot = carrot - xy
-        pref = to_carrot / max(float(np.hypot(*to_carrot)), 1e-9) * self.max_speed
+        pref = self.heading_to(xy, carrot) * self.max_speed
         radius = np.array([self.robot.radius + c.margin])
         moving = np.hypot(*point_velocities.T) > MOVING if len(points) else np.zeros(0, bool)
         lines_q, lines_n = [], []

@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..config.controllers import SocialForceControllerConfig
-from .base import RobotSpec
 from .crowd_nav import CrowdController
 
 
@@ -19,14 +18,12 @@ ANISOTROPY = 0.3  # lambda: weight of a point straight behind (1 ahead); Helbing
 class SocialForceController(CrowdController):
     """Social force toward the path, away from what the LiDAR sees."""
 
-    def __init__(self, config: SocialForceControllerConfig, robot: RobotSpec) -> None:
-        super().__init__(config, robot)
+    config: SocialForceControllerConfig
 
     def velocity(self, xy: np.ndarray, carrot: np.ndarray, points: np.ndarray,
                  point_velocities: np.ndarray, period: float) -> np.ndarray:
         c = self.config
-        to_carrot = carrot - xy
-        e = to_carrot / max(float(np.hypot(*to_carrot)), 1e-9)
+        e = self.heading_to(xy, carrot)
         force = (self.max_speed * e - self.last) / c.relaxation_time
         if len(points):
             ahead = points + point_velocities * c.anticipation

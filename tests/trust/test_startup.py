@@ -19,7 +19,9 @@ def test_ctrl_c_during_start_up_is_one_line(delay):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(REPO)}
     # The default Ctrl-C disposition, as in a terminal: a test runner's worker (pytest-xdist)
     # may ignore SIGINT, and a child inherits an ignored signal.
-    proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless"],
+    # A long run, so the signal never comes after it has finished (a warm start takes 0.5 s).
+    proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless",
+                             "--duration", "600"],
                             cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, preexec_fn=lambda: signal.signal(signal.SIGINT,
                                                                         signal.SIG_DFL))
