@@ -11,8 +11,7 @@ dependencies (the scenario schema is built when the first scenario is read).
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
+TYPE_CHECKING = False  # as typing's (mypy knows the name), without importing typing at start-up
 if TYPE_CHECKING:
     from .command import Command
     from .config import ScenarioConfig, load_scenario

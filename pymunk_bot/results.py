@@ -1,9 +1,13 @@
 """Writing result files atomically: readers never see a half-written file."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import tempfile
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 
@@ -18,6 +22,24 @@ def temp_beside(path: str | Path, suffix: str = ".tmp") -> str:
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     return tmp
+
+
+@contextlib.contextmanager
+def termination_deferred() -> Iterator[None]:
+    """A SIGTERM that arrives inside the block is delivered when it ends: for steps that must not
+    be cut in two (a part file created but not yet known to its cleanup; a child process forked
+    but not yet owned). Outside the main thread, signals cannot be handled: the block just runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if caught:
+            signal.raise_signal(signal.SIGTERM)  # now to the handler that was there before
 
 
 def writable_problem(path: str | Path) -> str | None:

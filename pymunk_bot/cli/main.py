@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+import datetime  # noqa: F401  (now: pydantic-core imports it at start-up, and a Ctrl-C landing
+# inside that import makes its Rust code panic with a backtrace)
 import math
 import os
 import signal
@@ -42,6 +44,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if settings:
         config = scenario_with_settings(config, args.scenario, settings)
     sim = Simulation(config, seed=args.seed, source=args.scenario)
+    sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops the run
     duration = args.duration if args.duration is not None else config.world.duration
     from .outputs import prepare_outputs
 
@@ -275,36 +278,62 @@ def _terminate(signum, frame) -> None:
     raise SystemExit(128 + signum)
 
 
-def _redelivering_interrupts(previous):
-    """An unraisable-exception hook: a Ctrl-C that lands in a C callback (numba's compiler calls
-    back into Python) would be "ignored" there with a traceback; it is delivered to the main
-    thread again instead. Everything else goes to ``previous``."""
-    def hook(info) -> None:
-        if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
-            import _thread
+class _Interrupts:
+    """Ctrl-C, raised as KeyboardInterrupt as by default, and remembered.
 
-            _thread.interrupt_main()
-            return
-        previous(info)
+    Raised inside a callback from C (numba's compiler, a pymunk collision handler) the exception
+    is "ignored" there; inside a compiled extension's initialisation (pydantic-core's) it can come
+    out as another exception. Remembering it lets ``main`` raise it again at the next safe point
+    (after every tick, and when the command returns) and report the second case as what it was.
+    """
 
-    return hook
+    def __init__(self) -> None:
+        self.seen = False
+
+    def __call__(self, signum, frame) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def raise_if_seen(self, sim: object = None) -> None:
+        """Raise the interrupt that a C callback swallowed (a ``Simulation`` observer too)."""
+        if self.seen:
+            raise KeyboardInterrupt
+
+    def unraisable_hook(self, previous):
+        """A ``sys.unraisablehook``: an interrupt swallowed by a C callback is remembered, not
+        printed with a traceback; everything else goes to ``previous``."""
+        def hook(info) -> None:
+            if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+                self.seen = True
+                return
+            previous(info)
+
+        return hook
+
+
+_interrupts = _Interrupts()
 
 
 def main(argv: list[str] | None = None) -> int:
     """The `pymunk-bot` entry point; returns the exit status (see docs/cli.md)."""
     previous = None
+    _interrupts.seen = False
     try:
         previous = signal.signal(signal.SIGTERM, _terminate)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not if ignored
+            signal.signal(signal.SIGINT, _interrupts)
     except ValueError:  # not the main thread: leave signals alone
         pass
     unraisable = sys.unraisablehook
-    sys.unraisablehook = _redelivering_interrupts(unraisable)
+    sys.unraisablehook = _interrupts.unraisable_hook(unraisable)
     try:  # the parser too: building it imports most of pymunk-bot (Ctrl-C may come then)
         args = build_parser().parse_args(argv)
         with warnings.catch_warnings():
             warnings.simplefilter("always", ScenarioWarning)
             warnings.showwarning = _show_warning
-            return args.func(args)
+            status = args.func(args)
+        _interrupts.raise_if_seen()
+        return status
     except ScenarioError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -320,7 +349,12 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python's flush at exit must not fail again
         return 128 + signal.SIGPIPE
-    except Exception as exc:  # a bug in pymunk-bot itself: show everything
+    except BaseException as exc:  # what an interrupt became, or a bug in pymunk-bot itself
+        if _interrupts.seen and not isinstance(exc, SystemExit):
+            print("interrupted", file=sys.stderr)
+            return 130
+        if not isinstance(exc, Exception):
+            raise
         traceback.print_exc(file=sys.stderr)
         print(f"internal error: {type(exc).__name__}: {exc} (this is a bug in pymunk-bot; "
               "please report it with the traceback above)", file=sys.stderr)
@@ -329,6 +363,8 @@ def main(argv: list[str] | None = None) -> int:
         sys.unraisablehook = unraisable
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        if signal.getsignal(signal.SIGINT) is _interrupts:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Offscreen video recording (.mp4 through imageio-ffmpeg, .gif through imageio's Pillow plugin).
+"""Offscreen video recording (.mp4 through imageio-ffmpeg's ffmpeg, .gif through Pillow).
 
 Frame k shows the state after round(k / fps / dt) physics steps, so a recording samples exactly
 the trajectory a headless run computes; when it ends, a live simulation has been advanced by
@@ -6,14 +6,17 @@ exactly as many steps as ``Simulation.run(duration)`` would take.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import subprocess
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..results import temp_beside
+from ..results import temp_beside, termination_deferred
 from ._pygame import require_pygame
 
 pygame = require_pygame()
@@ -72,21 +75,25 @@ def record(source, path: str | Path, duration: float | None = None, fps: float |
     surface = pygame.Surface(size)
     dt = frames_source.dt
     n_frames = int(math.floor(duration * fps + 1e-9)) + 1  # frame 0 shows the start
-    tmp = _temp_name(path)
+    tmp: str | None = None
+    writer: _GifWriter | _Mp4Writer | None = None
     try:
-        writer = _open_writer(tmp, ext, fps)
-        try:
-            for k in _progress(range(n_frames), progress, path.name):
-                _advance_to(frames_source, round(k / fps / dt))
-                viewer.draw(surface)
-                writer.append(_pixels(surface))
-        finally:
-            writer.close()
+        with termination_deferred():  # both or neither: a part file is never left unowned
+            tmp = _temp_name(path)
+            writer = _open_writer(tmp, ext, fps, size)
+        for k in _progress(range(n_frames), progress, path.name):
+            _advance_to(frames_source, round(k / fps / dt))
+            viewer.draw(surface)
+            writer.append(_pixels(surface))
+        writer.close()
         # End where a headless run of the same duration ends.
         _advance_to(frames_source, round(duration / dt))
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        if writer is not None:
+            writer.abort()
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
         raise
     return n_frames
 
@@ -151,25 +158,71 @@ class _GifWriter:
                        duration=self._delay, loop=0, optimize=False, disposal=1)
         self._frames = []
 
+    def abort(self) -> None:
+        """Drop the frames (idempotent)."""
+        self._frames = []
+
 
 class _Mp4Writer:
-    """H.264 in MP4 through imageio-ffmpeg, streamed: memory does not grow with length."""
+    """H.264 in MP4: frames piped to the ffmpeg that imageio-ffmpeg ships, streamed (memory does
+    not grow with length).
 
-    def __init__(self, path: str, fps: float) -> None:
-        import imageio.v2 as iio
+    The process is ours, so an interrupted recording stops it *before* its part file is removed:
+    ffmpeg creates its output only when input (or the end of input) arrives, so an ffmpeg left
+    running would create the removed file again.
+    """
 
-        # crf 20 keeps thin lines sharp at a few hundred kB per simulated minute.
-        self._writer = iio.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
-                                      quality=None, pixelformat="yuv420p", macro_block_size=2,
-                                      ffmpeg_log_level="error",
-                                      output_params=["-crf", "20", "-preset", "fast"])
+    def __init__(self, path: str, fps: float, size: tuple[int, int]) -> None:
+        import imageio_ffmpeg
+
+        width, height = size
+        command = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error",
+                   "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}",
+                   "-r", f"{fps:.12g}", "-i", "-", "-an", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                   # crf 20 keeps thin lines sharp at a few hundred kB per simulated minute.
+                   "-crf", "20", "-preset", "fast", path]
+        self._errors = tempfile.TemporaryFile()  # a file, not a pipe: ffmpeg can never block on it
+        # Its own session: a Ctrl-C in the terminal reaches only us, and we stop ffmpeg.
+        self._process = subprocess.Popen(command, stdin=subprocess.PIPE,
+                                         stdout=subprocess.DEVNULL, stderr=self._errors,
+                                         start_new_session=True)
 
     def append(self, frame: np.ndarray) -> None:
-        self._writer.append_data(frame)
+        stdin = self._process.stdin
+        assert stdin is not None
+        try:
+            stdin.write(frame.tobytes())
+        except BrokenPipeError:  # ffmpeg stopped reading: it has said why
+            self._process.wait()
+            self._fail()
 
     def close(self) -> None:
-        self._writer.close()
+        stdin = self._process.stdin
+        assert stdin is not None
+        try:
+            stdin.close()
+        except BrokenPipeError:
+            pass
+        if self._process.wait() != 0:
+            self._fail()
+        self._errors.close()
+
+    def abort(self) -> None:
+        """Stop ffmpeg and wait until it is gone (idempotent)."""
+        self._process.kill()
+        self._process.wait()
+        if self._process.stdin is not None:
+            with contextlib.suppress(OSError):
+                self._process.stdin.close()
+        self._errors.close()
+
+    def _fail(self) -> None:
+        self._errors.seek(0)
+        message = self._errors.read().decode(errors="replace").strip().splitlines()
+        raise RuntimeError(f"ffmpeg failed (exit {self._process.returncode}): "
+                           f"{message[-1] if message else 'no message'}")
 
 
-def _open_writer(path: str, ext: str, fps: float):
-    return _GifWriter(path, fps) if ext == ".gif" else _Mp4Writer(path, fps)
+def _open_writer(path: str, ext: str, fps: float,
+                 size: tuple[int, int]) -> _GifWriter | _Mp4Writer:
+    return _GifWriter(path, fps) if ext == ".gif" else _Mp4Writer(path, fps, size)
