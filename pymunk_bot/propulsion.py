@@ -7,7 +7,8 @@ heading the robot will have half a substep after this one, scaled by sinc(omega 
 keeps a robot in free space exactly on its commanded arc.
 
 With many robots the bodies are read and written in one call each through ``pymunk.batch``;
-with few, property access per robot is cheaper. Both paths use the same formulas.
+with few, property access per robot is cheaper. Both paths call the same compiled formulas
+(:mod:`pymunk_bot.steering`), so a robot gets the same floats on either.
 
 A drive group whose motors have settled on their commands is *held* for the whole step
 instead (with many robots, once every group has settled: one batch read and write for all): a
@@ -29,7 +30,7 @@ import pymunk.batch as batch
 
 from .drives.base import SMALL_GROUP
 from .stacking import DriveUnits
-from .arcs import sinc_half, sinc_half_scalar
+from .steering import aim, aim_rows, anchor, hold_rows
 
 # A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
 # [m] (an almost straight path) it is aimed substep by substep instead.
@@ -44,16 +45,11 @@ _SET_ANGLE = vars(pymunk.Body)["angle"].fset
 _READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
+# From this many robots aimed in one substep, the per-robot path reads, aims and writes them as
+# rows (one pymunk.batch read and write for all) rather than by property access one by one.
+ROWS_AIM = 6
 
-def _origin_correction(cog: np.ndarray, angle: float, omega: float, h: float) -> tuple[float, float]:
-    """Velocity to add so a body origin ``cog`` away from the centre of gravity moves along the
-    exact chord: pymunk rotates the offset by the linear omega h x r, the body by R(omega h)."""
-    c, s = math.cos(angle), math.sin(angle)
-    rx, ry = -(c * cog[0] - s * cog[1]), -(s * cog[0] + c * cog[1])  # centre -> origin, world
-    turn = omega * h
-    ct, st = math.cos(turn), math.sin(turn)
-    exact_x, exact_y = (ct - 1.0) * rx - st * ry, st * rx + (ct - 1.0) * ry
-    return (-turn * ry - exact_x) / h, (turn * rx - exact_y) / h
+_UNKNOWN = (math.nan,) * 3  # a control body's last written twist, when it was written as rows
 
 
 def _floats(twists: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
@@ -91,8 +87,9 @@ class Propulsion:
         # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
         # moves the centre straight within a substep, so the origin's path needs a correction.
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
-        self._offset = [k for k in range(self.n) if self.cog[k].any()]
-        self._offset_set = set(self._offset)
+        self._cog = [(float(x), float(y)) for x, y in self.cog.tolist()]  # the same, as floats
+        self._everyone = np.arange(self.n, dtype=np.intp)
+        self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
         self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
         self._rows = -1  # bodies the last index was built for
         self._held_twists: np.ndarray | None = None  # (n, 3) twists held (batched), or None
@@ -138,8 +135,7 @@ class Propulsion:
                     self._aim(k, twist, h, after)
             for drives, units in loose:
                 rows, members = drives.rows(units)
-                for k, twist in zip(members, zip(*_floats(drives.advance(h, rows)))):
-                    self._aim(k, twist, h, after)
+                self._aim_members(members, drives.advance(h, rows), h, after)
             space.step(h)
             left = substeps - 1 - sub
             if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
@@ -165,6 +161,22 @@ class Propulsion:
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
         return steady
+
+    def _aim_members(self, members: list[int], twists: tuple[Any, Any, Any], h: float,
+                     h_next: float) -> None:
+        """:meth:`_aim` for these robots (twists in their order): one by one when few, else as
+        rows (the same compiled formula: the same floats)."""
+        if len(members) < ROWS_AIM:
+            for k, twist in zip(members, zip(*_floats(twists))):
+                self._aim(k, twist, h, h_next)
+            return
+        for k in members:  # what _aim keeps per robot
+            if self._anchored[k]:
+                self.pivots[k].anchor_a = (0.0, 0.0)
+                self._anchored[k] = False
+            self._held[k] = None
+            self._given[k] = _UNKNOWN
+        self._aim_rows(np.asarray(members, dtype=np.intp), twists, h, h_next)
 
     def _step_batched(self, h: float, substeps: int, h_last: float) -> None:
         """``step`` for many robots: held as a whole fleet when every group has settled,
@@ -199,44 +211,20 @@ class Propulsion:
         pivot's anchor, a straight one aimed once), in one read and one write; False (nothing
         written) if some robot's anchor would lie beyond _MAX_ANCHOR."""
         ux, uy, omega = twists
-        turning = omega != 0.0
-        half = 0.5 * omega * h
-        chord = sinc_half(omega * h)
-        c, s = np.cos(half), np.sin(half)
-        wx, wy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
-        for k in self._offset:
-            dvx, dvy = _origin_correction(self.cog[k], 0.0, float(omega[k]), h)
-            wx[k] += dvx
-            wy[k] += dvy
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ax, ay = np.where(turning, wy / omega, 0.0), np.where(turning, -wx / omega, 0.0)
-        if not ((np.abs(ax) <= _MAX_ANCHOR).all() and (np.abs(ay) <= _MAX_ANCHOR).all()):
+        state = self._read_state()
+        out, anchors = self._held_out, self._anchors
+        out[:] = state
+        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega, h,
+                         self.cog, _MAX_ANCHOR, anchors, out):
             return False
+        turning = omega != 0.0
         held = np.stack((ux, uy, omega), axis=1)
         changed = np.flatnonzero((held != self._held_twists).any(axis=1))
         for k in changed.tolist():  # pivot anchors are no batch field: written on change only
             if turning[k] or self._anchored[k]:
-                self.pivots[k].anchor_a = (float(ax[k]), float(ay[k]))
+                self.pivots[k].anchor_a = (float(anchors[k, 0]), float(anchors[k, 1]))
                 self._anchored[k] = bool(turning[k])
         self._held_twists = held
-        state = self._read_state()
-        robot, control = self._robot_rows, self._control_rows
-        angle, spin = state[robot, 0], state[robot, 3]
-        out = self._held_out
-        out[:] = state
-        # Turning: the control body spins at omega, headed as the robot will be at the solve.
-        out[control, 0] = np.where(turning, angle + (spin - omega) * h, state[control, 0])
-        # Straight: one aim along the heading, as _aim gives it (chord 1, no turn).
-        heading = angle + spin * h
-        cos, sin = np.cos(heading), np.sin(heading)
-        out[control, 1] = np.where(turning, 0.0, ux * cos - uy * sin)
-        out[control, 2] = np.where(turning, 0.0, ux * sin + uy * cos)
-        out[control, 3] = omega
-        for k in self._offset:
-            if not turning[k]:
-                dvx, dvy = _origin_correction(self.cog[k], float(heading[k]), 0.0, h)
-                out[control[k], 1] += dvx
-                out[control[k], 2] += dvy
         batch.set_space_bodies(self.space, _READ, self._write_held)
         return True
 
@@ -279,23 +267,18 @@ class Propulsion:
     def _aim_all(self, twists: tuple[np.ndarray, np.ndarray, np.ndarray], h: float,
                  h_next: float) -> None:
         """The batched :meth:`_aim`: every control body's velocity for the next substep."""
-        ux, uy, omega = twists
+        self._aim_rows(self._everyone, twists, h, h_next)
+
+    def _aim_rows(self, members: np.ndarray, twists: tuple[Any, Any, Any], h: float,
+                  h_next: float) -> None:
+        """:meth:`_aim` of robots ``members`` (twists in their order), read and written as rows."""
+        ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
         state = self._read_state()
-        robot, control = self._robot_rows, self._control_rows
-        heading = state[robot, 0] + state[robot, 3] * h + (0.5 * h_next) * omega
-        chord = sinc_half(omega * h_next)
-        c, s = np.cos(heading), np.sin(heading)
         out = self._out
-        out[:, :2] = state[:, 1:3]
+        out[:, :2] = state[:, 1:3]  # every other body keeps its velocity
         out[:, 2] = state[:, 3]
-        out[control, 0] = (ux * c - uy * s) * chord
-        out[control, 1] = (ux * s + uy * c) * chord
-        out[control, 2] = omega
-        for k in self._offset:
-            dvx, dvy = _origin_correction(self.cog[k], state[robot[k], 0] + state[robot[k], 3] * h,
-                                          omega[k], h_next)
-            out[control[k], 0] += dvx
-            out[control[k], 1] += dvy
+        aim_rows(state, self._robot_rows, self._control_rows, members, ux, uy, omega, h, h_next,
+                 self.cog, out)
         batch.set_space_bodies(self.space, _WRITE, self._write)
 
     def positions(self) -> Any:
@@ -327,14 +310,8 @@ class Propulsion:
             self.pivots[k].anchor_a = (0.0, 0.0)
             self._anchored[k] = False
         self._held[k] = None
-        heading = body.angle + body.angular_velocity * h + 0.5 * omega * h_next
-        chord = sinc_half_scalar(omega * h_next)
-        c, s = math.cos(heading), math.sin(heading)
-        vx, vy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
-        if k in self._offset_set:  # the pose point is not the centre of gravity
-            dvx, dvy = _origin_correction(self.cog[k], body.angle + body.angular_velocity * h,
-                                          omega, h_next)
-            vx, vy = vx + dvx, vy + dvy
+        cx, cy = self._cog[k]
+        vx, vy = aim(body.angle, body.angular_velocity, ux, uy, omega, h, h_next, cx, cy)
         last = self._given[k]
         if vx != last[0] or vy != last[1]:
             _SET_VELOCITY(control, (vx, vy))
@@ -351,15 +328,8 @@ class Propulsion:
             self._aim(k, twist, h, h)  # a constant velocity: one aim lasts the step
             return True
         if self._held[k] != twist:
-            # The chord velocity in the robot frame at the start of a substep's solve ...
-            chord = sinc_half_scalar(omega * h)
-            c, s = math.cos(0.5 * omega * h), math.sin(0.5 * omega * h)
-            wx, wy = (ux * c - uy * s) * chord, (ux * s + uy * c) * chord
-            if k in self._offset_set:
-                dvx, dvy = _origin_correction(self.cog[k], 0.0, omega, h)
-                wx, wy = wx + dvx, wy + dvy
-            # ... is omega x anchor, so the anchor is w turned back a quarter turn, / omega.
-            ax, ay = wy / omega, -wx / omega
+            cx, cy = self._cog[k]
+            ax, ay = anchor(ux, uy, omega, h, cx, cy)
             if not (abs(ax) <= _MAX_ANCHOR and abs(ay) <= _MAX_ANCHOR):
                 self._aim(k, twist, h, h)
                 return False

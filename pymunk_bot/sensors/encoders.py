@@ -11,6 +11,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..arcs import integrate_arcs
+
 
 class EncoderBank:
     """Encoders of every robot of a group: ``scale`` (n, k), ``noise_var`` (n,) [m^2 per m],
@@ -79,11 +81,8 @@ def integrate_twist(pose: np.ndarray, dx: np.ndarray, dy: np.ndarray,
                     dtheta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move poses (n, 3) in place by body-frame increments along exact arcs; returns
     (cos, sin) of the mid-step heading and the chord factor, for covariance propagation."""
-    from ..arcs import sinc_half
-    chord = sinc_half(dtheta)
-    heading = pose[:, 2] + 0.5 * dtheta
-    c, s = np.cos(heading), np.sin(heading)
-    pose[:, 0] += chord * (dx * c - dy * s)
-    pose[:, 1] += chord * (dx * s + dy * c)
-    pose[:, 2] += dtheta
+    n = pose.shape[0]
+    c, s, chord = np.empty(n), np.empty(n), np.empty(n)
+    integrate_arcs(pose, np.asarray(dx, dtype=np.float64), np.asarray(dy, dtype=np.float64),
+                   np.asarray(dtheta, dtype=np.float64), c, s, chord)
     return c, s, chord

@@ -17,13 +17,12 @@ cannot know its scale and track errors, so their systematic drift is not in it.
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Sequence
 
+import numba
 import numpy as np
 
-from ..arcs import sinc_half, sinc_half_scalar
-from ..drives.base import SMALL_GROUP
+from ..arcs import arc_step
 from ..stacking import join_odometry, split_odometry
 from .encoders import EncoderBank
 
@@ -41,7 +40,7 @@ class DiffOdometryGroup:
         self.track_widths = list(track_widths)  # [m] the true ones
         n = len(self.configs)
         self._rngs = list(rngs)
-        self.pose: Any = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
+        self.pose = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
         self.believed_track = np.array(
             [t * (1.0 + c.track_width_error) for t, c in zip(track_widths, configs)])  # [m]
         self.scale = np.array([(1.0 + c.left_scale_error, 1.0 + c.right_scale_error)
@@ -50,16 +49,12 @@ class DiffOdometryGroup:
         self.encoders = EncoderBank(self.scale, self.noise_var,
                                     np.array([c.encoder_resolution for c in configs]), self._rngs)
         self._noisy = self.encoders.noisy
-        self.wheel_travel: Any = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
+        self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
-        # A few noise-free robots are integrated one by one on lists of floats (numpy's per-call
-        # cost dominates there); otherwise as arrays. Both index as pose[i] -> (x, y, theta).
-        self.scalar = n < SMALL_GROUP and not self._noisy and not self.encoders.quantised
-        if self.scalar:
-            self.pose = self.pose.tolist()
-            self.wheel_travel = self.wheel_travel.tolist()
-            self._scale_list = self.scale.tolist()
-            self._track_list = self.believed_track.tolist()
+        # Encoders that only scale are applied in the compiled step; others measure first.
+        self._plain = not self._noisy and not self.encoders.quantised
+        self._unit_scale = np.ones((n, 2))
+        self._mid = np.empty((3, n))  # cos, sin of the mid-step heading and chord factor
 
     @classmethod
     def stacked(cls, parts: list["DiffOdometryGroup"]) -> "DiffOdometryGroup":
@@ -70,8 +65,6 @@ class DiffOdometryGroup:
                     [t for part in parts for t in part.track_widths],
                     [rng for part in parts for rng in part._rngs])
         join_odometry(whole, parts)
-        for part in parts + [whole]:
-            part.scalar = False
         return whole
 
     def split(self, parts: list["DiffOdometryGroup"]) -> None:
@@ -80,38 +73,17 @@ class DiffOdometryGroup:
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
-        if self.scalar:
-            self._update_each(travel)
-            return
         travel = np.asarray(travel, dtype=float)
-        wheels = self.encoders.measure(travel)
-        self.wheel_travel += wheels
-        left, right = wheels[:, 0], wheels[:, 1]
-        ds = 0.5 * (left + right)
-        dtheta = (right - left) / self.believed_track
-        chord = ds * sinc_half(dtheta)
-        heading = self.pose[:, 2] + 0.5 * dtheta
-        cos_h, sin_h = np.cos(heading), np.sin(heading)
+        if self._plain:
+            wheels, scale = travel, self.scale
+        else:
+            wheels, scale = self.encoders.measure(travel), self._unit_scale
+        cos_h, sin_h, factor = self._mid
+        _dead_reckon(wheels, scale, self.believed_track, self.wheel_travel, self.pose,
+                     cos_h, sin_h, factor)
         if self._noisy:
-            self._propagate(chord, cos_h, sin_h, ds, np.abs(wheels))
-        self.pose[:, 0] += chord * cos_h
-        self.pose[:, 1] += chord * sin_h
-        self.pose[:, 2] += dtheta
-
-    def _update_each(self, travel: Sequence[Sequence[float]]) -> None:
-        """The noise-free update robot by robot, on lists (see ``scalar``)."""
-        for (lt, rt), (scale_l, scale_r), track, wheels, pose in zip(
-                travel, self._scale_list, self._track_list, self.wheel_travel, self.pose):
-            left, right = lt * scale_l, rt * scale_r
-            wheels[0] += left
-            wheels[1] += right
-            ds = 0.5 * (left + right)
-            dtheta = (right - left) / track
-            chord = ds * sinc_half_scalar(dtheta)
-            heading = pose[2] + 0.5 * dtheta
-            pose[0] += chord * math.cos(heading)
-            pose[1] += chord * math.sin(heading)
-            pose[2] += dtheta
+            ds = 0.5 * (wheels[:, 0] + wheels[:, 1])
+            self._propagate(ds * factor, cos_h, sin_h, ds, np.abs(wheels))
 
     def _propagate(self, chord: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray,
                    ds: np.ndarray, abs_wheels: np.ndarray) -> None:
@@ -168,7 +140,7 @@ class Odometry:
         """Integrate one tick's true wheel travel [m] (standalone use only)."""
         travel = np.zeros((len(self._group.configs), 2))
         travel[self._i] = (left_travel, right_travel)
-        self._group.update(travel.tolist() if self._group.scalar else travel)
+        self._group.update(travel)
 
 
 def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
@@ -176,3 +148,18 @@ def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
     ``plugins.odometry`` pairs with the drive of the same name."""
     return DiffOdometryGroup([c.odometry for c in group.configs], [c.pose for c in group.configs],
                              group.track.tolist(), rngs)
+
+
+@numba.njit(cache=True)
+def _dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
+                 wheel_travel: np.ndarray, pose: np.ndarray, cos_mid: np.ndarray,
+                 sin_mid: np.ndarray, chord: np.ndarray) -> None:
+    """Each robot's encoder readings (n, 2) [m] (times ``scale``: encoders that only scale, or
+    ones) added to its wheel travel, and its pose moved along the arc they make with the track
+    width it believes [m]; fills the mid-step cos, sin and chord factors."""
+    for i in range(pose.shape[0]):
+        left, right = wheels[i, 0] * scale[i, 0], wheels[i, 1] * scale[i, 1]
+        wheel_travel[i, 0] += left
+        wheel_travel[i, 1] += right
+        cos_mid[i], sin_mid[i], chord[i] = arc_step(pose, i, 0.5 * (left + right), 0.0,
+                                                    (right - left) / track[i])

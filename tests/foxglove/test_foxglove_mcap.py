@@ -173,10 +173,10 @@ def test_logging_a_minute_costs_less_than_the_run(tmp_path):
 
     sim = Simulation.from_file(None)
     logger = McapLogger(tmp_path / "run.mcap").attach(sim)
-    started = time.perf_counter()
+    started = time.process_time()  # CPU time: a loaded machine does not fail it
     sim.run(10.0)
     logger.save()
-    elapsed = time.perf_counter() - started
+    elapsed = time.process_time() - started
     assert elapsed < 10.0 / 5  # well under the simulated time (measured: ~0.2 s)
     assert math.isclose(read_mcap(tmp_path / "run.mcap")[1]["/tf"][-1][0], 10e9)
 

@@ -19,9 +19,9 @@ ROBOT = {"name": "r", "pose": [1.0, 1.0, 0.0]}
 
 
 def one_line_exit_2(capsys, path: Path, *fragments: str) -> str:
-    started = time.monotonic()
+    started = time.process_time()  # CPU time: a loaded machine does not fail it
     assert main(["validate", str(path)]) == 2
-    assert time.monotonic() - started < 5
+    assert time.process_time() - started < 5
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and err.startswith("error: ") and "Traceback" not in err, err
     for fragment in fragments:
@@ -169,8 +169,8 @@ def test_a_long_traced_outline_builds_in_seconds_not_minutes():
     segments = np.column_stack([x[:-1], y[:-1], x[1:], y[1:]])
     geometry = MapGeometry((), segments, np.zeros(len(segments)), (0.0, 0.0, 60.0, 40.0))
     space = pymunk.Space()
-    started = time.perf_counter()
+    started = time.process_time()  # CPU time: a loaded machine does not fail it
     shapes = add_to_space(space, geometry)
-    assert time.perf_counter() - started < 2.0
+    assert time.process_time() - started < 2.0
     assert len(space.shapes) == len(shapes) == n - 1
     assert [tuple(s.a) for s in shapes[:3]] == [tuple(p) for p in segments[:3, :2]]  # given order
