@@ -16,8 +16,8 @@ import numpy as np
 from ..command import Command
 from ..stacking import join_rows, split_rows
 
-# Below this many robots, drives and the tick work robot by robot in plain Python: numpy's
-# per-call overhead costs more than it saves for a handful of robots.
+# Below this many robots, the tick reads and writes the bodies robot by robot (pymunk's
+# properties); from it on, all at once through pymunk.batch (see propulsion.py).
 SMALL_GROUP = 24
 
 
@@ -64,7 +64,7 @@ class DriveGroup:
     # ------------------------------------------------------------------ physics
     def advance(self, h: float) -> tuple[Any, Any, Any]:
         """Advance the motors by one substep of ``h`` [s]: body twists (ux, uy, omega), each an
-        array of shape (n,) (or a list of floats for fewer than SMALL_GROUP robots).
+        array of shape (n,) (or lists of floats: the tick takes either).
 
         Also accumulates what the encoders see during the substep (see :meth:`take_travel`).
         """
@@ -83,8 +83,8 @@ class DriveGroup:
         raise NotImplementedError
 
     def take_travel(self) -> Any:
-        """Encoder input accumulated since the last call (rows per robot, drive-specific columns:
-        an array, or lists for a small group), then reset."""
+        """Encoder input accumulated since the last call (rows per robot, drive-specific columns),
+        then reset."""
         raise NotImplementedError
 
     # ------------------------------------------------------------------ set-up
