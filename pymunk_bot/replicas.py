@@ -19,7 +19,6 @@ from typing import Any, Sequence
 import numpy as np
 import pymunk
 
-from .actors.motion import ScriptedMotion
 from .config import ScenarioConfig
 from .physics import MAX_REPLICAS
 from .propulsion import Propulsion
@@ -43,7 +42,7 @@ class Replicas:
         self.sims = [Simulation(config, seed, source, ground=self.ground, replica=r)
                      for r, seed in enumerate(seeds)]
         for actor in self.sims[0].world.actors:
-            if not isinstance(actor, ScriptedMotion):  # pedestrians look around the whole space
+            if not getattr(actor, "keeps_to_its_copy", False):  # it may meet the other copies
                 raise NotShareable(f"copies of scenario '{config.name}' cannot share a space: "
                                    f"its {type(actor).__name__} would meet the other copies")
         self.dt = self.sims[0].dt

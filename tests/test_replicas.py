@@ -7,7 +7,7 @@ import pytest
 
 from pymunk_bot.config import load_scenario, parse_scenario
 from pymunk_bot.physics import MAX_REPLICAS
-from pymunk_bot.replicas import NotShareable, Replicas
+from pymunk_bot.replicas import Replicas
 from pymunk_bot.sim import Simulation
 
 
@@ -106,8 +106,6 @@ def test_copies_neither_meet_nor_see_each_other():
 
 
 def test_what_cannot_share_a_space_is_refused():
-    with pytest.raises(NotShareable, match="Crowd"):
-        Replicas(load_scenario("pedestrian_corridor"), [0, 1])
     with pytest.raises(ValueError, match=f"1 to {MAX_REPLICAS}"):
         Replicas(_lidar_default(), list(range(MAX_REPLICAS + 1)))
     with pytest.raises(RuntimeError, match="Replicas.step"):

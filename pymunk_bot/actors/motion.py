@@ -47,6 +47,8 @@ class PathScript:
 class ScriptedMotion:
     """Moves one obstacle along its ``motion`` script (an actor: ``before_step`` each tick)."""
 
+    keeps_to_its_copy = True  # it moves its own obstacle only (a copy on a shared ground)
+
     def __init__(self, obstacle: Obstacle) -> None:
         motion: Any = getattr(obstacle.config, "motion")
         self.obstacle = obstacle

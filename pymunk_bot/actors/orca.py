@@ -7,18 +7,17 @@ truncated cone, the velocity obstacle. u is the smallest change of the relative 
 leaves it and n the cone's outward normal there; A takes its share of u (half against another
 walker, who does the other half; all of it against a robot, which may not) and must keep to
 the half-plane {v : (v - (v_A + share u)) . n >= 0}. A wall at distance d from A's centre
-(its nearest point, ``space.point_query``) gives {v : v . g >= -max(d - r_A, 0) / tau_obst},
-g pointing away from it: a hard constraint. A then takes the velocity closest to its wish
-inside all of them (``orca_lp.solve_all``, compiled), turned KEEP_RIGHT_ANGLE to its right
-(see there). The cones are built for all walkers at
-once with numpy.
+(its nearest point, :func:`.surfaces.nearest_hits`) gives
+{v : v . g >= -max(d - r_A, 0) / tau_obst}, g pointing away from it: a hard constraint. A then
+takes the velocity closest to its wish inside all of them (``orca_lp.solve_all``, compiled),
+turned KEEP_RIGHT_ANGLE to its right (see there). The cones are built for all walkers at once
+with numpy.
 """
 from __future__ import annotations
 
 from typing import Any, Sequence
 
 import numpy as np
-import pymunk
 
 MAX_WALL_LINES = 4  # nearest wall points per walker that constrain it
 ROBOT_SHARE = 1.0  # of u a walker takes against a robot
@@ -86,12 +85,13 @@ class Orca:
     def velocities(self, pos: np.ndarray, vel: np.ndarray, radius: np.ndarray,
                    others: tuple[np.ndarray, np.ndarray, np.ndarray], walkers: int,
                    visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray, dt: float,
-                   walls: list[list[tuple[float, float, float]]]) -> np.ndarray:
+                   walls: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
         """New velocities (k, 2) [m/s] of the agents, at ``pos``, ``vel``, ``radius`` (k, ...),
         wishing ``pref`` (k, 2) within ``vmax`` (k,). ``others``: positions, velocities and
         radii of everything avoided (the first ``walkers`` are walkers, the rest robots);
         ``visible`` (k, m): who each agent takes into account (not itself); ``walls``: per
-        agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces."""
+        agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
+        nearest first, (k, MAX_WALL_LINES, 3), and how many (k,)."""
         from .orca_lp import solve_all
 
         c, s = np.cos(KEEP_RIGHT_ANGLE), np.sin(KEEP_RIGHT_ANGLE)
@@ -107,15 +107,11 @@ class Orca:
         share = np.where(order < walkers, WALKER_SHARE, ROBOT_SHARE)
         q_n, n_n = neighbour_lines(pos, vel, radius, opos[order], ovel[order], orad[order],
                                    share, self.horizon, dt)
-        q_w = np.zeros((k, MAX_WALL_LINES, 2))
-        n_w = np.zeros((k, MAX_WALL_LINES, 2))
-        wall_valid = np.zeros((k, MAX_WALL_LINES), dtype=bool)
-        for a, hits in enumerate(walls):
-            for j, (distance, gx, gy) in enumerate(hits[:MAX_WALL_LINES]):
-                room = max(distance - radius[a], 0.0) / self.wall_horizon[a]
-                n_w[a, j] = gx, gy
-                q_w[a, j] = -gx * room, -gy * room
-                wall_valid[a, j] = True
+        hits, count = walls
+        wall_valid = np.arange(MAX_WALL_LINES)[None, :] < count[:, None]
+        n_w = np.where(wall_valid[..., None], hits[..., 1:], 0.0)
+        room = np.maximum(hits[..., 0] - radius[:, None], 0.0) / self.wall_horizon[:, None]
+        q_w = -n_w * np.where(wall_valid, room, 0.0)[..., None]
         q = np.concatenate([q_w, q_n], axis=1)
         n = np.concatenate([n_w, n_n], axis=1)
         ok = np.concatenate([wall_valid, valid], axis=1)
@@ -127,12 +123,3 @@ class Orca:
                          np.ascontiguousarray(vmax, dtype=float),
                          np.ascontiguousarray(pref, dtype=float))
 
-
-def nearest_surfaces(space: pymunk.Space, point: tuple[float, float], reach: float,
-                     query_filter: pymunk.ShapeFilter, skip: set) -> list[tuple[float, float, float]]:
-    """Up to MAX_WALL_LINES nearest surfaces within ``reach`` [m] of ``point``, as (distance
-    [m], unit gradient away from the surface), bodies in ``skip`` left out."""
-    hits = [(h.distance, h.gradient.x, h.gradient.y)
-            for h in space.point_query(point, reach, query_filter) if h.shape.body not in skip]
-    hits.sort()
-    return hits[:MAX_WALL_LINES]

@@ -9,8 +9,9 @@ Per unit mass, walker a feels
   (2b = sqrt((|r| + |r - s|)^2 - |s|^2), r = r_a - r_b, s = v_b * STEP_TIME), b less the
   bodies' size beyond NOMINAL_RADIUS each (so a large robot is avoided from farther); forces
   from behind (outside a 200 deg field of view) count at SIGHT_WEIGHT;
-- from walls, obstacles and robots' footprints a repulsion U0 exp(-d / R) away from the nearest surface (d from the
-  centre, less the walker's size beyond NOMINAL_RADIUS);
+- from each wall, obstacle and robot footprint (each shape) within WALL_REACH ranges a
+  repulsion U0 / R exp(-d / R) away from its nearest surface (d from the centre, less the
+  walker's size beyond NOMINAL_RADIUS);
 - optionally a random fluctuation, from the run's seeded generator;
 - a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
   walker back is turned to its right, so head-on encounters resolve the way people do.
@@ -18,7 +19,8 @@ A walker with ``policy: orca`` takes its velocity from ORCA instead (:mod:`.orca
 same wished velocity. One that does not ``react_to_robot`` leaves robots out of both. Walkers
 of one ``group`` share its slowest pace, and each is pulled back toward the group's centre
 when it strays farther than GROUP_SPACING per companion (Moussaid et al. 2010's cohesion).
-All walkers are updated together as numpy arrays. Each walker is a dynamic disc: contacts push
+The forces are compiled (numba: :mod:`.social_forces`, :mod:`.surfaces`); the fixed world's
+surfaces are read once, when the crowd is made. Each walker is a dynamic disc: contacts push
 it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0.
 """
 from __future__ import annotations
@@ -33,26 +35,34 @@ from .. import physics
 from ..config.motion import MAX_SPEED_FACTOR
 from ..obstacles import Obstacle
 from .body_state import BodyStates
-from .orca import Orca, nearest_surfaces
+from .orca import MAX_WALL_LINES, Orca
+from .social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
+from .surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
 
-STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
-SIGHT_COS = math.cos(math.radians(100.0))  # half the field of view
-SIGHT_WEIGHT = 0.5  # weight of forces from outside the field of view
-# People facing each other head-on both step to their right: without this a walker and a robot
-# on one line balance forever. Part of a repulsion from ahead is turned to the walker's right.
-KEEP_RIGHT = 0.5
-# The 1995 paper measures distances between centres, for people of about this radius [m]; a
-# bigger body (a robot, a large walker) is felt from farther by its excess size.
-NOMINAL_RADIUS = 0.25
 WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
 PEDESTRIAN_FRICTION = 0.3
-SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are left out (< 1 %)
-# Walkers carry their own category bit, so the wall queries can skip them in C.
-WALKER_CATEGORY = 1 << 30
-_NOT_WALKERS = pymunk.ShapeFilter(mask=pymunk.ShapeFilter.ALL_MASKS() ^ WALKER_CATEGORY)
-BOX_TEST_LIMIT = 200_000  # walkers x shapes beyond which the bounding-box test is skipped
+# Walkers carry a category bit of their own, so a query leaves them out by its mask (without
+# WALKER_CATEGORIES): WALKER_CATEGORY, or in copy r on a shared ground (physics.replica_filter)
+# the r-th bit above the copies' bits, which nothing of another copy collides with.
+WALKER_CATEGORY = 1 << physics.MAX_REPLICAS
+WALKER_CATEGORIES = ((1 << physics.MAX_REPLICAS) - 1) << physics.MAX_REPLICAS
 GROUP_SPACING = 0.8  # [m] a companion's share of the group's spread (two walk ~0.8 m apart)
 GROUP_PULL = 1.0  # [1/s] wished speed toward the group's centre per metre strayed beyond it
+
+
+def walker_filter(given: pymunk.ShapeFilter) -> pymunk.ShapeFilter:
+    """A walker's filter, from the one its world gave it (a copy's, or WALKER_CATEGORY's)."""
+    copy = given.categories & ((1 << physics.MAX_REPLICAS) - 1)
+    if not copy or given.categories & WALKER_CATEGORIES:
+        return given
+    own = copy << physics.MAX_REPLICAS
+    return pymunk.ShapeFilter(given.group, own, given.mask & ~(WALKER_CATEGORIES ^ own))
+
+
+def rejects(a: pymunk.ShapeFilter, b: pymunk.ShapeFilter) -> bool:
+    """Whether two shape filters keep their shapes apart (Chipmunk's rule)."""
+    return ((a.group != 0 and a.group == b.group) or not a.categories & b.mask
+            or not b.categories & a.mask)
 
 
 def build_pedestrian(space: pymunk.Space, config: Any) -> Obstacle:
@@ -68,7 +78,12 @@ def build_pedestrian(space: pymunk.Space, config: Any) -> Obstacle:
 
 
 class Crowd:
-    """Every pedestrian of a world (an actor: ``before_step`` each tick)."""
+    """Every pedestrian of a world (an actor: ``before_step`` each tick).
+
+    It feels only what its walkers collide with (by their filters), so copies of a world on a
+    shared ground (:mod:`pymunk_bot.replicas`) each keep to their own."""
+
+    keeps_to_its_copy = True
 
     def __init__(self, walkers: Sequence[Obstacle], robots: Sequence, space: pymunk.Space,
                  rng: np.random.Generator) -> None:
@@ -91,67 +106,92 @@ class Crowd:
         self.wall_range = np.array([c.wall_range for c in cfg])  # [m]
         self.fluctuation = np.array([c.fluctuation for c in cfg])  # [m/s^2]
         self.reacts = np.array([c.react_to_robot for c in cfg], dtype=bool)
-        self._robot_bodies = {r.body for r in self.robots}
-        self._states = BodyStates(space, [w.body for w in self.walkers])
-        # What the wall forces can come from, by bounding box: a walker whose reach meets no box
-        # skips its queries (exact: a shape within reach has its box within reach too).
+        # The walkers' bodies, then the robots' (read together: the social force needs both).
+        self._states = BodyStates(space, [w.body for w in self.walkers]
+                                  + [r.body for r in self.robots])
         mine = {shape for w in self.walkers for shape in w.shapes}
-        others = [s for s in space.shapes if s not in mine and s.body is not None]
-        static = [s for s in others if s.body is not None
-                  and s.body.body_type == pymunk.Body.STATIC]
-        self._static_boxes = np.array([(s.bb.left, s.bb.bottom, s.bb.right, s.bb.top)
-                                       for s in static], dtype=float).reshape(-1, 4)
-        fixed = set(static)
-        self._moving_shapes = [s for s in others if s not in fixed]
+        for shape in mine:  # a copy on a shared ground gave them its category: ours instead
+            shape.filter = walker_filter(shape.filter)
         names = sorted({c.group for c in cfg if c.group is not None})
         self.groups = [np.array([i for i, c in enumerate(cfg) if c.group == g]) for g in names]
         self.groups = [g for g in self.groups if len(g) > 1]
         for members in self.groups:  # a group walks at its slowest member's pace
             self.desired[members] = self.desired[members].min()
         orca = np.array([c.policy == "orca" for c in cfg], dtype=bool)
-        self.social = ~orca
         self.orca = Orca(np.flatnonzero(orca), cfg) if orca.any() else None
         self.goals = [np.asarray(c.goals, dtype=float) for c in cfg]
         self.target = [0] * n  # index of the current goal
         self.direction = [1] * n  # +1 forward through the goals, -1 back (pingpong)
         self.done = np.zeros(n, dtype=bool)  # a "once" walker at its last goal
+        self._goal_xy = np.array([g[0] for g in self.goals], dtype=float).reshape(-1, 2)
         self._tolerance = np.array([c.goal_tolerance for c in cfg])  # [m]
-        self._robot_radius = np.array([r.spec.radius for r in self.robots])
-        # Walkers feel each other through the elliptical potential only (the wall queries skip
-        # them by category); robots also repel like walls, from their real footprint.
+        self._all_radius = np.concatenate([self.radius, [r.spec.radius for r in self.robots]])
+        self._cap = MAX_SPEED_FACTOR * self.desired  # [m/s]
+        self._wish = self.desired.copy()  # [m/s] the speed wished: 0 once done
+        self._no_pull = np.zeros((n, 2))
+        self._fluctuates = bool(self.fluctuation.any())
+        # Wall forces are felt out to WALL_REACH ranges beyond the walker's body (farther, less
+        # than 1 % of the force at contact); ORCA walls bind out to where (d - r) / tau_obst
+        # exceeds the speed cap.
+        self._wall_reach = WALL_REACH * self.wall_range + self.radius  # [m]
+        # reach [m], excess size [m], U0 [m^2/s^2] and R [m] of each walker's wall force
+        self._walls = np.column_stack([self._wall_reach, self.radius - NOMINAL_RADIUS,
+                                       self.u0, self.wall_range]).reshape(-1, 4)
+        self._orca_reach = np.zeros(0)  # [m]
+        if self.orca is not None:
+            agents = self.orca.agents
+            self._orca_reach = self.radius[agents] + self._cap[agents] * self.orca.wall_horizon
+        # What walkers keep away from: the shapes they collide with, other walkers aside (felt
+        # through the social force); the fixed ones read once, the moving ones every tick.
+        own_filter = next(iter(mine)).filter if mine else pymunk.ShapeFilter()
+        # (Other copies' walkers, robots and crates are kept apart by the filter.)
+        felt = [s for s in space.shapes if s not in mine and s.body is not None
+                and not s.sensor and not rejects(s.filter, own_filter)]
+        fixed = [s for s in felt if s.body is not None and s.body.body_type == pymunk.Body.STATIC]
+        robot_bodies = {r.body for r in self.robots}
+        self.fixed = Surfaces(fixed, robot_bodies)
+        fixed_set = set(fixed)
+        self.moving = Surfaces([s for s in felt if s not in fixed_set], robot_bodies)
+        self._fixed_poses = self.fixed.poses()
+        reach = max([0.0, *self._wall_reach.tolist(), *self._orca_reach.tolist()])
+        self._cells = CellIndex(self.fixed.boxes(), reach)
 
     # ------------------------------------------------------------------ state
     def positions(self) -> np.ndarray:
         """Every walker's position [m], shape (n, 2)."""
-        return self._states.read()[:, :2]
+        return self._states.read()[:len(self.walkers), :2]
 
     def velocities(self) -> np.ndarray:
         """Every walker's velocity [m/s], shape (n, 2)."""
-        return self._states.read()[:, 2:]
+        return self._states.read()[:len(self.walkers), 2:]
 
     def goal_points(self) -> np.ndarray:
-        return np.array([g[k] for g, k in zip(self.goals, self.target)]).reshape(-1, 2)
+        """Every walker's current goal [m], shape (n, 2)."""
+        return self._goal_xy.copy()
 
     # ------------------------------------------------------------------ the tick
     def before_step(self, time: float, dt: float) -> None:
         state = self._states.read()
-        pos, vel = state[:, :2], state[:, 2:]
+        n = len(self.walkers)
+        pos, vel = state[:n, :2], state[:n, 2:]
         self._advance_goals(pos)
-        to_goal = self.goal_points() - pos
-        dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
-        e = to_goal / np.maximum(dist, 1e-9)[:, None]
-        wish = np.where(self.done, 0.0, self.desired)
-        pref = wish[:, None] * e + self._cohesion(pos)  # the wished velocity [m/s]
-        cap = MAX_SPEED_FACTOR * self.desired
-        new = vel.copy()
-        if self.social.any():
-            new[self.social] = self._social_force(pos, vel, e, pref, dt)[self.social]
+        pull = self._cohesion(pos) if self.groups else self._no_pull
+        force, pref = np.empty((n, 2)), np.empty((n, 2))
+        # from everything a walker avoids: walkers, then robots (centres of gravity)
+        social_forces(pos, vel, self._goal_xy, self._wish, pull, self.tau, self.radius,
+                      state[:, :2], state[:, 2:], self._all_radius, self.v0, self.sigma,
+                      self.reacts, force, pref)
+        poses = self.moving.poses()
+        wall_forces(self.fixed, self._fixed_poses, self._cells, pos, self._walls, self.reacts,
+                    force)
+        wall_forces(self.moving, poses, None, pos, self._walls, self.reacts, force)
+        if self._fluctuates:
+            force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
+        new = vel + force * dt
         if self.orca is not None:
-            new[self.orca.agents] = self._orca(pos, vel, pref, cap, dt)
-        speed = np.hypot(new[:, 0], new[:, 1])
-        new *= np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
-        for walker, (vx, vy) in zip(self.walkers, new.tolist()):
-            walker.body.velocity = (vx, vy)
+            new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt)
+        cap_speeds(new, self._cap)
+        self._states.set_velocities(new)
 
     def _cohesion(self, pos: np.ndarray) -> np.ndarray:
         """Wished velocity [m/s] back toward each walker's group centre, beyond its spread."""
@@ -163,48 +203,28 @@ class Crowd:
             pull[members] = (GROUP_PULL * stray / dist)[:, None] * off
         return pull
 
-    def _social_force(self, pos: np.ndarray, vel: np.ndarray, e: np.ndarray, pref: np.ndarray,
-                      dt: float) -> np.ndarray:
-        """Velocities after one step of the social force model (every walker)."""
-        force = (pref - vel) / self.tau[:, None]
-        social = self._social(pos, vel, e)
-        against = np.maximum(-(social * e).sum(axis=1), 0.0)  # the part that holds us back
-        social += KEEP_RIGHT * against[:, None] * np.column_stack([e[:, 1], -e[:, 0]])
-        force += social
-        force += self._walls(pos)
-        if self.fluctuation.any():
-            force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
-        return vel + force * dt
-
-    def _orca(self, pos: np.ndarray, vel: np.ndarray, pref: np.ndarray, cap: np.ndarray,
-              dt: float) -> np.ndarray:
-        """Velocities of the ORCA walkers."""
+    def _orca(self, pos: np.ndarray, vel: np.ndarray, pref: np.ndarray, state: np.ndarray,
+              poses: np.ndarray, dt: float) -> np.ndarray:
+        """Velocities of the ORCA walkers (robots are neighbours or ignored, never walls);
+        ``state``: every walker's and robot's (BodyStates)."""
         assert self.orca is not None
         agents = self.orca.agents
-        opos, ovel, orad = self._others(pos, vel)
-        n, m = len(pos), len(opos)
+        others = (state[:, :2], state[:, 2:], self._all_radius)
+        n, m = len(pos), len(state)
         visible = np.ones((len(agents), m), dtype=bool)
         visible[np.arange(len(agents)), agents] = False
         visible[:, n:] &= self.reacts[agents][:, None]
-        walls: list[list[tuple[float, float, float]]] = []
-        # farther surfaces than this never bind: (d - r) / tau_obst exceeds the speed cap
-        reach = self.radius[agents] + cap[agents] * self.orca.wall_horizon
-        near = self._near_boxes(pos[agents], reach)
-        for k, a in enumerate(agents.tolist()):
-            if not near[k]:
-                walls.append([])
-                continue
-            skip = self._robot_bodies  # robots are neighbours (or ignored), not walls
-            walls.append(nearest_surfaces(self.space, (float(pos[a, 0]), float(pos[a, 1])),
-                                          float(reach[k]), _NOT_WALKERS, skip))
-        return self.orca.velocities(pos[agents], vel[agents], self.radius[agents],
-                                    (opos, ovel, orad), n,
-                                    visible, pref[agents], cap[agents], dt, walls)
+        at = np.ascontiguousarray(pos[agents])
+        hits, count = np.zeros((len(agents), MAX_WALL_LINES, 3)), np.zeros(len(agents), np.int64)
+        nearest_walls(self.fixed, self._fixed_poses, self._cells, at, self._orca_reach, hits,
+                      count)
+        nearest_walls(self.moving, poses, None, at, self._orca_reach, hits, count)
+        return self.orca.velocities(at, vel[agents], self.radius[agents], others, n, visible,
+                                    pref[agents], self._cap[agents], dt, (hits, count))
 
     def _advance_goals(self, pos: np.ndarray) -> None:
-        off = self.goal_points() - pos
-        arrived = (np.hypot(off[:, 0], off[:, 1]) <= self._tolerance) & ~self.done
-        for i in np.flatnonzero(arrived).tolist():  # most ticks: nobody
+        # most ticks: nobody
+        for i in arrivals(self._goal_xy, pos, self._tolerance, self.done).tolist():
             walker = self.walkers[i]
             goals, k = self.goals[i], self.target[i]
             config: Any = walker.config
@@ -214,6 +234,7 @@ class Crowd:
             elif mode == "once":
                 if k == last:
                     self.done[i] = True
+                    self._wish[i] = 0.0
                 else:
                     self.target[i] = k + 1
             else:  # pingpong
@@ -222,85 +243,7 @@ class Crowd:
                 if not 0 <= k + self.direction[i] <= last:
                     self.direction[i] = -self.direction[i]
                 self.target[i] = k + self.direction[i]
-
-    def _others(self, pos: np.ndarray, vel: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Positions, velocities and radii of everything a walker avoids: walkers, robots."""
-        if not self.robots:
-            return pos, vel, self.radius
-        bodies = [r.body for r in self.robots]
-        rpos = np.array([tuple(b.local_to_world(b.center_of_gravity)) for b in bodies])
-        rvel = np.array([tuple(b.velocity) for b in bodies])
-        return (np.vstack([pos, rpos]), np.vstack([vel, rvel]),
-                np.concatenate([self.radius, self._robot_radius]))
-
-    def _social(self, pos: np.ndarray, vel: np.ndarray, e: np.ndarray) -> np.ndarray:
-        """Sum of the elliptical repulsions (per unit mass) on every walker, shape (n, 2).
-
-        Only pairs closer than the other's step plus SOCIAL_CUTOFF are evaluated: farther ones
-        contribute less than exp(-SOCIAL_CUTOFF / sigma) of the force at contact."""
-        opos, ovel, orad = self._others(pos, vel)
-        n = len(pos)
-        step = ovel * STEP_TIME
-        d = pos[:, None, :] - opos[None, :, :]
-        reach = np.hypot(step[:, 0], step[:, 1]) + SOCIAL_CUTOFF + orad
-        near = (d[..., 0] ** 2 + d[..., 1] ** 2) < reach[None, :] ** 2
-        near[np.arange(n), np.arange(n)] = False  # no force on oneself
-        near[:, n:] &= self.reacts[:, None]  # robots, for walkers that react to them
-        a, b = np.nonzero(near)
-        force = np.zeros_like(pos)
-        if not len(a):
-            return force
-        r = d[a, b]  # from the other to the walker
-        s = step[b]
-        q = r - s
-        rn = np.maximum(np.hypot(r[:, 0], r[:, 1]), 1e-9)
-        qn = np.maximum(np.hypot(q[:, 0], q[:, 1]), 1e-9)
-        two_b = np.sqrt(np.maximum((rn + qn) ** 2 - (s[:, 0] ** 2 + s[:, 1] ** 2), 1e-12))
-        grad_b = ((rn + qn) / (2.0 * two_b))[:, None] * (r / rn[:, None] + q / qn[:, None])
-        gap = np.maximum(0.5 * two_b - (self.radius[a] + orad[b] - 2 * NOMINAL_RADIUS), 0.0)
-        sigma = self.sigma[a]
-        magnitude = self.v0[a] / sigma * np.exp(-gap / sigma)
-        seen = (-(r * e[a]).sum(axis=1) / rn) >= SIGHT_COS
-        magnitude *= np.where(seen, 1.0, SIGHT_WEIGHT)
-        pair = magnitude[:, None] * grad_b
-        force[:, 0] = np.bincount(a, pair[:, 0], minlength=n)
-        force[:, 1] = np.bincount(a, pair[:, 1], minlength=n)
-        return force
-
-    def _near_boxes(self, pos: np.ndarray, reach: np.ndarray) -> np.ndarray:
-        """Whether each point's square of half-side ``reach`` [m] meets the bounding box of
-        any non-walker shape (static boxes from the build, moving ones as they are now)."""
-        boxes = self._static_boxes
-        if self._moving_shapes:
-            boxes = np.vstack([boxes, [(s.bb.left, s.bb.bottom, s.bb.right, s.bb.top)
-                                       for s in self._moving_shapes]])
-        if len(pos) * len(boxes) > BOX_TEST_LIMIT:  # a huge map: let the queries sort it out
-            return np.ones(len(pos), dtype=bool)
-        x, y, r = pos[:, :1], pos[:, 1:], reach[:, None]
-        return ((boxes[:, 0] <= x + r) & (boxes[:, 2] >= x - r)
-                & (boxes[:, 1] <= y + r) & (boxes[:, 3] >= y - r)).any(axis=1)
-
-    def _walls(self, pos: np.ndarray) -> np.ndarray:
-        """Repulsion from the nearest surface of each wall, obstacle, robot and arena side."""
-        force = np.zeros_like(pos)
-        near = self._near_boxes(pos, WALL_REACH * self.wall_range + self.radius)
-        for i, (x, y) in enumerate(pos.tolist()):
-            if not near[i]:
-                continue
-            reach = WALL_REACH * self.wall_range[i] + self.radius[i]
-            # One C call says whether anything is in reach at all (most walkers, most ticks:
-            # nothing), before the query that reports every shape through a Python callback.
-            if self.space.point_query_nearest((x, y), reach, _NOT_WALKERS) is None:
-                continue
-            for hit in self.space.point_query((x, y), reach, _NOT_WALKERS):
-                if not self.reacts[i] and hit.shape.body in self._robot_bodies:
-                    continue
-                gap = max(hit.distance - (self.radius[i] - NOMINAL_RADIUS), 0.0)
-                push = self.u0[i] / self.wall_range[i] * math.exp(-gap / self.wall_range[i])
-                gx, gy = hit.gradient
-                force[i, 0] += push * gx
-                force[i, 1] += push * gy
-        return force
+            self._goal_xy[i] = goals[self.target[i]]
 
 
 def make_crowd(world: Any, robots: Sequence[Any], rng: np.random.Generator) -> Crowd | None:

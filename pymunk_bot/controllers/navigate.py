@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..config.controllers import NavigateControllerConfig
@@ -230,11 +231,10 @@ class NavigateController(Controller):
         bearing = np.arctan2(pts[:, 1] - oy, pts[:, 0] - ox) - theta
         angles = np.asarray(scan.angles)
         ranges = np.asarray(scan.ranges)
-        diff = np.abs((bearing[:, None] - angles[None, :] + np.pi) % (2 * np.pi) - np.pi)
-        beam = diff.argmin(axis=1)
+        beam, off = nearest_beams(bearing, np.ascontiguousarray(angles, dtype=float))
         # Beam spacing from the beams themselves: a 90-degree LiDAR is not a full circle.
         step = float(np.median(np.abs(np.diff(angles)))) if len(angles) > 1 else np.inf
-        covered = diff[np.arange(len(keys)), beam] <= step
+        covered = off <= step
         seen_through = covered & (ranges[beam] > dist + 2.0 * res)
         for key, gone in zip(keys, seen_through):
             if gone:
@@ -249,3 +249,32 @@ class NavigateController(Controller):
     def _stop(self) -> Command:
         self.command = (0.0, 0.0)
         return STOP
+
+
+@numba.njit(cache=True, nogil=True)
+def nearest_beams(bearing: np.ndarray, angles: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """For each bearing [rad], the beam whose angle is nearest around the circle (the first of
+    equals) and the angle between them [rad]. Beams in increasing order over less than a turn
+    (a LiDAR's) are searched by bisection, the few around the bearing compared; others all."""
+    n = len(angles)
+    turn = 2.0 * np.pi
+    ordered = n > 1 and angles[n - 1] - angles[0] < turn
+    for m in range(n - 1):
+        ordered = ordered and angles[m + 1] > angles[m]
+    beam = np.zeros(len(bearing), dtype=np.int64)
+    off = np.full(len(bearing), np.inf)
+    every = np.arange(n)
+    near = np.empty(6, dtype=np.int64)
+    for i in range(len(bearing)):
+        candidates = every
+        if ordered:  # the bracketing beams (and a spare each side), and both ends (the wrap)
+            k = np.searchsorted(angles, angles[0] + (bearing[i] - angles[0]) % turn)
+            near[0], near[1], near[2] = 0, max(k - 2, 0), max(k - 1, 0)
+            near[3], near[4], near[5] = min(k, n - 1), min(k + 1, n - 1), n - 1
+            candidates = near  # in increasing order: the first of equals wins
+        for j in candidates:
+            d = abs((bearing[i] - angles[j] + np.pi) % turn - np.pi)
+            if d < off[i]:
+                beam[i], off[i] = j, d
+    return beam, off

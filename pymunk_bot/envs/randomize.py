@@ -8,12 +8,19 @@
         "set": {"robots[0].max_wheel_speed": [0.5, 1.0],        # a range: uniform draw
                 "robots[0].lidar.noise_std": {"choices": [0.0, 0.02]}},
     })
+    gym.make("pymunk_bot/Navigation-v0", scenario=..., randomize={"crowd": "crowds"})
+
+``crowd`` names a benchmark suite (a shipped suite's name, a generator spec or a folder of
+scenarios, as ``pymunk-bot benchmark`` takes it): each episode draws one of its scenarios and,
+for a generated one, its CrowdNav layout (stage, pedestrians' starts and routes, the robot's
+start and goal) from a seed drawn from the episode's generator, as the benchmark's episode of
+that seed (:func:`pymunk_bot.benchmark.suite.episode_data`).
 
 ``set`` takes the key paths of ``sweep --set`` and is checked the same way: each range's ends
 and each choice must give a valid scenario. A range of two integers draws integers (both ends
-included). A generated world keeps the scenario's learning robot (drive, size, sensors) and
-takes the world's arena, obstacles, start and goal; other robots and a ``world.map`` are left
-out. Every draw comes from the episode's generator: a seed gives the same episodes.
+included). A generated world or a suite's scenario keeps the scenario's learning robot (drive,
+size, sensors) and takes the world's arena (or map), obstacles, start and goal; other robots
+are left out. Every draw comes from the episode's generator: a seed gives the same episodes.
 """
 from __future__ import annotations
 
@@ -29,8 +36,9 @@ from ..config import parse_scenario
 from ..errors import ScenarioError
 from ..maps.generate import KINDS, generate
 from ..sweep.grid import apply_override, parse_key_path
+from .crowd_draw import crowd_suite, crowd_world
 
-KEYS = ("generate", "world_seeds", "size", "start", "set")
+KEYS = ("generate", "world_seeds", "size", "start", "set", "crowd")
 MAX_CHOICES = 1000
 MAX_SEED = 2**31 - 1
 WORLD_CACHE = 256  # generated worlds kept (drawing one runs a solvability check)
@@ -72,7 +80,9 @@ class Randomization:
     size: tuple[float, float] | None = None  # [m]
     start: bool = False
     draws: tuple[Draw, ...] = ()
+    crowd: str | None = None  # a benchmark suite whose scenarios are drawn
     _worlds: OrderedDict = field(default_factory=OrderedDict, compare=False, repr=False)
+    _suite: tuple = field(default=(), compare=False, repr=False)  # its entries
 
     @classmethod
     def parse(cls, value: Mapping[str, Any], source: str) -> "Randomization":
@@ -106,18 +116,32 @@ class Randomization:
             raise ScenarioError(source, "randomize.set", "must map key paths to [low, high] "
                                                          "or {choices: [...]}")
         draws = tuple(_draw(path, spec, source) for path, spec in keys.items())
+        crowd = value.get("crowd")
+        entries: tuple = ()
+        if crowd is not None:
+            entries = crowd_suite(crowd, kind, source)
         return cls(kind, (int(seeds[0]), int(seeds[1])),
-                   None if size is None else (float(size[0]), float(size[1])), start, draws)
+                   None if size is None else (float(size[0]), float(size[1])), start, draws,
+                   None if crowd is None else str(crowd), _suite=entries)
 
     @property
     def changes_world(self) -> bool:
         """Whether an episode's scenario differs from the next one's in more than its seed."""
-        return self.generate is not None or self.start or bool(self.draws)
+        return (self.generate is not None or self.crowd is not None or self.start
+                or bool(self.draws))
 
     def check(self, base: dict, robot: str, source: str) -> None:
         """Every range end and choice, applied to ``base`` (or a generated world), parses:
         a ScenarioError naming the key otherwise, before any episode runs."""
-        world = self.world(base, robot, self.world_seeds[0], source)
+        if self._suite:  # the suite's first scenario, drawn from seed 0
+            world = crowd_world(base, robot, self._suite[0], 0, source)
+            try:
+                parse_scenario(world, source)
+            except ScenarioError as exc:
+                raise ScenarioError(source, "randomize.crowd",
+                                    f"{exc.source}: {exc.path}: {exc.problem}") from None
+        else:
+            world = self.world(base, robot, self.world_seeds[0], source)
         for draw in self.draws:
             for value in draw.values():
                 data = copy.deepcopy(world)
@@ -130,8 +154,12 @@ class Randomization:
 
     def scenario(self, base: dict, robot: str, rng: np.random.Generator, source: str) -> dict:
         """One episode's scenario data (before the start pose, see :meth:`start_pose`)."""
-        seed = int(rng.integers(*self.world_seeds)) if self.generate is not None else 0
-        data = copy.deepcopy(self.world(base, robot, seed, source))
+        if self._suite:  # one of the suite's scenarios, and its layout's seed
+            entry = self._suite[int(rng.integers(len(self._suite)))]
+            data = crowd_world(base, robot, entry, int(rng.integers(MAX_SEED)), source)
+        else:
+            seed = int(rng.integers(*self.world_seeds)) if self.generate is not None else 0
+            data = copy.deepcopy(self.world(base, robot, seed, source))
         for draw in self.draws:
             _apply(data, draw.path, draw.sample(rng), source)
         return data

@@ -39,7 +39,7 @@ class NavigationVectorEnv(VectorEnv):
     arguments) whose simulations advance in lockstep.
 
     ``share_space`` (default): up to MAX_REPLICAS worlds share one pymunk Space and advance
-    as one (:class:`~pymunk_bot.replicas.Replicas`), unless the scenario has pedestrians.
+    as one (:class:`~pymunk_bot.replicas.Replicas`), pedestrians included.
     False: each world in a space of its own (slower; a pushed crate then moves exactly as in a
     single env, where sharing can change the last bits of contacts between moving bodies:
     see docs/learning.md)."""
@@ -262,7 +262,8 @@ class NavigationVectorEnv(VectorEnv):
 
     def _share_spaces(self, first: NavigationEpisode) -> list[Replicas]:
         """The worlds as copies sharing spaces (MAX_REPLICAS to a space), when the scenario
-        allows it (no pedestrians); else none: each world keeps a space of its own."""
+        allows it (its actors keep to their own copy); else none: each world keeps a space
+        of its own."""
         n = len(self.episodes)
         count = -(-n // MAX_REPLICAS)
         slots = [list(range(k * n // count, (k + 1) * n // count)) for k in range(count)]

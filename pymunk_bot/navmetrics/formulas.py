@@ -3,31 +3,80 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def disc_clearance(dx: float, dy: float, robot_radius: float, human_radius: float) -> float:
+    """Clearance [m] between a disc robot and a human disc, (dx, dy) [m] apart: |d| - r_r -
+    r_h (negative while they overlap)."""
+    return math.hypot(dx, dy) - robot_radius - human_radius
+
+
+@numba.njit(cache=True, nogil=True)
 def disc_clearances(robot_xy: np.ndarray, robot_radius: float, human_xy: np.ndarray,
                     human_radius: np.ndarray) -> np.ndarray:
-    """Clearance [m] between a disc robot and each human disc: |p_h - p_r| - r_r - r_h
-    (negative while they overlap). ``human_xy`` (n, 2), ``human_radius`` (n,)."""
-    d = human_xy - robot_xy
-    return np.hypot(d[:, 0], d[:, 1]) - robot_radius - human_radius
-
-
-def times_to_collision(rel_xy: np.ndarray, rel_v: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """Constant-velocity time to contact [s] for each human: the smallest t >= 0 with
-    |d + w t| = R, d the human's position relative to the robot [m], w its relative
-    velocity [m/s], R the sum of their radii [m]. 0 while already within R; inf when the two
-    never come within R (moving apart, or missing each other)."""
-    a = (rel_v ** 2).sum(axis=1)
-    b = 2.0 * (rel_xy * rel_v).sum(axis=1)
-    c = (rel_xy ** 2).sum(axis=1) - reach ** 2
-    disc = b * b - 4.0 * a * c
-    out = np.full(len(c), math.inf)
-    course = (b < 0.0) & (disc >= 0.0) & (a > 0.0)
-    out[course] = (-b[course] - np.sqrt(disc[course])) / (2.0 * a[course])
-    out[c <= 0.0] = 0.0
+    """:func:`disc_clearance` [m] to each human: ``human_xy`` (n, 2), ``human_radius`` (n,)."""
+    out = np.empty(len(human_xy))
+    for i in range(len(human_xy)):
+        out[i] = disc_clearance(human_xy[i, 0] - robot_xy[0], human_xy[i, 1] - robot_xy[1],
+                                robot_radius, human_radius[i])
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def time_to_collision(dx: float, dy: float, wx: float, wy: float, reach: float) -> float:
+    """Constant-velocity time to contact [s]: the smallest t >= 0 with |d + w t| = R, d the
+    human's position relative to the robot [m], w its relative velocity [m/s], R the sum of
+    their radii [m]. 0 while already within R; inf when the two never come within R (moving
+    apart, or missing each other)."""
+    c = dx * dx + dy * dy - reach * reach
+    if c <= 0.0:
+        return 0.0
+    a = wx * wx + wy * wy
+    b = 2.0 * (dx * wx + dy * wy)
+    disc = b * b - 4.0 * a * c
+    if b < 0.0 and disc >= 0.0 and a > 0.0:
+        return (-b - math.sqrt(disc)) / (2.0 * a)
+    return math.inf
+
+
+@numba.njit(cache=True, nogil=True)
+def times_to_collision(rel_xy: np.ndarray, rel_v: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """:func:`time_to_collision` [s] of each human (rows of ``rel_xy``, ``rel_v``, ``reach``)."""
+    out = np.empty(len(rel_xy))
+    for i in range(len(rel_xy)):
+        out[i] = time_to_collision(rel_xy[i, 0], rel_xy[i, 1], rel_v[i, 0], rel_v[i, 1],
+                                   reach[i])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def encounters(human_xy: np.ndarray, human_v: np.ndarray, human_radius: np.ndarray,
+               rx: float, ry: float, rvx: float, rvy: float, robot_radius: float,
+               clear: np.ndarray, disc: bool, personal: float,
+               inside: np.ndarray) -> tuple[float, int, bool, float]:
+    """One instant of the human metrics of a robot at (``rx``, ``ry``) [m] moving at (``rvx``,
+    ``rvy``) [m/s], of bounding radius ``robot_radius`` [m], among humans (``human_xy``,
+    ``human_v``, ``human_radius``): each one's clearance [m] into ``clear`` (a ``disc``
+    robot's, :func:`disc_clearance`; else ``clear`` holds them already), then (the least
+    clearance [m], how many humans entered the ``personal`` space [m] since the last instant
+    (``inside``, updated in place), whether any is in it, the least :func:`time_to_collision`
+    [s])."""
+    closest, entries, any_inside, least = math.inf, 0, False, math.inf
+    for i in range(len(clear)):
+        dx, dy = human_xy[i, 0] - rx, human_xy[i, 1] - ry
+        if disc:
+            clear[i] = disc_clearance(dx, dy, robot_radius, human_radius[i])
+        closest = min(closest, clear[i])
+        now = clear[i] < personal
+        entries += int(now and not inside[i])
+        any_inside = any_inside or now
+        inside[i] = now
+        least = min(least, time_to_collision(dx, dy, human_v[i, 0] - rvx, human_v[i, 1] - rvy,
+                                             robot_radius + human_radius[i]))
+    return closest, entries, any_inside, least
 
 
 def sample_kinematics(velocities: np.ndarray, period: float) -> dict[str, float]:

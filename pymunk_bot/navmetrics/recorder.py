@@ -1,8 +1,9 @@
 """One robot's navigation metrics, measured after every tick of a run.
 
 Per tick (only in runs that ask: a crowd, an ``expect`` bound on a metric, or :func:`track`):
-clearances and times to collision to every pedestrian (numpy over the crowd), stalled time,
-and the clearing distance; every ``sample_period`` the velocity for speed, acceleration and
+clearances and times to collision to every pedestrian (one compiled call over the crowd,
+folded into running minima and sums: :func:`.formulas.encounters`), stalled time, and the
+clearing distance; every ``sample_period`` the velocity for speed, acceleration and
 jerk. Contact impulses come from pymunk's post-solve of the robot's contacts. Everything else
 (success, SPL, ...) is read once, at :meth:`NavMetrics.values`.
 """
@@ -15,7 +16,7 @@ import numpy as np
 import pymunk
 
 from ..actors.body_state import BodyStates
-from ..actors.pedestrians import WALKER_CATEGORY
+from ..actors.pedestrians import WALKER_CATEGORIES
 from ..metrics import RobotMetrics
 from . import formulas
 from .definitions import METRIC_NAMES, Thresholds
@@ -65,7 +66,7 @@ class NavMetrics:
         # Clearing distance: RobotMetrics' clearance, with pedestrians left out of the query.
         f = robot.shape.filter
         self._clearing = RobotMetrics(world.space, robot, [], shape_filter=pymunk.ShapeFilter(
-            group=f.group, categories=f.categories, mask=f.mask & ~WALKER_CATEGORY))
+            group=f.group, categories=f.categories, mask=f.mask & ~WALKER_CATEGORIES))
         self.contacts = ContactTally()
         for shape in self._shapes:
             world.watch_contacts(shape, self._on_contact)
@@ -76,6 +77,7 @@ class NavMetrics:
         self.personal_space_time = 0.0  # [s]
         self.stalled_time = 0.0  # [s]
         self._inside = np.zeros(len(self._humans), dtype=bool)
+        self._clear = np.zeros(len(self._humans))  # [m] to each human, this tick
         self._samples: list[tuple[float, float, float, float]] = []  # t, vx, vy, best [s, m/s, m]
         self._best = math.inf  # [m] closest approach to the goal so far
         self._next_sample = self.start
@@ -106,21 +108,20 @@ class NavMetrics:
     def _measure_humans(self, step: float, vx: float, vy: float) -> None:
         state = self._human_states.read()
         hxy, hv = state[:, :2], state[:, 2:]
-        rxy = np.array(tuple(self._body.position), dtype=float)
-        if self._disc:
-            clear = formulas.disc_clearances(rxy, self._radius, hxy, self._human_radius)
-        else:  # exact distance to the footprint's pieces, less the pedestrian's radius
-            clear = np.array([min(s.point_query(tuple(p)).distance for s in self._shapes)
-                              for p in hxy]) - self._human_radius
-        self.min_distance_to_human = min(self.min_distance_to_human, float(clear.min()))
-        inside = clear < self.thresholds.personal_space
-        self.personal_space_intrusions += int((inside & ~self._inside).sum())
-        self._inside = inside
-        if inside.any():
+        x, y = self._body.position
+        clear = self._clear
+        if not self._disc:  # exact distance to the footprint's pieces, less the pedestrian's
+            clear[:] = [min(s.point_query(tuple(p)).distance for s in self._shapes)
+                        for p in hxy.tolist()]
+            clear -= self._human_radius
+        closest, entries, inside, ttc = formulas.encounters(
+            hxy, hv, self._human_radius, x, y, vx, vy, self._radius, clear, self._disc,
+            self.thresholds.personal_space, self._inside)
+        self.min_distance_to_human = min(self.min_distance_to_human, closest)
+        self.personal_space_intrusions += entries
+        if inside:
             self.personal_space_time += step
-        ttc = formulas.times_to_collision(hxy - rxy, hv - np.array([vx, vy]),
-                                          self._radius + self._human_radius)
-        self.min_time_to_collision = min(self.min_time_to_collision, float(ttc.min()))
+        self.min_time_to_collision = min(self.min_time_to_collision, ttc)
 
     def _on_contact(self, arbiter: pymunk.Arbiter) -> None:
         a, b = arbiter.bodies

@@ -12,6 +12,7 @@ import heapq
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from .grid import ClearanceGrid
@@ -114,39 +115,63 @@ def astar(grid: ClearanceGrid, start, goal, hard: float, soft: float, weight: fl
 
 def _search(multiplier: np.ndarray, start: tuple[int, int], goal: tuple[int, int],
             result: PlanResult) -> list[tuple[int, int]] | None:
-    """The A* loop on a flat, padded copy of the grid (plain lists: fastest in CPython)."""
+    """A* on a flat, padded copy of the grid (compiled: :func:`_expand`)."""
     rows, cols = multiplier.shape
     width = cols + 2  # one blocked cell of padding on every side: no bounds checks
     padded = np.full((rows + 2, width), np.inf)
     padded[1:-1, 1:-1] = multiplier
-    cost = padded.ravel().tolist()
+    cost = padded.ravel()
     s = (start[0] + 1) * width + start[1] + 1
     g_idx = (goal[0] + 1) * width + goal[1] + 1
-    goal_row, goal_col = divmod(g_idx, width)
-    inf = math.inf
+    best = np.full(len(cost), np.inf)
+    parent = np.full(len(cost), -1, dtype=np.int64)
+    result.expanded = int(_expand(cost, width, s, g_idx, best, parent))
+    if not np.isfinite(best[g_idx]):
+        return None
+    result.cost = float(best[g_idx])
+    cells = []
+    i = g_idx
+    while i != -1:
+        r, c = divmod(int(i), width)
+        cells.append((r - 1, c - 1))
+        i = parent[i]
+    cells.reverse()
+    return cells
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _heuristic(i: int, goal_row: int, goal_col: int, width: int) -> float:
+    """Octile distance from cell ``i`` to the goal, in cells; the tiny tie-break toward the
+    goal makes A* expand far fewer equal-cost cells."""
+    dr, dc = abs(i // width - goal_row), abs(i % width - goal_col)
+    return (max(dr, dc) + (SQRT2 - 1.0) * min(dr, dc)) * (1.0 + 1e-4)
+
+
+@numba.njit(cache=True, nogil=True)
+def _expand(cost: np.ndarray, width: int, s: int, g_idx: int, best: np.ndarray,
+            parent: np.ndarray) -> int:  # pragma: no cover - compiled
+    """The A* loop: fills ``best`` (cost so far) and ``parent``; returns the cells expanded
+    (taken off the open list), the search stopping once the goal is (its best is then final).
+    Ties break as Python's heapq of (f, g, cell) tuples does."""
+    inf = np.inf
+    n = len(cost)
+    goal_row, goal_col = g_idx // width, g_idx % width
+    closed = np.zeros(n, dtype=np.uint8)
+    best[s] = 0.0
+    open_list = [(_heuristic(s, goal_row, goal_col, width), 0.0, s)]
     straight = ((1, 1.0), (-1, 1.0), (width, 1.0), (-width, 1.0))
     diagonal = ((width + 1, 1, width), (width - 1, -1, width),
                 (-width + 1, 1, -width), (-width - 1, -1, -width))
-    n = len(cost)
-    best = [inf] * n
-    best[s] = 0.0
-    parent = [-1] * n
-    closed = bytearray(n)
-    # Octile distance to the goal for every cell, computed once with numpy; the tiny tie-break
-    # toward the goal makes A* expand far fewer equal-cost cells.
-    r_idx, c_idx = np.divmod(np.arange(n), width)
-    dr, dc = np.abs(r_idx - goal_row), np.abs(c_idx - goal_col)
-    h = ((np.maximum(dr, dc) + (SQRT2 - 1.0) * np.minimum(dr, dc)) * (1.0 + 1e-4)).tolist()
-    open_list = [(h[s], 0.0, s)]
-    push, pop = heapq.heappush, heapq.heappop
     expanded = 0
+    goal_closed = False
     while open_list:
-        _, g, i = pop(open_list)
+        _, g, i = heapq.heappop(open_list)
         if closed[i]:
             continue
         closed[i] = 1
         expanded += 1
         if i == g_idx:
+            goal_closed = True
             break
         ci = cost[i]
         for step, length in straight:
@@ -158,7 +183,8 @@ def _search(multiplier: np.ndarray, start: tuple[int, int], goal: tuple[int, int
             if ng < best[j]:
                 best[j] = ng
                 parent[j] = i
-                push(open_list, (ng + h[j], ng, j))
+                heapq.heappush(open_list, (ng + _heuristic(j, goal_row, goal_col, width),
+                                           ng, j))
         for step, side_a, side_b in diagonal:
             j = i + step
             cj = cost[j]
@@ -169,16 +195,8 @@ def _search(multiplier: np.ndarray, start: tuple[int, int], goal: tuple[int, int
             if ng < best[j]:
                 best[j] = ng
                 parent[j] = i
-                push(open_list, (ng + h[j], ng, j))
-    result.expanded = expanded
-    if not closed[g_idx]:
-        return None
-    result.cost = best[g_idx]
-    cells = []
-    i = g_idx
-    while i != -1:
-        r, c = divmod(i, width)
-        cells.append((r - 1, c - 1))
-        i = parent[i]
-    cells.reverse()
-    return cells
+                heapq.heappush(open_list, (ng + _heuristic(j, goal_row, goal_col, width),
+                                           ng, j))
+    if not goal_closed:
+        best[g_idx] = inf
+    return expanded

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..readings import LaserScan, RobotSpec
@@ -124,16 +125,14 @@ class DynamicWindow:
             pts, vel = pts[near], vel[near]
         now = math.inf
         if len(pts):
-            # Clearance of the robot's disc at each arc sample to the nearest point.
-            d = np.sqrt((x[:, :, None] - pts[None, None, :, 0]) ** 2
-                        + (y[:, :, None] - pts[None, None, :, 1]) ** 2).min(axis=2)
+            # Clearance of the robot's disc at each arc sample to the nearest point ...
             moving = np.any(vel != 0.0, axis=1)
-            if moving.any():  # and to where the moving ones will be at each sample time
-                t = np.linspace(p.horizon / p.time_samples, p.horizon, p.time_samples)
-                px = pts[moving, 0][None, :] + t[:, None] * vel[moving, 0][None, :]  # (k, n)
-                py = pts[moving, 1][None, :] + t[:, None] * vel[moving, 1][None, :]
-                d = np.minimum(d, np.sqrt((x[:, :, None] - px[None]) ** 2
-                                          + (y[:, :, None] - py[None]) ** 2).min(axis=2))
+            t = np.linspace(p.horizon / p.time_samples, p.horizon, p.time_samples)
+            # ... and to where the moving ones will be at each sample time, (k, n) each
+            px = pts[moving, 0][None, :] + t[:, None] * vel[moving, 0][None, :]
+            py = pts[moving, 1][None, :] + t[:, None] * vel[moving, 1][None, :]
+            d = arc_distances(np.ascontiguousarray(x), np.ascontiguousarray(y),
+                              np.ascontiguousarray(pts), px, py)
             clear_t = d - self.robot.radius  # (m, k)
             now = float(np.sqrt(pts[:, 0] ** 2 + pts[:, 1] ** 2).min()) - self.robot.radius
             # Already inside the safety band: arcs may get a little closer (never below a
@@ -231,3 +230,25 @@ def free_runs(points: np.ndarray, radius: float, directions: np.ndarray,
     contact = along - np.sqrt(np.maximum(radius * radius - lateral * lateral, 0.0))
     contact = np.where(blocking, np.maximum(contact, 0.0), np.inf)
     return np.minimum(contact.min(axis=1), max_length)
+
+
+@numba.njit(cache=True, nogil=True)
+def arc_distances(x: np.ndarray, y: np.ndarray, points: np.ndarray, moving_x: np.ndarray,
+                  moving_y: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """Distance [m] from each arc sample (``x``, ``y``: (m, k)) to the nearest of ``points``
+    (n, 2) and of the moving points at that sample's time (``moving_x``, ``moving_y``:
+    (k, n'))."""
+    m, k = x.shape
+    out = np.empty((m, k))
+    for a in range(m):
+        for j in range(k):
+            sx, sy = x[a, j], y[a, j]
+            near2 = np.inf
+            for i in range(len(points)):
+                dx, dy = sx - points[i, 0], sy - points[i, 1]
+                near2 = min(near2, dx * dx + dy * dy)
+            for i in range(moving_x.shape[1]):
+                dx, dy = sx - moving_x[j, i], sy - moving_y[j, i]
+                near2 = min(near2, dx * dx + dy * dy)
+            out[a, j] = math.sqrt(near2)
+    return out

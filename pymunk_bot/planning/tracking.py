@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 CLUSTER_GAP = 0.2  # [m] neighbouring scan points farther apart start a new cluster
@@ -24,16 +25,59 @@ PASS_MARGIN = 0.1  # [m] ...and pass closer than radii + safety + this is oncomi
 def distance_to_polyline(points: np.ndarray, scan: np.ndarray, gap: float) -> np.ndarray:
     """Distance [m] from each of ``points`` to a scan's returns joined, in scan order, where
     neighbours are at most ``gap`` apart (the surface that scan saw)."""
-    a, b = scan[:-1], scan[1:]
-    joined = np.hypot(*(b - a).T) <= gap
-    a = np.concatenate([a[joined], scan])  # segments, then every return (isolated ones too)
-    b = np.concatenate([b[joined], scan])
-    ab = b - a
-    length2 = np.maximum((ab * ab).sum(axis=1), 1e-12)
-    rel = points[:, None, :] - a[None, :, :]
-    u = np.clip((rel * ab[None]).sum(axis=2) / length2[None], 0.0, 1.0)
-    closest = a[None] + u[:, :, None] * ab[None]
-    return np.hypot(*(points[:, None, :] - closest).transpose(2, 0, 1)).min(axis=1)
+    return _distance_to_polyline(np.ascontiguousarray(points, dtype=float).reshape(-1, 2),
+                                 np.ascontiguousarray(scan, dtype=float).reshape(-1, 2),
+                                 float(gap))
+
+
+@numba.njit(cache=True, nogil=True)
+def _distance_to_polyline(points: np.ndarray, scan: np.ndarray,
+                          gap: float) -> np.ndarray:  # pragma: no cover - compiled
+    near2 = np.full(len(points), np.inf)  # [m^2] squared distances: one root at the end
+    for k in range(len(scan)):
+        ax, ay = scan[k, 0], scan[k, 1]
+        ex, ey = 0.0, 0.0  # the segment to the next return if they are joined, else the return
+        if k + 1 < len(scan):
+            ex, ey = scan[k + 1, 0] - ax, scan[k + 1, 1] - ay
+            if ex * ex + ey * ey > gap * gap:
+                ex, ey = 0.0, 0.0
+        length2 = max(ex * ex + ey * ey, 1e-12)
+        for i in range(len(points)):
+            rx, ry = points[i, 0] - ax, points[i, 1] - ay
+            u = min(max((rx * ex + ry * ey) / length2, 0.0), 1.0)
+            dx, dy = rx - u * ex, ry - u * ey
+            near2[i] = min(near2[i], dx * dx + dy * dy)
+    return np.sqrt(near2)
+
+
+def small_clusters(points: np.ndarray, world: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """The scan's clusters that may be something moving: (each one's indices into ``points``,
+    their centres in ``world``, (k, 2)). ``points`` (robot frame) are cut where neighbouring
+    returns are more than CLUSTER_GAP apart (the last joins the first across the scan's ends);
+    a cluster of at least 3 returns none farther than CLUSTER_SIZE from its centre is kept."""
+    if not len(points):
+        return [], np.zeros((0, 2))
+    jumps = np.hypot(*np.diff(points, axis=0).T) > CLUSTER_GAP
+    labels = np.concatenate([[0], np.cumsum(jumps)])
+    if labels[-1] > 0 and np.hypot(*(points[0] - points[-1])) <= CLUSTER_GAP:
+        labels[labels == labels[-1]] = 0  # the scan wraps around
+    order = np.argsort(labels, kind="stable")  # each cluster's returns together, in scan order
+    cuts = np.flatnonzero(np.diff(labels[order])) + 1
+    starts = np.concatenate([[0], cuts])
+    counts = np.diff(np.append(starts, len(order)))
+    centre = np.add.reduceat(points[order], starts, axis=0) / counts[:, None]
+    spread = np.hypot(*(points[order] - np.repeat(centre, counts, axis=0)).T)
+    keep = (counts >= 3) & (np.maximum.reduceat(spread, starts) <= CLUSTER_SIZE)
+    centres = np.add.reduceat(world[order], starts, axis=0) / counts[:, None]
+    return ([index for index, kept in zip(np.split(order, cuts), keep) if kept],
+            centres[keep].reshape(-1, 2))
+
+
+def median(values: np.ndarray) -> float:
+    """The median of a few values (np.median's, without its overhead)."""
+    ordered = np.sort(values)
+    half = len(ordered) // 2
+    return float(ordered[half] if len(ordered) % 2 else 0.5 * (ordered[half - 1] + ordered[half]))
 
 
 class MovingObstacleTracker:
@@ -66,18 +110,7 @@ class MovingObstacleTracker:
         c, s_ = math.cos(theta), math.sin(theta)
         rotate = np.array([[c, -s_], [s_, c]])  # robot frame -> world
         world = points @ rotate.T + (x, y)
-        members = []
-        if len(points):
-            jumps = np.hypot(*np.diff(points, axis=0).T) > CLUSTER_GAP
-            labels = np.concatenate([[0], np.cumsum(jumps)])
-            if labels[-1] > 0 and np.hypot(*(points[0] - points[-1])) <= CLUSTER_GAP:
-                labels[labels == labels[-1]] = 0  # the scan wraps around
-            for label in np.unique(labels):
-                index = np.flatnonzero(labels == label)
-                centre = points[index].mean(axis=0)
-                if len(index) >= 3 and np.hypot(*(points[index] - centre).T).max() <= CLUSTER_SIZE:
-                    members.append(index)
-        centres = np.array([world[index].mean(axis=0) for index in members]).reshape(-1, 2)
+        members, centres = small_clusters(points, world)
         self._history = [h for h in self._history if h[0] < stamp and stamp - h[0] <= 2 * BASELINE]
         old = [h for h in self._history if stamp - h[0] >= BASELINE - 1e-6]
         self._history.append((stamp, world, centres))
@@ -91,7 +124,7 @@ class MovingObstacleTracker:
         for index, centre in zip(members, centres):
             if np.hypot(*(centre - (x, y))) > TRACK_RANGE:
                 continue
-            if np.median(distance_to_polyline(world[index], old_world, CLUSTER_GAP)) < MOVED_DISTANCE:
+            if median(distance_to_polyline(world[index], old_world, CLUSTER_GAP)) < MOVED_DISTANCE:
                 continue  # still on the old returns: static
             shift = centre - old_centres[np.argmin(np.hypot(*(old_centres - centre).T))]
             velocity = shift / dt
