@@ -95,7 +95,8 @@ def train(minutes: float, seed: int = 0, hidden: int = 8, popsize: int = 16,
     from pymunk_bot.envs import NavigationEnv
 
     probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True))
-    layer_shapes = shapes(probe.observation_space.shape[0], hidden)
+    inputs = probe.episode.task.obs_size
+    layer_shapes = shapes(inputs, hidden)
     size = sum(a * b + b for a, b in layer_shapes)
     es = cma.CMAEvolutionStrategy(np.zeros(size), sigma, {
         "popsize": popsize, "seed": seed + 1, "verbose": -9,

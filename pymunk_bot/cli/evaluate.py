@@ -3,8 +3,8 @@ contacts and time to goal, with 95 % confidence intervals.
 
 Each episode is the scenario in ``pymunk_bot/Navigation-v0`` (the policy drives its first
 robot, or ``--robot``) reset with seed ``--seed + k``; ``--random-goal``, ``--random-start``
-and ``--generate KIND`` draw a new goal, start pose or generated world per episode
-(:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input.
+and ``--generate KIND`` (of ``--size``, seeds from ``--world-seeds``) draw a new goal, start
+pose or generated world per episode (:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input.
 """
 from __future__ import annotations
 
@@ -37,6 +37,8 @@ def add_parser(sub) -> None:
                    help="a generated world per episode (the scenario's robot in it)")
     p.add_argument("--world-seeds", default=None, metavar="LOW:HIGH",
                    help="generated worlds' seeds are drawn from [LOW, HIGH)")
+    p.add_argument("--size", type=float, nargs=2, default=None, metavar=("WIDTH", "HEIGHT"),
+                   help="generated worlds' arena [m] (default: the kind's own)")
     p.add_argument("--max-time", type=duration_seconds, default=None,
                    help="episode time limit [s] (default: the scenario's world.duration)")
     p.add_argument("--control-period", type=duration_seconds, default=0.1,
@@ -52,6 +54,11 @@ def env_kwargs(args: argparse.Namespace) -> dict:
     randomize: dict = {}
     if args.generate is not None:
         randomize["generate"] = args.generate
+    for option, value in (("--world-seeds", args.world_seeds), ("--size", args.size)):
+        if value is not None and args.generate is None:
+            raise ScenarioError(option, "", "applies to generated worlds: add --generate KIND")
+    if args.size is not None:
+        randomize["size"] = list(args.size)
     if args.world_seeds is not None:
         low, _, high = args.world_seeds.partition(":")
         try:

@@ -86,3 +86,26 @@ def test_the_shipped_policy_on_its_shipped_scenario_from_another_folder(tmp_path
                   "--episodes", "2", "--json", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["reached"]["rate"] == 1.0
+
+
+def test_generated_worlds_take_the_size_asked_for():
+    import argparse
+
+    from pymunk_bot.cli.evaluate import add_parser, env_kwargs
+    from pymunk_bot.envs import NavigationEnv
+
+    parser = argparse.ArgumentParser()
+    add_parser(parser.add_subparsers())
+    args = parser.parse_args(["evaluate", "p.npz", "policy_clutter", "--generate", "clutter",
+                              "--size", "8", "6", "--world-seeds", "1000000:2000000"])
+    env = NavigationEnv(**env_kwargs(args))
+    env.reset(seed=3)
+    assert env.sim is not None and env.sim.config.world.size == (8.0, 6.0)
+
+
+def test_size_without_generate_is_one_line_exit_2(tmp_path):
+    policy, scenario = homing(tmp_path)
+    out = run_cli("evaluate", policy, scenario, "--size", "8", "6")
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        "error: --size: applies to generated worlds: add --generate KIND"]
