@@ -115,7 +115,7 @@ class SlamConfig(Section):
     loop_min_travel: Distance = 5.0  # [m] travelled since a keyframe before it can close a loop
     loop_min_inliers: Weight = 0.7  # fraction of scan points that must match a loop closure
     max_pair: Distance = 0.3  # [m] ICP pairs a point with a reference point at most this far
-    huber: Distance = 0.05  # [m] ICP residuals beyond this count linearly
+    huber: Distance = 0.05  # [m] scale of the ICP's robust (Cauchy) kernel
     iterations: Annotated[Int, Field(ge=1, le=100)] = 20  # ICP iterations per match
     max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 180
     optimize_every: Annotated[Int, Field(ge=1, le=10_000)] = 1  # loop closures between optimizations

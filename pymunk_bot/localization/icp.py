@@ -1,9 +1,10 @@
-"""Point-to-line ICP (Censi's PLICP idea, Gauss-Newton form): align a scan with reference points.
+"""Point-to-line ICP (Censi's PLICP idea, Gauss-Newton form): align a scan with reference lines.
 
-Reference points carry normals, estimated from their neighbours along the scan that made them
-(consecutive beam ends closer than ``max_gap``); each scan point is paired with the nearest
-reference point (scipy's cKDTree) within ``max_pair`` and the error is its distance to that
-point's line, n . (R p + t - q). Continuous geometry: no grid, so no quantisation bias.
+The reference is a submap of local line fits (:meth:`Reference.surfaces`): centroids and
+normals of the neighbourhoods of the submap's end points. Each scan point is paired with the
+nearest fit (scipy's cKDTree) within ``max_pair``; its error is its distance to that line,
+n . (R p + t - q), weighed by Cauchy's kernel; an optional prior (the odometry) makes the
+match a maximum a posteriori one. Continuous geometry: no grid, so no quantisation bias.
 """
 from __future__ import annotations
 
@@ -13,20 +14,13 @@ from scipy.spatial import cKDTree
 from .scanmatch import MIN_POINTS, Match
 from .se2 import transform_points, wrap
 
-
-def scan_normals(points: np.ndarray, beams: np.ndarray, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
-    """Points that have a neighbour on both sides along the scan, and their unit normals."""
-    if points.shape[0] < 3:
-        return np.empty((0, 2)), np.empty((0, 2))
-    prev, nxt = points[:-2], points[2:]
-    mid = points[1:-1]
-    ok = (np.diff(beams)[:-1] == 1) & (np.diff(beams)[1:] == 1)
-    ok &= (np.hypot(*(mid - prev).T) < max_gap) & (np.hypot(*(nxt - mid).T) < max_gap)
-    tangent = nxt - prev
-    length = np.hypot(*tangent.T)
-    ok &= length > 1e-9
-    tangent = tangent[ok] / length[ok, None]
-    return mid[ok], np.stack([-tangent[:, 1], tangent[:, 0]], axis=-1)
+POINT_CORRELATION = 3.0  # variance inflation for correlated neighbouring beams (as ekf's match_cov_scale)
+MIN_POINT_STD = 0.002  # [m] floor of the per-point residual std
+SURFACE_RADIUS = 0.2  # [m] neighbourhood of a reference point's line fit
+SURFACE_NEIGHBOURS = 32  # at most this many neighbours per fit (enough to fill SURFACE_RADIUS)
+SURFACE_CELL = 0.04  # [m] the submap's points are thinned to one per cell of this size
+SURFACE_MIN_POINTS = 5  # fewer neighbours within SURFACE_RADIUS: no fit
+SURFACE_THINNESS = 0.4  # std across / std along the line at most this
 
 
 class Reference:
@@ -36,11 +30,48 @@ class Reference:
         self.points, self.normals = points, normals
         self.tree = cKDTree(points) if points.shape[0] else None
 
+    @classmethod
+    def surfaces(cls, points: np.ndarray, radius: float = SURFACE_RADIUS) -> "Reference":
+        """Local line fits of a cloud (the end points of several scans, world frame): for each
+        point, the centroid and normal of its neighbours within ``radius`` (at least
+        SURFACE_MIN_POINTS, thin enough to be a line: corners and clutter are left out). Fitted
+        over every scan of the submap, the lines average the range noise out; a normal from a
+        point's two neighbours in its own scan was tilted by about 6 deg at 5 m with 180 beams
+        and 2.5 cm noise, and pairing with a raw noisy point added that point's noise."""
+        empty = cls(np.empty((0, 2)), np.empty((0, 2)))
+        if points.shape[0] < SURFACE_MIN_POINTS:
+            return empty
+        # One point per SURFACE_CELL (the centroid of those in it): overlapping scans would
+        # otherwise pack a point's nearest neighbours into a few centimetres of wall.
+        _, cell, per_cell = np.unique(np.floor(points / SURFACE_CELL).astype(np.int64), axis=0,
+                                      return_inverse=True, return_counts=True)
+        cell = cell.ravel()
+        points = np.column_stack([np.bincount(cell, points[:, 0]), np.bincount(cell, points[:, 1])]) / per_cell[:, None]
+        if points.shape[0] < SURFACE_MIN_POINTS:
+            return empty
+        _, idx = cKDTree(points).query(points, k=SURFACE_NEIGHBOURS, distance_upper_bound=radius)
+        padded = np.vstack([points, np.full((1, 2), np.nan)])
+        near = padded[idx]  # (n, k, 2); NaN where fewer than k neighbours
+        count = np.count_nonzero(idx < points.shape[0], axis=1)
+        centroid = np.nanmean(near, axis=1)
+        centred = np.nan_to_num(near - centroid[:, None, :])
+        cov = np.einsum("nki,nkj->nij", centred, centred) / np.maximum(count, 1)[:, None, None]
+        values, vectors = np.linalg.eigh(cov)  # ascending: column 0 is the normal
+        keep = (count >= SURFACE_MIN_POINTS) & (values[:, 0] <= SURFACE_THINNESS ** 2 * values[:, 1])
+        if not keep.any():
+            return empty
+        return cls(centroid[keep], vectors[keep, :, 0])
+
 
 def icp(reference: Reference, points: np.ndarray, guess: np.ndarray, iterations: int = 20,
-        max_pair: float = 0.3, huber: float = 0.05, cov_scale: float = 1.0) -> Match:
-    """Align robot-frame ``points`` (m, 2) with ``reference``, from ``guess``."""
+        max_pair: float = 0.3, huber: float = 0.05, cov_scale: float = 1.0,
+        prior: np.ndarray | None = None) -> Match:
+    """Align robot-frame ``points`` (m, 2) with ``reference``, from ``guess``. ``prior``: the
+    information matrix (3x3, world frame) of ``guess`` as a measurement of the pose (odometry):
+    the match is then the maximum a posteriori pose, which holds the directions the scan does
+    not fix (a corridor's length) where the odometry puts them instead of letting them slide."""
     pose = np.array(guess, dtype=float)
+    prior_info = np.zeros((3, 3)) if prior is None else np.asarray(prior, dtype=float)
     fail = Match(pose, np.eye(3) * 1e6, 0.0, float("inf"), False)
     if reference.tree is None or points.shape[0] < MIN_POINTS:
         return fail
@@ -60,10 +91,19 @@ def icp(reference: Reference, points: np.ndarray, guess: np.ndarray, iterations:
         dx = -s * p[:, 0] - c * p[:, 1]
         dy = c * p[:, 0] - s * p[:, 1]
         jac = np.column_stack([n[:, 0], n[:, 1], n[:, 0] * dx + n[:, 1] * dy])
-        w = np.where(np.abs(r) <= huber, 1.0, huber / np.maximum(np.abs(r), 1e-12))
-        hessian = (jac * w[:, None]).T @ jac
+        # Cauchy's kernel: a point paired with the wrong surface (a place the reference has not
+        # seen yet, paired with the edge of what it has) pulls less the farther it is; Huber's
+        # pulled with a constant force, always backwards for a robot driving into the unknown.
+        w = 1.0 / (1.0 + (r / huber) ** 2)
+        # Per-point variance: the robust spread of the residuals, inflated for the correlation
+        # of neighbouring beams (POINT_CORRELATION), to weigh the scan against the prior.
+        variance = POINT_CORRELATION * max((1.4826 * float(np.median(np.abs(r)))) ** 2, MIN_POINT_STD ** 2)
+        hessian = (jac * w[:, None]).T @ jac / variance + prior_info
+        offset = pose - np.asarray(guess, dtype=float)
+        offset[2] = float(wrap(offset[2]))
         try:
-            step = -np.linalg.solve(hessian + 1e-9 * np.eye(3), (jac * w[:, None]).T @ r)
+            step = -np.linalg.solve(hessian + 1e-9 * np.eye(3),
+                                    (jac * w[:, None]).T @ r / variance + prior_info @ offset)
         except np.linalg.LinAlgError:
             return fail
         pose += step
@@ -75,7 +115,6 @@ def icp(reference: Reference, points: np.ndarray, guess: np.ndarray, iterations:
     m = int(np.count_nonzero(inlier))
     if m < MIN_POINTS or np.linalg.cond(hessian) > 1e8:
         return Match(pose, np.eye(3) * 1e6, m / points.shape[0], float("inf"), False)
-    variance = float(np.sum(r[inlier] ** 2)) / max(m - 3, 1)
-    covariance = max(variance, 1e-8) * np.linalg.inv(hessian) * cov_scale
+    covariance = np.linalg.inv(hessian) * cov_scale
     return Match(pose, 0.5 * (covariance + covariance.T), m / points.shape[0],
                  float(np.sqrt(np.mean(r[inlier] ** 2))), True)

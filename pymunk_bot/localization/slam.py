@@ -1,8 +1,9 @@
 """Pose-graph SLAM: the robot maps as it goes and corrects its odometry against its own map.
 
 - **Front end.** Every ``keyframe_d`` of travel or ``keyframe_a`` of turn (by odometry), the
-  new scan is aligned by point-to-line ICP (icp.py) with the end points of the latest
-  ``LOCAL_KEYFRAMES`` keyframes, starting from the odometry prediction. (Matching against the
+  new scan is aligned by point-to-line ICP (icp.py) with line fits of the end points of the
+  latest ``LOCAL_KEYFRAMES`` keyframes, from the odometry prediction, with the odometry as the
+  match's prior (``odometry_information``: an uncalibrated robot's step error). (Matching against the
   occupancy grid itself was tried: its 5 cm cells bias each match by millimetres and
   milliradians, and those add up over hundreds of keyframes.) The matched pose becomes a
   keyframe, joined to the previous one by an edge with the match's covariance, and its scan
@@ -27,7 +28,7 @@ from .base import Localizer, LocalizerContext, LocalizerInputs
 from .config import MappingConfig, SlamConfig
 from .mapping import OccupancyMapper
 from .posegraph import Edge, optimize
-from .icp import Reference, icp, scan_normals
+from .icp import Reference, icp
 from .scanmatch import subsample
 from .se2 import between, compose, scan_points, transform_points
 
@@ -35,6 +36,26 @@ EDGE_FLOOR = np.diag([0.01, 0.01, 0.005]) ** 2  # [m^2, m^2, rad^2] added to eve
 LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes
 SUBMAP_NEIGHBOURS = 10  # keyframes either side of a loop candidate in its submap
 MIN_KEYFRAMES_BETWEEN_CLOSURES = 10
+
+
+# How far the odometry of an uncalibrated robot may be off over one keyframe step (the EKF's
+# defaults, docs/localization.md): a systematic share of the motion (wheel radii, track
+# width) and a random walk per metre driven and per radian turned.
+ODOMETRY_SCALE_ERROR = 0.03  # fraction of the step
+ODOMETRY_TRANS_NOISE = 0.03  # [m/sqrt(m)]
+ODOMETRY_ROT_NOISE = 0.1  # [rad/sqrt(m)]
+ODOMETRY_TURN_NOISE = 0.1  # [rad/sqrt(rad)]
+
+
+def odometry_information(step: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    """Information matrix (world frame) of the pose ``predicted`` by an odometry ``step``
+    (robot frame, from the last keyframe): the front end's prior."""
+    d, a = float(np.hypot(step[0], step[1])), abs(float(step[2]))
+    trans = (ODOMETRY_SCALE_ERROR * d) ** 2 + ODOMETRY_TRANS_NOISE ** 2 * d + 1e-8
+    rot = (ODOMETRY_SCALE_ERROR * a) ** 2 + ODOMETRY_ROT_NOISE ** 2 * d + ODOMETRY_TURN_NOISE ** 2 * a + 1e-8
+    c, s = np.cos(predicted[2]), np.sin(predicted[2])
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rotation @ np.diag([1.0 / trans, 1.0 / trans, 1.0 / rot]) @ rotation.T
 
 
 class SlamLocalizer(Localizer):
@@ -53,7 +74,7 @@ class SlamLocalizer(Localizer):
         self._scans: list = []  # the LaserScan of each keyframe
         self._points: list[np.ndarray] = []  # its subsampled end points, robot frame
         self._odom: list[np.ndarray] = []  # odometry at each keyframe
-        self._local_normals: list = []  # (points, normals) of each keyframe, robot frame
+        self._local: list[np.ndarray] = []  # all end points of each keyframe's scan, robot frame
         self._travel: list[float] = []  # odometry distance driven up to each keyframe [m]
         self.edges: list[Edge] = []
         self.loop_closures: list[tuple[int, int]] = []
@@ -98,7 +119,7 @@ class SlamLocalizer(Localizer):
             c = self.config
             match = icp(self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
                                               len(self.keyframes))), points, predicted,
-                        c.iterations, c.max_pair, c.huber)
+                        c.iterations, c.max_pair, c.huber, prior=odometry_information(moved, predicted))
             pose, cov = (match.pose, match.covariance) if match.ok and match.inliers > 0.5 else (
                 predicted, np.diag([0.05, 0.05, 0.05]) ** 2)
             self._add_keyframe(pose, odom, scan, travel, cov)
@@ -109,9 +130,9 @@ class SlamLocalizer(Localizer):
         index = len(self.keyframes)
         self.keyframes.append(np.array(pose, dtype=float))
         self._scans.append(scan)
-        points, beams = scan_points(scan)
+        points, _ = scan_points(scan)
         self._points.append(subsample(points, self.config.max_beams))
-        self._local_normals.append(scan_normals(points, beams))
+        self._local.append(points)
         self._odom.append(odom.copy())
         self._travel.append(travel)
         if cov is not None:
@@ -122,15 +143,9 @@ class SlamLocalizer(Localizer):
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
     def _reference(self, keyframes) -> Reference:
-        """The end points (with normals) of these keyframes' scans, in the world frame."""
-        pts, normals = [], []
-        for k in keyframes:
-            p, n = self._local_normals[k]
-            pose = self.keyframes[k]
-            pts.append(transform_points(pose, p))
-            c, s = np.cos(pose[2]), np.sin(pose[2])
-            normals.append(n @ np.array([[c, s], [-s, c]]))
-        return Reference(np.concatenate(pts), np.concatenate(normals))
+        """The surfaces (line fits) of these keyframes' end points, in the world frame."""
+        return Reference.surfaces(np.concatenate([transform_points(self.keyframes[k], self._local[k])
+                                                  for k in keyframes]))
 
     # ------------------------------------------------------------------ loops
     def _close_loop(self, index: int) -> bool:

@@ -5,7 +5,7 @@ from pydantic import ValidationError
 
 import harness
 from pymunk_bot.localization import MclConfig, MclLocalizer
-from pymunk_bot.localization.mcl import kld_limit, low_variance_indices
+from pymunk_bot.localization.particles import kld_limit, low_variance_indices
 from pymunk_bot.localization.motion import sample_motion
 
 # Tracking uses the defaults (issue 20: they must work on their own).
@@ -98,7 +98,7 @@ def test_mcl_without_a_map_is_refused():
 def test_roughening_a_cloud_of_equal_headings_gives_finite_poses():
     # The mean resultant of equal headings rounds to just above 1: log > 0 made the circular
     # std NaN, and every particle NaN with it (seen in global runs of the robustness bench).
-    from pymunk_bot.localization.mcl import roughen
+    from pymunk_bot.localization.particles import roughen
 
     poses = np.tile([1.0, 2.0, 0.3], (1000, 1))
     assert np.isfinite(roughen(poses, np.random.default_rng(0))).all()

@@ -3,7 +3,10 @@ office, and a kidnapped robot re-localizes, both with MCL's defaults and without
 
 Before: a global start in generated offices converged within 20 s in 0 of 10 seeds (AMCL's
 ``1 + sum pz^3`` barely told the rooms apart while the robot turned on the spot), and a
-kidnapped robot stayed lost (AMCL's recovery injects a few random particles once).
+kidnapped robot stayed lost (AMCL's recovery injects a few random particles once). Then 5 of
+10 (global) and 4 of 10 (kidnapped): in the failures no particle was ever near the truth, and
+the cloud settled on a look-alike room, until MCL seeded particles where the scan fits the
+map (posesearch.py, tests/localization/test_posesearch.py).
 """
 from __future__ import annotations
 
@@ -46,7 +49,7 @@ def test_a_kidnapped_robot_relocalizes_within_20_s_without_collision():
         if (math.hypot(est[0] - truth[0], est[1] - truth[1]) > 0.3
                 or abs(math.remainder(est[2] - truth[2], math.tau)) > math.radians(10.0)):
             last_bad = sim.time
-    assert mcl.restarts >= 1  # the contradicted cloud started over
+    assert mcl.reseeded > 0  # particles were put where the scan fits the map
     assert last_bad - 3.0 <= 20.0
     assert r.collisions == 0
 
