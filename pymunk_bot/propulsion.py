@@ -170,12 +170,17 @@ class Propulsion:
             for k, twist in zip(members, zip(*_floats(twists))):
                 self._aim(k, twist, h, h_next)
             return
-        for k in members:  # what _aim keeps per robot
-            if self._anchored[k]:
-                self.pivots[k].anchor_a = (0.0, 0.0)
-                self._anchored[k] = False
-            self._held[k] = None
-            self._given[k] = _UNKNOWN
+        if any(self._anchored):  # from holding: the anchors back to the centres
+            for k in members:
+                if self._anchored[k]:
+                    self.pivots[k].anchor_a = (0.0, 0.0)
+                    self._anchored[k] = False
+        if len(members) == self.n:  # what _aim keeps per robot, for all at once
+            self._held, self._given = [None] * self.n, [_UNKNOWN] * self.n
+        else:
+            for k in members:
+                self._held[k] = None
+                self._given[k] = _UNKNOWN
         self._aim_rows(np.asarray(members, dtype=np.intp), twists, h, h_next)
 
     def _step_batched(self, h: float, substeps: int, h_last: float) -> None:
@@ -272,7 +277,9 @@ class Propulsion:
     def _aim_rows(self, members: np.ndarray, twists: tuple[Any, Any, Any], h: float,
                   h_next: float) -> None:
         """:meth:`_aim` of robots ``members`` (twists in their order), read and written as rows."""
-        ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
+        ux = np.asarray(twists[0], dtype=np.float64)
+        uy = np.asarray(twists[1], dtype=np.float64)
+        omega = np.asarray(twists[2], dtype=np.float64)
         state = self._read_state()
         out = self._out
         out[:, :2] = state[:, 1:3]  # every other body keeps its velocity
