@@ -38,7 +38,8 @@ ROBOT_BUFFER = 1.0  # [m] no pedestrian starts closer to the robot's start or go
 CORRIDOR_WIDTH = 3.0  # [m]
 DOOR_WIDTH = 1.2  # [m]
 WALL_THICKNESS = 0.1  # [m]
-ATTEMPTS = 200  # draws of the stage before giving up
+ATTEMPTS = 200  # draws of the stage over which it shrinks to half its size ...
+MAX_ATTEMPTS = 1000  # ... again and again (a small stage may fit nothing), before giving up
 HUMAN_ATTEMPTS = 200  # draws per pedestrian
 ROUTE_MARGIN = 3.0  # [m] routes may leave the stage's disc by this much
 
@@ -216,9 +217,9 @@ def draw_layout(name: str, world: dict, obstacles: list[dict], robot: dict, huma
     side = min(stage, x1 - x0 - 0.4, y1 - y0 - 0.4)
     if side < 3.0:
         raise LayoutError(f"the world is too small for a {name} stage (needs 3 m, has {side:.2f} m)")
-    for attempt in range(ATTEMPTS):
+    for attempt in range(MAX_ATTEMPTS):
         # A world with little open room gets a stage that shrinks, down to half (or 3 m).
-        size = max(3.0, side * (1.0 - 0.5 * attempt / ATTEMPTS))
+        size = max(3.0, side * (1.0 - 0.5 * (attempt % ATTEMPTS) / ATTEMPTS))
         centre = np.array([rng.uniform(x0 + size / 2, x1 - size / 2),
                            rng.uniform(y0 + size / 2, y1 - size / 2)])
         if map_geometry is None and not obstacles:
@@ -241,7 +242,7 @@ def draw_layout(name: str, world: dict, obstacles: list[dict], robot: dict, huma
         placed["goal"] = dict(robot.get("goal", {}), position=[round(float(goal[0]), 3),
                                                                round(float(goal[1]), 3)])
         return obstacles + walls + walkers, placed
-    raise LayoutError(f"no room for the {name} layout in {ATTEMPTS} draws of seed {seed}")
+    raise LayoutError(f"no room for the {name} layout in {MAX_ATTEMPTS} draws of seed {seed}")
 
 
 def _walkers(name: str, stage: Stage, place: Placement, rng: np.random.Generator, humans: int,

@@ -65,6 +65,15 @@ def test_the_shipped_suite_draws_every_layout_deterministically():
         assert place.free(np.array(p["center"]), 0.25)
 
 
+@pytest.mark.parametrize("seed", [7, 25, 26])
+def test_a_tight_layout_is_found_for_seeds_whose_first_draws_miss(seed):
+    # The dense corridor in the office map: these seeds' first 200 draws (the stage shrinking
+    # to half) found no room, and the episodes failed; the sweep of sizes now repeats.
+    entry = next(e for e in load_suite("crowds") if e.scenario == "office-corridor_passing-dense")
+    data = episode_data(entry, seed)
+    assert sum(o["type"] == "pedestrian" for o in data["obstacles"]) == 8
+
+
 def test_rows_are_the_same_on_serial_and_process_backends(suite, tmp_path):
     choices = controller_choices(["go_to_goal", "avoid"])
     entries = load_suite(str(suite))
