@@ -277,15 +277,11 @@ class Propulsion:
     def _aim_rows(self, members: np.ndarray, twists: tuple[Any, Any, Any], h: float,
                   h_next: float) -> None:
         """:meth:`_aim` of robots ``members`` (twists in their order), read and written as rows."""
-        ux = np.asarray(twists[0], dtype=np.float64)
-        uy = np.asarray(twists[1], dtype=np.float64)
-        omega = np.asarray(twists[2], dtype=np.float64)
-        state = self._read_state()
-        out = self._out
-        out[:, :2] = state[:, 1:3]  # every other body keeps its velocity
-        out[:, 2] = state[:, 3]
-        aim_rows(state, self._robot_rows, self._control_rows, members, ux, uy, omega, h, h_next,
-                 self.cog, out)
+        ux, uy, omega = twists
+        if not isinstance(ux, np.ndarray):  # a plugin drive's lists
+            ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
+        aim_rows(self._read_state(), self._robot_rows, self._control_rows, members, ux, uy,
+                 omega, h, h_next, self.cog, self._out)
         batch.set_space_bodies(self.space, _WRITE, self._write)
 
     def positions(self) -> Any:

@@ -122,7 +122,7 @@ class DriveUnits:
         """Per unit: its motors have reached their commands."""
         if self.starts is None:
             return [self.group.settled()]
-        return np.logical_and.reduceat(self.group.settled_rows(), self.starts).tolist()
+        return self.group.settled_units(self.starts)
 
     def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int]]:
         """The rows of these units (None: every row) and their robots."""

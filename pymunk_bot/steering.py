@@ -72,7 +72,9 @@ def aim_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray
              h_next: float, cog: np.ndarray, out: np.ndarray) -> None:
     """:func:`aim` for robots ``members`` (their twists in the same order), from the bodies'
     ``state`` rows (angle, vx, vy, omega) in pymunk's body order: each control body's
-    (vx, vy, omega) into ``out`` (rows in the same order)."""
+    (vx, vy, omega) into ``out`` (rows in the same order), every other body's as it is."""
+    for r in range(state.shape[0]):
+        out[r, 0], out[r, 1], out[r, 2] = state[r, 1], state[r, 2], state[r, 3]
     for j in range(members.shape[0]):
         k = members[j]
         r = robot_rows[k]

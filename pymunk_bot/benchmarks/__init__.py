@@ -154,11 +154,20 @@ def _learning(quick: bool) -> list[Verdict]:
                  "pip install 'pymunk-bot[rl]')", None)]
     from . import learning
     result = learning.run(quick)
-    return [(f"one env: >= {learning.ENV_TARGET:g}x bare pymunk (got {result['env_ratio']:.2f}x)",
-             result["env_ratio"] >= learning.ENV_TARGET),
-            (f"16 envs as a vector env: >= {learning.VECTOR_TARGET:g}x 16 separate envs "
-             f"(got {result['vector_16_ratio']:.2f}x)",
-             result["vector_16_ratio"] >= learning.VECTOR_TARGET)]
+    verdicts: list[Verdict] = [
+        (f"one env: >= {learning.ENV_TARGET:g}x bare pymunk (got {result['env_ratio']:.2f}x)",
+         result["env_ratio"] >= learning.ENV_TARGET),
+        (f"16 envs as a vector env: >= {learning.VECTOR_TARGET:g}x 16 separate envs "
+         f"(got {result['vector_16_ratio']:.2f}x)",
+         result["vector_16_ratio"] >= learning.VECTOR_TARGET),
+        (f"16 envs as a vector env, random actions: >= {learning.VECTOR_RATE_TARGET:,.0f} "
+         f"env steps/s (got {result['vector_16_random'][0]:,.0f})",
+         result["vector_16_random"][0] >= learning.VECTOR_RATE_TARGET)]
+    if "process_scaling" in result:
+        verdicts.append((f"process sweep, 2 workers: >= {learning.SCALING_TARGET:g}x serial (got "
+                         f"{result['process_scaling']:.2f}x)",
+                         result["process_scaling"] >= learning.SCALING_TARGET))
+    return verdicts
 
 
 def _fuzz(quick: bool) -> list[Verdict]:

@@ -52,6 +52,11 @@ class DriveGroup:
         """:meth:`settled` robot by robot (a stacked group's); never, unless a drive can tell."""
         return np.zeros(self.n, dtype=np.bool_)
 
+    def settled_units(self, starts: np.ndarray) -> list[bool]:
+        """:meth:`settled` of each run of rows from each of ``starts`` to the next (a stacked
+        group's copies)."""
+        return np.logical_and.reduceat(self.settled_rows(), starts).tolist()
+
     # ------------------------------------------------------------------ commands
     def set_command(self, i: int, command: Any) -> None:
         """Robot ``i`` drives with this :class:`Command` (limited to what the drive can do)."""

@@ -104,6 +104,11 @@ class DiffDriveGroup(DriveGroup):
         """:meth:`settled` robot by robot (a stacked group's)."""
         return (self.commanded == self.target).all(axis=1)
 
+    def settled_units(self, starts: np.ndarray) -> list[bool]:
+        flags = np.empty(starts.shape[0], dtype=np.bool_)
+        _settled_units(self.commanded, self.target, starts, flags)
+        return flags.tolist()
+
     def coast(self, h: float, substeps: int, rows: np.ndarray | None = None
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """See :meth:`DriveGroup.coast`; ``rows``: as in :meth:`advance`."""
@@ -229,3 +234,13 @@ def _equal_rows(a: np.ndarray, b: np.ndarray) -> bool:
             if a[i, j] != b[i, j]:
                 return False
     return True
+
+
+@numba.njit(cache=True)
+def _settled_units(commanded: np.ndarray, target: np.ndarray, starts: np.ndarray,
+                   flags: np.ndarray) -> None:
+    """Per run of rows from each of ``starts`` to the next: every wheel's command has reached
+    its target."""
+    for u in range(starts.shape[0]):
+        stop = starts[u + 1] if u + 1 < starts.shape[0] else commanded.shape[0]
+        flags[u] = _equal_rows(commanded[starts[u]:stop], target[starts[u]:stop])
