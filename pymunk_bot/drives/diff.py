@@ -197,16 +197,12 @@ def _advance_rows(rows: np.ndarray, commanded: np.ndarray, target: np.ndarray,
     max_accel * h, and the body twists (ux [m/s], omega [rad/s]) of the new commands."""
     for j in range(rows.shape[0]):
         i = rows[j]
-        left, right = commanded[i, 0], commanded[i, 1]
-        turning[i, 0], turning[i, 1] = left, right
-        travel[i, 0] += left * h
-        travel[i, 1] += right * h
+        _turn_wheels(i, commanded, turning, travel, h)
         step = max_accel[i] * h
-        left += min(step, max(-step, target[i, 0] - left))
-        right += min(step, max(-step, target[i, 1] - right))
-        commanded[i, 0], commanded[i, 1] = left, right
-        ux[j] = 0.5 * (left + right)
-        omega[j] = (right - left) / track[i]
+        for wheel in range(2):
+            speed = commanded[i, wheel]
+            commanded[i, wheel] = speed + min(step, max(-step, target[i, wheel] - speed))
+        _twist(i, j, commanded, track, ux, omega)
 
 
 @numba.njit(cache=True)
@@ -217,12 +213,27 @@ def _coast_rows(rows: np.ndarray, commanded: np.ndarray, turning: np.ndarray,
     the body twists as in :func:`_advance_rows`."""
     for j in range(rows.shape[0]):
         i = rows[j]
-        left, right = commanded[i, 0], commanded[i, 1]
-        turning[i, 0], turning[i, 1] = left, right
-        travel[i, 0] += left * span
-        travel[i, 1] += right * span
-        ux[j] = 0.5 * (left + right)
-        omega[j] = (right - left) / track[i]
+        _turn_wheels(i, commanded, turning, travel, span)
+        _twist(i, j, commanded, track, ux, omega)
+
+
+@numba.njit(cache=True)
+def _turn_wheels(i: int, commanded: np.ndarray, turning: np.ndarray, travel: np.ndarray,
+                 span: float) -> None:
+    """Robot ``i``'s wheels turn at their commanded speeds [m/s] for ``span`` [s]."""
+    for wheel in range(2):
+        turning[i, wheel] = commanded[i, wheel]
+        travel[i, wheel] += commanded[i, wheel] * span
+
+
+@numba.njit(cache=True)
+def _twist(i: int, j: int, commanded: np.ndarray, track: np.ndarray, ux: np.ndarray,
+           omega: np.ndarray) -> None:
+    """Row ``j`` of the twists: robot ``i``'s body speed [m/s] and yaw rate [rad/s] from its
+    commanded wheel speeds."""
+    left, right = commanded[i, 0], commanded[i, 1]
+    ux[j] = 0.5 * (left + right)
+    omega[j] = (right - left) / track[i]
 
 
 @numba.njit(cache=True)
