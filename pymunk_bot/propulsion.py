@@ -52,6 +52,15 @@ ROWS_AIM = 6
 _UNKNOWN = (math.nan,) * 3  # a control body's last written twist, when it was written as rows
 
 
+def _partition(units: list[int], settled: list[bool]) -> tuple[list[int], list[int]]:
+    """These units of a drive group split by their motors' state (``settled``: per unit of
+    the group): (settled, still moving). Random commands leave most units moving every tick."""
+    if not any(settled):
+        return [], units
+    calm = [u for u in units if settled[u]]
+    return calm, ([u for u in units if not settled[u]] if len(calm) < len(units) else [])
+
+
 def _floats(twists: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
     """Twists as lists of floats (robot by robot, numpy's scalars cost more than floats)."""
     ux, uy, omega = twists
@@ -116,13 +125,14 @@ class Propulsion:
         held: list[tuple[DriveUnits, list[int]]] = []
         loose: list[tuple[DriveUnits, list[int]]] = []
         for drives in self._drives:
-            flags = (drives.settled() if substeps > 1 and h_last == h
-                     else [False] * drives.units)
-            calm = [u for u, settled in enumerate(flags) if settled]
+            if substeps > 1 and h_last == h:
+                calm, moving = _partition(drives.every_unit, drives.settled())
+            else:
+                calm, moving = [], drives.every_unit
             if calm:
                 held.append((drives, calm))
-            if len(calm) < drives.units:
-                loose.append((drives, [u for u, settled in enumerate(flags) if not settled]))
+            if moving:
+                loose.append((drives, moving))
         steady = self._hold_units(held, h, substeps)  # held, yet aimed every substep
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
@@ -134,19 +144,18 @@ class Propulsion:
                 for k, twist in steady:
                     self._aim(k, twist, h, after)
             for drives, units in loose:
-                rows, members = drives.rows(units)
-                self._aim_members(members, drives.advance(h, rows), h, after)
+                rows, members, member_rows = drives.rows(units)
+                self._aim_members(members, member_rows, drives.advance(h, rows), h, after)
             space.step(h)
             left = substeps - 1 - sub
             if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
                 still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
-                    flags = drives.settled()
-                    calm = [u for u in units if flags[u]]
+                    calm, moving = _partition(units, drives.settled())
                     if calm:
                         steady += self._hold_units([(drives, calm)], h, left)
-                    if len(calm) < len(units):
-                        still.append((drives, [u for u in units if not flags[u]]))
+                    if moving:
+                        still.append((drives, moving))
                 loose = still
 
     def _hold_units(self, held: list[tuple[DriveUnits, list[int]]], h: float, substeps: int
@@ -156,16 +165,17 @@ class Propulsion:
         substep instead, with their twists."""
         steady: list[tuple[int, tuple[float, float, float]]] = []
         for drives, units in held:
-            rows, members = drives.rows(units)
+            rows, members, _ = drives.rows(units)
             for k, twist in zip(members, zip(*_floats(drives.coast(h, substeps, rows)))):
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
         return steady
 
-    def _aim_members(self, members: list[int], twists: tuple[Any, Any, Any], h: float,
-                     h_next: float) -> None:
-        """:meth:`_aim` for these robots (twists in their order): one by one when few, else as
-        rows (the same compiled formula: the same floats)."""
+    def _aim_members(self, members: list[int], member_rows: np.ndarray,
+                     twists: tuple[Any, Any, Any], h: float, h_next: float) -> None:
+        """:meth:`_aim` for these robots (twists in their order; ``member_rows``: ``members``
+        as an array): one by one when few, else as rows (the same compiled formula: the same
+        floats)."""
         if len(members) < ROWS_AIM:
             for k, twist in zip(members, zip(*_floats(twists))):
                 self._aim(k, twist, h, h_next)
@@ -181,7 +191,7 @@ class Propulsion:
             for k in members:
                 self._held[k] = None
                 self._given[k] = _UNKNOWN
-        self._aim_rows(np.asarray(members, dtype=np.intp), twists, h, h_next)
+        self._aim_rows(member_rows, twists, h, h_next)
 
     def _step_batched(self, h: float, substeps: int, h_last: float) -> None:
         """``step`` for many robots: held as a whole fleet when every group has settled,

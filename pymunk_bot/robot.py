@@ -12,6 +12,7 @@ import pymunk
 from .command import Command
 from .config.schema import RobotConfig
 from .drives.base import SMALL_GROUP
+from .fleet_rows import advance_rows
 from .readings import RobotSpec
 from .stacking import join_rows, split_rows
 
@@ -118,21 +119,24 @@ class Fleet:
     def advance(self, xy: Any, time: Any) -> None:
         """Bookkeeping after a tick at ``time`` [s], from every robot's new position [m]: an
         (n, 2) array, or a list of (x, y) for a small fleet."""
-        if self.small:
-            distance = self.distance
-            for i, ((x, y), (x0, y0)) in enumerate(zip(xy, self.xy)):
-                dx, dy = x - x0, y - y0
-                distance[i] += math.sqrt(dx * dx + dy * dy)  # as the arrays do, to the bit
-        else:
-            step = xy - self.xy
-            step *= step  # x^2 + y^2 below: a sum of two is the same float either way round
-            self.distance += np.sqrt(step.sum(axis=1))
+        if not self.small:
+            p = self._pending
+            times = time if isinstance(time, np.ndarray) else np.full(xy.shape[0], time)
+            reached = np.empty(p.shape[0], dtype=np.bool_)
+            last, self.xy = self.xy, xy
+            if advance_rows(xy, last, self.distance, p, self._pending_goal,
+                            self._pending_tolerance2, times, self.time_to_goal,
+                            self.distance_to_goal, reached):
+                self._pending = p[~reached]
+                self._refresh_targets()
+            return
+        distance = self.distance
+        for i, ((x, y), (x0, y0)) in enumerate(zip(xy, self.xy)):
+            dx, dy = x - x0, y - y0
+            distance[i] += math.sqrt(dx * dx + dy * dy)  # as the rows do, to the bit
         self.xy = xy
         if self._pending.shape[0]:
-            if self.small:
-                self._check_goals_each(xy, time)
-            else:
-                self.check_goals(xy, time)
+            self._check_goals_each(xy, time)
 
     def _check_goals_each(self, xy: Any, time: float) -> None:
         """check_goals robot by robot (the same arithmetic, cheaper for a few robots)."""

@@ -112,8 +112,10 @@ class DriveUnits:
     def __init__(self, group: Any, members: list[int], starts: np.ndarray | None) -> None:
         self.group = group
         self.members = members  # robot index of each row
+        self.member_rows = np.asarray(members, dtype=np.intp)  # the same, as an array
         self.starts = starts
         self.units = 1 if starts is None else starts.shape[0]
+        self.every_unit = list(range(self.units))
         if starts is not None:
             ends = np.append(starts[1:], len(members))
             self._unit_rows = [np.arange(a, b) for a, b in zip(starts.tolist(), ends.tolist())]
@@ -124,12 +126,12 @@ class DriveUnits:
             return [self.group.settled()]
         return self.group.settled_units(self.starts)
 
-    def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int]]:
-        """The rows of these units (None: every row) and their robots."""
+    def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int], np.ndarray]:
+        """The rows of these units (None: every row) and their robots, as a list and an array."""
         if len(units) == self.units:
-            return None, self.members
+            return None, self.members, self.member_rows
         rows = np.concatenate([self._unit_rows[u] for u in units])
-        return rows, [self.members[r] for r in rows.tolist()]
+        return rows, [self.members[r] for r in rows.tolist()], self.member_rows[rows]
 
     def advance(self, h: float, rows: np.ndarray | None) -> tuple[Any, Any, Any]:
         """The group's ``advance``, of these rows only (None: every robot)."""

@@ -160,9 +160,12 @@ def _learning(quick: bool) -> list[Verdict]:
         (f"16 envs as a vector env: >= {learning.VECTOR_TARGET:g}x 16 separate envs "
          f"(got {result['vector_16_ratio']:.2f}x)",
          result["vector_16_ratio"] >= learning.VECTOR_TARGET),
+        (f"one env: >= {learning.ENV_RATE_TARGET:,.0f} env steps/s "
+         f"(got {result['env_steps_per_s']:,.0f})",
+         result["env_steps_per_s"] >= learning.ENV_RATE_TARGET),
         (f"16 envs as a vector env, random actions: >= {learning.VECTOR_RATE_TARGET:,.0f} "
-         f"env steps/s (got {result['vector_16_random'][0]:,.0f})",
-         result["vector_16_random"][0] >= learning.VECTOR_RATE_TARGET)]
+         f"env steps/s (got {result['vector_16_random_rate']:,.0f})",
+         result["vector_16_random_rate"] >= learning.VECTOR_RATE_TARGET)]
     if "process_scaling" in result:
         verdicts.append((f"process sweep, 2 workers: >= {learning.SCALING_TARGET:g}x serial (got "
                          f"{result['process_scaling']:.2f}x)",

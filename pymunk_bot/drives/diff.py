@@ -71,18 +71,10 @@ class DiffDriveGroup(DriveGroup):
     def set_velocities(self, rows: np.ndarray, v: np.ndarray, omega: np.ndarray) -> None:
         """:meth:`set_command` with ``Command(v, omega)`` for these robots at once (arrays
         [m/s], [rad/s]): the same wheel speeds, to the bit."""
-        if not (np.isfinite(v).all() and np.isfinite(omega).all()):
+        if not _command_rows(rows, np.asarray(v, dtype=np.float64),
+                             np.asarray(omega, dtype=np.float64), self.track, self.max_wheel,
+                             self.target):
             raise ValueError("commands must be finite")
-        half = 0.5 * omega * self.track[rows]  # wheel_speeds, on arrays
-        left, right = v - half, v + half
-        peak = np.maximum(np.abs(left), np.abs(right))
-        limit = self.max_wheel[rows]
-        over = peak > limit
-        if over.any():  # both scaled by one factor, as set_wheel_speeds does
-            scale = limit[over] / peak[over]
-            left[over] *= scale
-            right[over] *= scale
-        self.target[rows] = np.stack((left, right), axis=1)
 
     def command_of(self, i: int) -> Command:
         left, right = self.target[i]
@@ -188,6 +180,27 @@ class DiffDrive:
 
 # The motors' arithmetic, robot by robot over rows: one compiled implementation for one robot,
 # a fleet, or the rows of a stacked group's copies (so each gets the same floats on any).
+@numba.njit(cache=True)
+def _command_rows(rows: np.ndarray, v: np.ndarray, omega: np.ndarray, track: np.ndarray,
+                  max_wheel: np.ndarray, target: np.ndarray) -> bool:
+    """set_command's wheel speeds of ``Command(v[j], omega[j])`` into ``target`` row
+    ``rows[j]``, the same floats (wheel_speeds, then both scaled by one factor to the limit);
+    False, and nothing written, if a command is not finite."""
+    for j in range(rows.shape[0]):
+        if not (math.isfinite(v[j]) and math.isfinite(omega[j])):
+            return False
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        half = 0.5 * omega[j] * track[i]
+        left, right = v[j] - half, v[j] + half
+        peak = max(abs(left), abs(right))
+        if peak > max_wheel[i]:
+            scale = max_wheel[i] / peak
+            left, right = left * scale, right * scale
+        target[i, 0], target[i, 1] = left, right
+    return True
+
+
 @numba.njit(cache=True)
 def _advance_rows(rows: np.ndarray, commanded: np.ndarray, target: np.ndarray,
                   turning: np.ndarray, travel: np.ndarray, max_accel: np.ndarray,

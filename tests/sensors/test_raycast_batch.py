@@ -75,6 +75,30 @@ def test_batched_casts_hand_hard_origins_to_the_single_cast():
         assert np.array_equal(ranges, reference_cast(space, origin, a, max_range, f))
 
 
+def test_origins_on_and_just_off_shapes_get_pymunks_start_inside_answer():
+    """The start-inside check asks pymunk only about origins near an admitted shape's bounding
+    circle: origins on a surface, 1e-10 m off it (inside pymunk's query radius), 1 mm off,
+    inside, and inside a shape the filter rejects, all still give pymunk's ranges."""
+    space = arena(6.0, 6.0)
+    sb = space.static_body
+    space.add(box(sb, 2.0, 2.0, 1.0, 1.0, 0.0), pymunk.Circle(sb, 0.5, (4.5, 4.0)))
+    hidden = pymunk.Circle(sb, 0.4, (1.0, 4.5))
+    hidden.filter = pymunk.ShapeFilter(group=7)
+    space.add(hidden)
+    caster = RayCaster(space)
+    caster.begin_frame()
+    origins = [(2.5, 2.0), (2.5 + 1e-10, 2.0), (2.501, 2.2), (2.2, 2.1),  # the box's side
+               (5.0, 4.0), (5.0 + 1e-10, 4.0), (4.5, 4.2),  # the circle's rim, its inside
+               (1.0, 4.5), (1.3, 4.5), (3.3, 3.3)]  # inside the hidden circle; open floor
+    filters = [pymunk.ShapeFilter()] * 7 + [pymunk.ShapeFilter(group=7)] * 2 + [
+        pymunk.ShapeFilter()]
+    angles = [np.linspace(-math.pi, math.pi, 72, endpoint=False) + 0.01 * i
+              for i in range(len(origins))]
+    requests = (origins, angles, [5.0] * len(origins), filters)
+    for origin, a, max_range, f, ranges in zip(*requests, caster.cast_many(*requests)):
+        assert np.array_equal(ranges, reference_cast(space, origin, a, max_range, f)), origin
+
+
 def test_a_frame_sees_moved_bodies_only_after_the_next_begin_frame():
     space = arena(10.0, 10.0)
     body = add_robot(space, 5.0, 5.0, group=1)
@@ -121,6 +145,21 @@ def test_endpoints_of_many_casts_are_those_of_each():
         c, s, e = endpoints(float(ox[k]), float(oy[k]), angles[k], float(r[k]))
         assert np.array_equal(cos[k], c) and np.array_equal(sin[k], s)
         assert np.array_equal(ends[k], e)
+
+
+def test_compiled_end_points_are_numpys_bit_for_bit():
+    """The compiled casts build their segments with the C library's cos and sin: the very
+    segments reference_cast queries (numpy's), or the compiled LiDAR would not be pymunk's."""
+    pytest.importorskip("numba")
+    from pymunk_bot.sensors.raycast.compiled import endpoints_rows
+    from pymunk_bot.sensors.raycast.reference import endpoints_many
+    rng = np.random.default_rng(3)
+    for spread in (math.pi, 50.0, 1e4):
+        ox, oy, r = rng.uniform(-80, 80, 40), rng.uniform(-80, 80, 40), rng.uniform(0.1, 30, 40)
+        angles = rng.uniform(-spread, spread, (40, 500))
+        ends = np.empty((40, 2, 500))
+        endpoints_rows(ox, oy, angles, r, ends)
+        assert np.array_equal(ends, endpoints_many(ox, oy, angles, r)[2])
 
 
 def test_compiled_mover_builds_numpys_table_bit_for_bit():

@@ -217,6 +217,7 @@ class SceneCache:
         rows, bound = moved(rows, bound, tf, owner, np.arange(len(static)))
         static_world = World(rows, owner, counts, bound)
         box = bounding_boxes(static_world)
+        self.static_boxes = box  # (4, n_static) l, b, r, t [m]
         self._static = corner_flags(static_world, box)
         # Sorted coordinates of the static boxes' vertical and horizontal side lines.
         finite = np.isfinite(box).all(axis=0)

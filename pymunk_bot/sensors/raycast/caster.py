@@ -18,13 +18,16 @@ import pymunk
 from .cache import SceneCache
 from .fan import Fan
 from .geometry import World
-from .reference import check_args, endpoints, endpoints_many, reference_cast
+from .reference import check_args, endpoints, reference_cast
 from .scene import DENSE_SHAPES, Scene, trace_rings
 from .sides import side_directions, side_lohi, sides_many
 
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
 REFERENCE_RAYS = 40
+# [m per m of scale] How near a shape's bounding circle an origin must be for the start-inside
+# check to ask pymunk: far above rounding (1e-16 of scale), far below any robot's size.
+NEAR_SHAPE = 1e-6
 # The same for the compiled tracer: its fixed cost per cast (about 20 us) buys ~6 of pymunk's rays.
 COMPILED_REFERENCE_RAYS = 6
 _MAX_CACHED = 4096  # query filters (one per robot, usually) and scratch sizes remembered
@@ -62,6 +65,8 @@ class RayCaster:
         mover: Callable[..., None] | None = None
         if self._kernel is not None:
             from .compiled import move_into as mover
+            from .compiled import endpoints_rows, near_admitted
+            self._near_admitted, self._endpoints_rows = near_admitted, endpoints_rows
         self._cache = SceneCache(space, mover)
         self._filter_rows: dict[pymunk.ShapeFilter, np.ndarray] = {}
         self._scratch: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
@@ -87,7 +92,8 @@ class RayCaster:
         return found
 
     def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
-                  max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
+                  max_ranges: list[float], filters: list[pymunk.ShapeFilter]
+                  ) -> list[np.ndarray] | np.ndarray:
         """Many casts at once: what :meth:`cast` gives for each, with less work per cast
         (compiled: one tracer call for every cast on the same table and ray count; numpy:
         one pass for them all, see :mod:`.batch`)."""
@@ -112,7 +118,7 @@ class RayCaster:
         return [r if r is not None else np.empty(0) for r in out]
 
     def _cast_uniform(self, xy: np.ndarray, ang: np.ndarray, rng: np.ndarray,
-                      filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
+                      filters: list[pymunk.ShapeFilter]) -> list[np.ndarray] | np.ndarray:
         """cast_many for checked casts with one ray count: the pymunk queries per origin, all
         else one array operation or one tracer call for them all."""
         assert self._kernel is not None
@@ -121,9 +127,13 @@ class RayCaster:
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
         scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
         sides, n_sides, cornered = sides_many(self._cache, ox, oy, scale)
+        f_all = np.array([self._filter_row(f) for f in filters], dtype=np.uint64).reshape(-1, 3)
+        near = np.empty(k, dtype=np.bool_)  # pymunk is asked only about origins near a shape
+        self._near_admitted(self._cache.static_boxes, bound, self._cache.shape_filters, ox, oy,
+                            NEAR_SHAPE * scale, f_all, near)
         # Origins at a shape (the start-inside rule) or a box corner: the single cast's path.
         query = self.space.point_query_nearest
-        single = [i for i in range(k) if cornered[i] or query(
+        single = [i for i in np.flatnonzero(cornered | near).tolist() if cornered[i] or query(
             (float(ox[i]), float(oy[i])), float(1e-9 * scale[i]), filters[i]) is not None]
         out: list[np.ndarray | None] = [None] * k
         for i in single:
@@ -132,9 +142,9 @@ class RayCaster:
         if single:
             ox, oy, ang, rng, scale = ox[traced], oy[traced], ang[traced], rng[traced], scale[traced]
             sides, n_sides = sides[traced], n_sides[traced]
-        ends = endpoints_many(ox, oy, ang, rng)[2]
-        f = np.array([self._filter_row(filters[i]) for i in traced.tolist()],
-                     dtype=np.uint64).reshape(-1, 3)
+        ends = np.empty((ang.shape[0], 2, n))
+        self._endpoints_rows(ox, oy, ang, rng, ends)  # endpoints_many's, compiled
+        f = f_all[traced] if single else f_all
         best = np.ones((traced.shape[0], n))
         flagged, got = self._buffers(traced.shape[0], n)
         self._kernel(table.rows, table.count_array, table.owner, bound,
@@ -143,7 +153,7 @@ class RayCaster:
         counts = got.tolist()  # read now: a cast below may reuse the tracer's scratch
         ranges = best * rng[:, None]  # _finish's product, for the casts without flagged rays
         if not single and not any(counts):  # the usual case: every cast traced, none flagged
-            return list(ranges)
+            return ranges  # (K, n): row k is cast k's
         for row, (i, count) in enumerate(zip(traced.tolist(), counts)):
             if count == 0:
                 out[i] = ranges[row]
@@ -273,7 +283,8 @@ class RayCaster:
             filters = self._filter_row(job.filter)[None]
         else:
             angles = np.stack([job.ang for job in jobs])
-            ends = endpoints_many(ox, oy, angles, rng)[2]
+            ends = np.empty((k, 2, angles.shape[1]))
+            self._endpoints_rows(ox, oy, angles, rng, ends)  # endpoints_many's, compiled
             filters = np.concatenate([self._filter_row(job.filter)[None] for job in jobs])
         counts = [len(job.directions) for job in jobs]
         if any(counts):

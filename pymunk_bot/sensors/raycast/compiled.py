@@ -115,6 +115,49 @@ def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def endpoints_rows(ox: np.ndarray, oy: np.ndarray, ang: np.ndarray, rng: np.ndarray,
+                   ends: np.ndarray) -> None:
+    """The (K, 2, n) segment end points of :func:`.reference.endpoints_many` into ``ends``:
+    origin + rng * (cos, sin) of each ray, the C library's cos and sin (numpy's on this
+    build; tests/sensors check it bit for bit), in a third of numpy's time."""
+    for k in range(ang.shape[0]):
+        for j in range(ang.shape[1]):
+            ends[k, 0, j] = math.cos(ang[k, j]) * rng[k] + ox[k]
+            ends[k, 1, j] = math.sin(ang[k, j]) * rng[k] + oy[k]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def near_admitted(boxes: np.ndarray, bound: np.ndarray, shape_filters: np.ndarray,
+                  ox: np.ndarray, oy: np.ndarray, reach: np.ndarray, filters: np.ndarray,
+                  near: np.ndarray) -> None:
+    """Per origin k (its query filter a row of ``filters``, as :func:`trace_filtered`'s):
+    whether some shape the filter admits comes within ``reach[k]`` [m] of it by its bounds:
+    the static shapes' bounding boxes (``boxes`` (4, n_static): l, b, r, t; a wall's circle
+    would cover half the arena), then the moving shapes' bounding circles (the rest of the
+    columns of ``bound``). An origin near none is inside no shape and within ``reach`` of
+    none, so pymunk's point query there finds nothing (NaN counts as near)."""
+    n_static = boxes.shape[1]
+    for k in range(ox.shape[0]):
+        group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
+        x, y, d = ox[k], oy[k], reach[k]
+        near[k] = False
+        for o in range(bound.shape[1]):
+            if ((shape_filters[0, o] != 0 and shape_filters[0, o] == group)
+                    or (shape_filters[1, o] & mask) == 0
+                    or (categories & shape_filters[2, o]) == 0):
+                continue
+            if o < n_static:
+                apart = (x < boxes[0, o] - d or x > boxes[2, o] + d
+                         or y < boxes[1, o] - d or y > boxes[3, o] + d)
+            else:
+                dx, dy, r = x - bound[0, o], y - bound[1, o], bound[2, o] + d
+                apart = dx * dx + dy * dy > r * r
+            if not apart:
+                near[k] = True
+                break
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, bound: np.ndarray,
                    shape_filters: np.ndarray, rounded: bool, ox: np.ndarray, oy: np.ndarray,
                    scale: np.ndarray, rng: np.ndarray, filters: np.ndarray, ang: np.ndarray,
