@@ -11,7 +11,6 @@ import pymunk
 
 from .command import Command
 from .config.schema import RobotConfig
-from .drives.base import SMALL_GROUP
 from .fleet_rows import advance_rows
 from .readings import RobotSpec
 from .stacking import join_rows, split_rows
@@ -41,8 +40,8 @@ class RobotsByName(dict):
 
 
 class Fleet:
-    """Every robot's per-tick bookkeeping: distance, goal, contact episodes. Arrays, or for a
-    few robots lists of floats (numpy's per-call cost dominates there); both index by robot."""
+    """Every robot's per-tick bookkeeping: distance, goal, contact episodes, as arrays indexed
+    by robot, advanced by one compiled pass (``fleet_rows.advance_rows``) however many."""
 
     ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
             "distance_to_goal")
@@ -53,9 +52,8 @@ class Fleet:
         n = len(configs)
         self.configs = configs
         self._whole: tuple[Fleet, int] | None = None  # (stack, first row) while stacked
-        self.small = n < SMALL_GROUP
-        self.xy: Any = [tuple(c.pose[:2]) for c in configs]  # [m]
-        self.distance: Any = [0.0] * n  # true path length [m]
+        self.xy = np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2)  # [m]
+        self.distance = np.zeros(n)  # true path length [m]
         self.collisions = np.zeros(n, dtype=np.int64)  # contact episodes
         self.goal = np.full((n, 2), np.nan)  # task goal [m]; NaN: none
         self.tolerance = np.full(n, 0.2)  # [m]
@@ -65,11 +63,10 @@ class Fleet:
                 self.tolerance[i] = c.goal.tolerance
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
+        self._now = np.zeros(n)  # [s] the tick's time, per robot (advance_rows takes rows)
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
         self._refresh_targets()
-        if not self.small:
-            self.xy, self.distance = np.array(self.xy, dtype=float).reshape(n, 2), np.zeros(n)
-        self.check_goals(np.array(self.xy, dtype=float).reshape(n, 2), 0.0)  # started inside: t = 0
+        self.advance(self.xy, 0.0)  # goals started inside are reached at t = 0
 
     @classmethod
     def stacked(cls, parts: list["Fleet"]) -> "Fleet":
@@ -79,7 +76,6 @@ class Fleet:
         join_rows(whole, parts, cls.ROWS)
         offset = 0
         for part in parts + [whole]:
-            part.small = False
             part._watch_unreached()
             if part is not whole:
                 part._whole = (whole, offset)
@@ -108,59 +104,25 @@ class Fleet:
             whole.watch_goal(offset + i)
 
     def _refresh_targets(self) -> None:
-        """The pending goals as the checks read them: (robot, goal x, goal y, squared
-        tolerance) as floats, and the goals and squared tolerances as arrays."""
+        """The pending goals as ``advance`` reads them: their goals and squared tolerances."""
         p = self._pending
-        self._targets = [(i, float(self.goal[i, 0]), float(self.goal[i, 1]),
-                          float(self.tolerance[i]) ** 2) for i in p.tolist()]
         self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
-        self._every_goal_pending = p.shape[0] == self.goal.shape[0]
 
     def advance(self, xy: Any, time: Any) -> None:
-        """Bookkeeping after a tick at ``time`` [s], from every robot's new position [m]: an
-        (n, 2) array, or a list of (x, y) for a small fleet."""
-        if not self.small:
-            p = self._pending
-            times = time if isinstance(time, np.ndarray) else np.full(xy.shape[0], time)
-            reached = np.empty(p.shape[0], dtype=np.bool_)
-            last, self.xy = self.xy, xy
-            if advance_rows(xy, last, self.distance, p, self._pending_goal,
-                            self._pending_tolerance2, times, self.time_to_goal,
-                            self.distance_to_goal, reached):
-                self._pending = p[~reached]
-                self._refresh_targets()
-            return
-        distance = self.distance
-        for i, ((x, y), (x0, y0)) in enumerate(zip(xy, self.xy)):
-            dx, dy = x - x0, y - y0
-            distance[i] += math.sqrt(dx * dx + dy * dy)  # as the rows do, to the bit
-        self.xy = xy
-        if self._pending.shape[0]:
-            self._check_goals_each(xy, time)
-
-    def _check_goals_each(self, xy: Any, time: float) -> None:
-        """check_goals robot by robot (the same arithmetic, cheaper for a few robots)."""
-        reached = []
-        for i, gx, gy, tolerance2 in self._targets:
-            dx, dy = xy[i][0] - gx, xy[i][1] - gy
-            if dx * dx + dy * dy <= tolerance2:
-                reached.append(i)
-        if reached:
-            self.time_to_goal[reached] = time
-            self.distance_to_goal[reached] = np.asarray(self.distance, dtype=float)[reached]
-            self._pending = np.setdiff1d(self._pending, reached)
-            self._refresh_targets()
-
-    def check_goals(self, xy: np.ndarray, time: Any) -> None:
-        """Goals reached at ``time`` [s] (one for all, or an array with each robot's)."""
+        """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
+        from every robot's new position [m]: an (n, 2) array, or a sequence of (x, y)."""
+        if not isinstance(xy, np.ndarray):  # a few robots' Vec2d, read one by one
+            xy = np.array(xy, dtype=float).reshape(-1, 2)
+        if isinstance(time, np.ndarray):
+            times = time
+        else:
+            times = self._now
+            times.fill(time)
         p = self._pending
-        d = (xy if self._every_goal_pending else xy[p]) - self._pending_goal
-        d *= d
-        reached = d.sum(axis=1) <= self._pending_tolerance2
-        if reached.any():
-            done = p[reached]
-            self.time_to_goal[done] = time[done] if isinstance(time, np.ndarray) else time
-            self.distance_to_goal[done] = np.asarray(self.distance, dtype=float)[done]
+        reached = np.empty(p.shape[0], dtype=np.bool_)
+        last, self.xy = self.xy, xy
+        if advance_rows(xy, last, self.distance, p, self._pending_goal, self._pending_tolerance2,
+                        times, self.time_to_goal, self.distance_to_goal, reached):
             self._pending = p[~reached]
             self._refresh_targets()
 
@@ -354,7 +316,7 @@ class Robot:
             if body.space is not None:
                 body.space.reindex_shapes_for_body(body)
         fleet = self._fleet  # the jump is no distance travelled (a copy: xy may be shared)
-        xy = fleet.xy.copy() if isinstance(fleet.xy, np.ndarray) else list(fleet.xy)
+        xy = fleet.xy.copy()
         xy[self._i] = (x, y)
         fleet.xy = xy
 
