@@ -19,8 +19,7 @@ from .base import DriveGroup
 
 def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
     """(v [m/s], omega [rad/s]) -> (left, right) wheel speeds [m/s]."""
-    half = 0.5 * omega * track_width
-    return v - half, v + half
+    return _wheel_speeds(float(v), float(omega), float(track_width))
 
 
 class DiffDriveGroup(DriveGroup):
@@ -41,7 +40,6 @@ class DiffDriveGroup(DriveGroup):
         self._travel = np.zeros((self.n, 2))  # wheel travel since take_travel [m]
         # The same as floats: cheaper than numpy's scalars robot by robot.
         self._track = self.track.tolist()
-        self._max_wheel = self.max_wheel.tolist()
         self._every = np.arange(self.n, dtype=np.intp)
         self._twists = (np.empty(self.n), np.zeros(self.n), np.empty(self.n))  # (ux, uy, omega)
 
@@ -49,14 +47,8 @@ class DiffDriveGroup(DriveGroup):
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
         limit, so the turn radius is kept."""
         left, right = float(left), float(right)
-        if not (math.isfinite(left) and math.isfinite(right)):
+        if not _set_wheels(i, left, right, self.max_wheel, self.target):
             raise ValueError(f"wheel speeds must be finite (got {left}, {right})")
-        peak = max(abs(left), abs(right))
-        limit = self._max_wheel[i]
-        if peak > limit:
-            scale = limit / peak
-            left, right = left * scale, right * scale
-        self.target[i] = [left, right]
 
     def set_command(self, i: int, command: Any) -> None:
         """A :class:`Command`, or a (left, right) pair of wheel speeds [m/s] (the older form)."""
@@ -183,21 +175,37 @@ class DiffDrive:
 @numba.njit(cache=True)
 def _command_rows(rows: np.ndarray, v: np.ndarray, omega: np.ndarray, track: np.ndarray,
                   max_wheel: np.ndarray, target: np.ndarray) -> bool:
-    """set_command's wheel speeds of ``Command(v[j], omega[j])`` into ``target`` row
-    ``rows[j]``, the same floats (wheel_speeds, then both scaled by one factor to the limit);
+    """set_command of ``Command(v[j], omega[j])`` for robot ``rows[j]``, into ``target``;
     False, and nothing written, if a command is not finite."""
     for j in range(rows.shape[0]):
         if not (math.isfinite(v[j]) and math.isfinite(omega[j])):
             return False
     for j in range(rows.shape[0]):
         i = rows[j]
-        half = 0.5 * omega[j] * track[i]
-        left, right = v[j] - half, v[j] + half
-        peak = max(abs(left), abs(right))
-        if peak > max_wheel[i]:
-            scale = max_wheel[i] / peak
-            left, right = left * scale, right * scale
-        target[i, 0], target[i, 1] = left, right
+        left, right = _wheel_speeds(v[j], omega[j], track[i])
+        _set_wheels(i, left, right, max_wheel, target)
+    return True
+
+
+@numba.njit(cache=True)
+def _wheel_speeds(v: float, omega: float, track: float) -> tuple[float, float]:
+    """wheel_speeds' formula (left, right) [m/s], once for the Python and the compiled paths."""
+    half = 0.5 * omega * track
+    return v - half, v + half
+
+
+@numba.njit(cache=True)
+def _set_wheels(i: int, left: float, right: float, max_wheel: np.ndarray,
+                target: np.ndarray) -> bool:
+    """Robot i's target wheel speeds [m/s], both scaled by one factor to respect its speed
+    limit (the turn radius is kept); False, and nothing written, if one is not finite."""
+    if not (math.isfinite(left) and math.isfinite(right)):
+        return False
+    peak = max(abs(left), abs(right))
+    if peak > max_wheel[i]:
+        scale = max_wheel[i] / peak
+        left, right = left * scale, right * scale
+    target[i, 0], target[i, 1] = left, right
     return True
 
 

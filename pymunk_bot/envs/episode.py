@@ -148,13 +148,13 @@ class NavigationEpisode:
         observation written into ``out`` if given."""
         if self.sim is None:
             raise RuntimeError("call reset() before finish()")
-        where = self.task.where()
+        obs = np.empty(self.task.obs_size, dtype=np.float32) if out is None else out
         reward, terminated, info = self.task.outcome(self.control_period,
-                                                     self.terminate_on_collision, where)
+                                                     self.terminate_on_collision, obs=obs)
         time = self.sim.time
         truncated = not terminated and time >= self.time_limit - 1e-9
         info["time"] = time
         if terminated or truncated:
             info.update(end_info(self.sim, self.robot_name))
             self.done = True
-        return self.task.observe(out, where), reward, terminated, truncated, info
+        return obs, reward, terminated, truncated, info

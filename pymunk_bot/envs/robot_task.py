@@ -1,5 +1,5 @@
-"""One robot's view of the navigation task: its action, observation and reward, for one robot
-(:meth:`RobotTask.outcome`) or many of one scenario at once (:func:`outcomes`), the same floats.
+"""One robot's view of the navigation task: its action, observation and reward, written once
+(:func:`outcomes`) for one robot (:meth:`RobotTask.outcome`) or many of one scenario at once.
 
 The observation and the action scaling are :mod:`pymunk_bot.policy_io`'s (the ``policy``
 controller uses them too); the reward is :class:`~pymunk_bot.envs.task.RewardWeights`'.
@@ -15,6 +15,7 @@ from ..policy_io import (
     ActionScale, ObservationBuilder, action_size, goal_features, observation_bounds,
     observation_size,
 )
+from .step_rows import step_rows
 from .task import RewardWeights
 
 if TYPE_CHECKING:
@@ -46,6 +47,7 @@ class RobotTask:
             raise ValueError(f"pose_source must be 'ground_truth' or 'odometry' (got {pose_source!r})")
         self.name = robot_config.name
         self.weights = weights
+        self.weight_row = weights.as_array()  # what step_rows reads
         self.pose_source = pose_source
         self.holonomic = getattr(robot_config, "drive", "diff") == "omni"
         self.beams = robot_config.lidar.beams
@@ -184,46 +186,39 @@ class RobotTask:
         self.builder.fill(obs[None], self.ranges()[None], [features], self.previous)
         return obs
 
-    def outcome(self, elapsed: float, terminate_on_collision: bool = False,
-                where: Where | None = None) -> tuple[float, bool, dict]:
-        """(reward, terminated, info) for the control step just taken (``elapsed`` seconds);
-        ``where``: :meth:`where`, if already read this step."""
+    def state(self, where: Where | None = None) -> dict[str, np.ndarray]:
+        """The robot's state as :func:`outcomes` reads it (``Replicas.robot_states``' keys), one
+        row: the pose the task sees, its goal, contact episodes, goal reached; ``where``:
+        :meth:`where`, if already read this step."""
+        x, y, theta, gx, gy = self.where() if where is None else where
         robot = self.bound()
-        distance = goal_features(*(self.where() if where is None else where))[0]
-        collisions = robot.collisions
-        new_collisions = collisions - self._collisions
-        contact = elapsed if (new_collisions > 0 or touching(robot)) else 0.0
-        clearance = float(self.ranges().min()) - robot.radius
-        reached = robot.goal_reached
-        progress = self._distance - distance
-        self.remember(distance, collisions, self.contact_time + contact)
-        success = reached and self.contact_free
-        reward = _reward(self.weights, progress, new_collisions, contact, clearance, elapsed,
-                         success)
-        info = {"distance_to_goal": distance, "collisions": collisions,
-                "new_collisions": new_collisions, "contact_time": self.contact_time,
-                "clearance": clearance, "goal_reached": reached, "is_success": success}
-        return float(reward), bool(reached or (terminate_on_collision and contact > 0)), info
+        return {"x": np.array([x]), "y": np.array([y]), "theta": np.array([theta]),
+                "goal_x": np.array([gx]), "goal_y": np.array([gy]),
+                "collisions": np.array([robot.collisions], dtype=np.int64),
+                "reached": np.array([robot.goal_reached])}
 
-
-def _reward(w: RewardWeights, progress: Any, new_collisions: Any, contact: Any, clearance: Any,
-            elapsed: float, success: Any) -> Any:
-    """The reward of a control step, for one robot (floats) or many (arrays), the same floats:
-    progress toward the goal [m], new contact episodes, seconds in contact, clearance [m],
-    time [s] and contact-free arrival."""
-    crowding = np.minimum(1.0, np.maximum(0.0, 1.0 - clearance / w.clearance_margin))
-    return (w.progress * progress + w.collision * new_collisions + w.contact * contact
-            + w.clearance * elapsed * crowding + w.time * elapsed + w.success * success)
+    def outcome(self, elapsed: float, terminate_on_collision: bool = False,
+                where: Where | None = None, obs: np.ndarray | None = None
+                ) -> tuple[float, bool, dict]:
+        """(reward, terminated, info) for the control step just taken (``elapsed`` seconds),
+        by :func:`outcomes` (the one implementation, for one robot as for many); ``where``:
+        :meth:`where`, if already read this step; ``obs``: the observation is written here
+        too (a row of the observation size)."""
+        rewards, terminated, info = outcomes([self], self.state(where), elapsed,
+                                             terminate_on_collision,
+                                             None if obs is None else obs[None])
+        return (float(rewards[0]), bool(terminated[0]),
+                {key: value[0].item() for key, value in info.items()})
 
 
 def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: float,
-             terminate_on_collision: bool, obs: np.ndarray
+             terminate_on_collision: bool, obs: np.ndarray | None
              ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """:meth:`RobotTask.outcome` and :meth:`RobotTask.observe` for many tasks of one scenario
-    at once (ground-truth pose), from their robots' states (``Replicas.robot_states``):
-    (rewards, terminated, info arrays), each row of ``obs`` written. The same floats as task
-    by task."""
-    first, w = tasks[0], tasks[0].weights
+    """The reward, end and info of the control step just taken (``elapsed`` seconds) for
+    tasks of one scenario, from their robots' states (``Replicas.robot_states``, or
+    :meth:`RobotTask.state` for one): (rewards, terminated, info arrays); each row of ``obs``
+    gets the task's observation (:meth:`RobotTask.observe`) if given."""
+    first = tasks[0]
     assert first.builder is not None, "call start() first"
     goals = [goal_features(x, y, t, gx, gy) for x, y, t, gx, gy in zip(
         states["x"].tolist(), states["y"].tolist(), states["theta"].tolist(),
@@ -232,22 +227,20 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
     collisions, reached = states["collisions"], states["reached"]
     before = np.array([(task.last_distance, task.last_collisions, task.contact_time,
                         task.start_collisions) for task in tasks]).reshape(-1, 4)
-    new_collisions = collisions - before[:, 1].astype(np.int64)
-    hit = (new_collisions > 0) | np.array([touching(task.bound()) for task in tasks])
-    contact = np.where(hit, elapsed, 0.0)
-    ranges = np.stack([task.ranges() for task in tasks])
-    radius = np.array([task.radius for task in tasks])
-    clearance = ranges.min(axis=1) - radius
-    contact_time = before[:, 2] + contact
-    success = reached & (contact_time == 0.0) & (collisions == before[:, 3])
-    rewards = _reward(w, before[:, 0] - distance, new_collisions, contact, clearance, elapsed,
-                      success)
-    terminated = reached | (terminate_on_collision & (contact > 0))
+    ranges = np.array([task.ranges() for task in tasks])  # np.stack's own cost is 5 us
+    n = len(tasks)
+    rewards, contact_time, clearance = np.empty(n), np.empty(n), np.empty(n)
+    new_collisions = np.empty(n, dtype=np.int64)
+    success, terminated = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
+    step_rows(elapsed, terminate_on_collision, first.weight_row, distance, collisions,
+              before, np.array([touching(task.bound()) for task in tasks]), ranges,
+              np.array([task.radius for task in tasks]), reached, rewards, new_collisions,
+              contact_time, clearance, success, terminated)
     for task, d, c, t in zip(tasks, distance.tolist(), collisions.tolist(),
                              contact_time.tolist()):
         task.remember(d, c, t)
-    previous = np.concatenate([task.previous for task in tasks])
-    first.builder.fill(obs, ranges, goals, previous)
+    if obs is not None:
+        first.builder.fill(obs, ranges, goals, np.concatenate([task.previous for task in tasks]))
     info = {"distance_to_goal": distance, "collisions": collisions,
             "new_collisions": new_collisions, "contact_time": contact_time,
             "clearance": clearance, "goal_reached": reached, "is_success": success}

@@ -41,6 +41,12 @@ class RewardWeights:
     time: float = -0.1  # per simulated second
     success: float = 10.0  # on reaching the goal without any contact on the way
 
+    def as_array(self) -> np.ndarray:
+        """progress, contact, collision, clearance, clearance_margin, time, success: the order
+        :func:`~pymunk_bot.envs.step_rows.step_rows` reads them in."""
+        return np.array((self.progress, self.contact, self.collision, self.clearance,
+                         self.clearance_margin, self.time, self.success))
+
     @classmethod
     def from_any(cls, value: "RewardWeights | Mapping[str, float] | None") -> "RewardWeights":
         """Weights as given, from a mapping of some of their names, or the defaults (None)."""
