@@ -19,8 +19,10 @@ def advance_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray, pending
                  reached: np.ndarray) -> int:
     """Add each robot's step from ``last`` to ``xy`` (n, 2) [m] to ``distance`` [m]; of the
     ``pending`` robots (their goals (p, 2) [m] and squared tolerances [m^2] in that order),
-    those now within tolerance get ``time`` [s] (each robot's) and their path length, and
-    are flagged in ``reached`` (p,). Returns how many were reached."""
+    those now within tolerance get ``time`` [s] (each robot's, or one for all: shape (1,))
+    and their path length, and are flagged in ``reached`` (p,). Returns how many were
+    reached."""
+    one_time = time.shape[0] != xy.shape[0]
     for i in range(xy.shape[0]):
         dx = xy[i, 0] - last[i, 0]
         dy = xy[i, 1] - last[i, 1]
@@ -33,7 +35,7 @@ def advance_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray, pending
         hit = dx * dx + dy * dy <= tolerance2[j]
         reached[j] = hit
         if hit:
-            time_to_goal[i] = time[i]
+            time_to_goal[i] = time[0] if one_time else time[i]
             distance_to_goal[i] = distance[i]
             count += 1
     return count

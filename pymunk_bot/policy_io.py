@@ -117,40 +117,17 @@ class ObservationBuilder:
         self.size = observation_size(self.beams, holonomic)
         self._cos, self._sin = np.cos(angles), np.sin(angles)  # beam directions, robot frame
         self._factor = PROXIMITY_SCALE / self.max_range
-        self._scratch: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-
-    def proximity(self, ranges: np.ndarray) -> np.ndarray:
-        """(s/R) (R - r) / (s + r) of ranges [m] (n x beams), float64."""
-        near = np.empty(np.shape(ranges))
-        return self._proximity(np.asarray(ranges, dtype=np.float64), near, np.empty_like(near))
-
-    def _proximity(self, ranges: np.ndarray, near: np.ndarray, spare: np.ndarray) -> np.ndarray:
-        """:meth:`proximity` into ``near``, ``spare`` a scratch array of the same shape."""
-        np.clip(ranges, 0.0, self.max_range, out=near)
-        np.add(near, PROXIMITY_SCALE, out=spare)
-        np.subtract(self.max_range, near, out=near)
-        np.divide(near, spare, out=near)
-        return np.multiply(near, self._factor, out=near)
+        # Loaded here, not with the module: config reads this module's constants.
+        from .observation_rows import fill_rows
+        self._fill_rows = fill_rows
 
     def fill(self, out: np.ndarray, ranges: np.ndarray, goals: Sequence[tuple[float, float, float]],
              previous: np.ndarray) -> None:
         """Write one observation per row of ``out`` (n x size, float32) from each robot's
-        ranges [m] (n x beams), :func:`goal_features` and previous clipped action (n x A)."""
-        b, n = self.beams, len(goals)
-        if self._scratch is None or self._scratch[0].shape[0] != n:  # reused: no allocation
-            self._scratch = (np.empty((n, b)), np.empty((n, b)), np.arange(n))
-        near, spare, rows = self._scratch
-        self._proximity(ranges, near, spare)
-        out[:, :b] = near
-        nearest = near.argmax(axis=1)
-        out[:, b] = near[rows, nearest]
-        out[:, b + 1] = self._cos[nearest]
-        out[:, b + 2] = self._sin[nearest]
-        if n == 1:  # one robot: no array of its three numbers
-            distance, cos_bearing, sin_bearing = goals[0]
-            out[0, b + 3:b + 6] = (distance / (distance + GOAL_SCALE), cos_bearing, sin_bearing)
-        else:
-            g = np.asarray(goals, dtype=np.float64)
-            out[:, b + 3] = g[:, 0] / (g[:, 0] + GOAL_SCALE)
-            out[:, b + 4:b + 6] = g[:, 1:]
-        out[:, b + 6:] = previous
+        ranges [m] (n x beams), :func:`goal_features` and previous clipped action (n x A);
+        compiled (``observation_rows``: the proximity (s/R) (R - r) / (s + r) of each range)."""
+        self._fill_rows(out, np.asarray(ranges, dtype=np.float64),
+                        np.asarray(goals, dtype=np.float64).reshape(-1, 3),
+                        np.asarray(previous, dtype=np.float64).reshape(len(goals), -1),
+                        self.max_range, PROXIMITY_SCALE, self._factor, GOAL_SCALE, self._cos,
+                        self._sin)

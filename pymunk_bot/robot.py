@@ -63,7 +63,7 @@ class Fleet:
                 self.tolerance[i] = c.goal.tolerance
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
-        self._now = np.zeros(n)  # [s] the tick's time, per robot (advance_rows takes rows)
+        self._now = np.zeros(1)  # [s] the tick's time, as advance_rows takes it
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
         self._refresh_targets()
         self.advance(self.xy, 0.0)  # goals started inside are reached at t = 0
@@ -107,6 +107,7 @@ class Fleet:
         """The pending goals as ``advance`` reads them: their goals and squared tolerances."""
         p = self._pending
         self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
+        self._reached = np.empty(p.shape[0], dtype=np.bool_)  # advance_rows' flags
 
     def advance(self, xy: Any, time: Any) -> None:
         """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
@@ -117,9 +118,8 @@ class Fleet:
             times = time
         else:
             times = self._now
-            times.fill(time)
-        p = self._pending
-        reached = np.empty(p.shape[0], dtype=np.bool_)
+            times[0] = time
+        p, reached = self._pending, self._reached
         last, self.xy = self.xy, xy
         if advance_rows(xy, last, self.distance, p, self._pending_goal, self._pending_tolerance2,
                         times, self.time_to_goal, self.distance_to_goal, reached):
