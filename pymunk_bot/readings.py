@@ -53,13 +53,13 @@ class Observation:
     """
 
     __slots__ = ("time", "pose", "odometry", "goal", "goal_tolerance", "robot", "scan",
-                 "_extra", "_read_extra", "localized")
+                 "_extra", "_read_extra", "localized", "explore_heading")
 
     def __init__(self, time: float, pose: np.ndarray, odometry: np.ndarray,
                  goal: tuple[float, float] | None, goal_tolerance: float, robot: RobotSpec,
                  scan: LaserScan | None = None, extra: dict[str, Any] | None = None,
                  read_extra: Callable[[], dict[str, Any]] | None = None,
-                 localized: bool = True) -> None:
+                 localized: bool = True, explore_heading: float | None = None) -> None:
         self.time = time  # simulated time [s]
         self.pose = pose  # the localizer's estimate [x, y, theta] (odometry by default)
         self.odometry = odometry  # odometry estimate [x, y, theta]
@@ -70,6 +70,9 @@ class Observation:
         self._extra = extra
         self._read_extra = read_extra
         self.localized = localized  # False: the estimate is not yet trustworthy (Localizer.localized)
+        # [rad, robot frame] while not localized, where driving would tell the localizer's
+        # hypotheses apart (MCL's active localization); None: no preference
+        self.explore_heading = explore_heading
 
     @property
     def extra(self) -> dict[str, Any]:

@@ -353,7 +353,8 @@ class Simulation:
             goal=robot.nav_goal, goal_tolerance=robot.goal_tolerance, robot=robot.spec,
             scan=lidar.latest if lidar is not None else None,
             read_extra=robot.readings,
-            localized=getattr(robot.localizer, "localized", True))  # a plugin's: trusted
+            localized=getattr(robot.localizer, "localized", True),  # a plugin's: trusted
+            explore_heading=getattr(robot.localizer, "explore_heading", None))
 
     # ------------------------------------------------------------------ results
     def check_expectations(self) -> list[Check]:

@@ -47,6 +47,9 @@ MAX_TIME = 90.0  # [s] per run
 LOCALIZERS = ("mcl", "ekf", "mcl_global", "mcl_kidnap", "slam")
 KIDNAP_TIME = 3.0  # [s] mcl_kidnap: when the robot is teleported
 KIDNAP_CLEARANCE = 0.6  # [m] mcl_kidnap: the least distance of the drop point to the map's obstacles
+KIDNAP_NOTICE = 1.0  # [s] after a kidnapping, time the filter has to notice it (see wrong_localized)
+KIDNAP_GOAL_DISTANCE = 2.0  # [m] mcl_kidnap: the least distance of the drop point to the goal
+MAX_KIDNAP_DRAWS = 100  # drop points drawn until one is far enough from the goal
 SLAM_ATE, SLAM_PRECISION = 0.05, 0.9  # [m], fraction: the issue's bounds for SLAM
 QUICK_SEEDS = 2  # seeds per world and profile in quick mode (a few minutes)
 MAX_SEEDS = 1000
@@ -63,6 +66,10 @@ class Outcome:
     rmse: float = math.nan  # [m]
     heading_rmse: float = math.nan  # [rad]
     converged_at: float = math.inf  # [s] global runs: from then on within the bounds
+    localized_at: float = math.inf  # [s] global runs: when the filter first said "localized"
+    # [s] global runs: time the filter said "localized" while its estimate was outside the
+    # bounds (it drove on a wrong mode), not counting KIDNAP_NOTICE after a kidnapping
+    wrong_localized: float = 0.0
     collisions: int = 0
     goal_reached: bool = False
     map_precision: float = math.nan  # slam: share of its occupied cells on the true map
@@ -86,6 +93,9 @@ class Outcome:
                 else f"rmse {100 * self.rmse:.1f} cm, heading {math.degrees(self.heading_rmse):.2f} deg")
         if self.localizer == "slam":
             what += f", map precision {self.map_precision:.3f}"
+        if self.localizer in ("mcl_global", "mcl_kidnap"):
+            what += (f", localized at {self.localized_at:.1f} s, {self.wrong_localized:.1f} s "
+                     f"localized on a wrong pose")
         extra = f" ERROR {self.error}" if self.error else ""
         return (f"{self.localizer:11s} {self.family:9s} {self.profile:12s} seed {self.seed:2d}: "
                 f"{what}, {self.collisions} collision(s), goal {'yes' if self.goal_reached else 'no'}"
@@ -160,12 +170,14 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     errors: list[float] = []
     headings: list[float] = []
     next_sample = 0.0
-    kidnap = _kidnap_target(r.localizer, seed) if localizer == "mcl_kidnap" else None
+    kidnap = _kidnap_target(r.localizer, seed, r.goal) if localizer == "mcl_kidnap" else None
+    localized: list[bool] = []
+    kidnapped_at = 0.0  # [s]
     while sim.time < MAX_TIME:
         if kidnap is not None and sim.time + 1e-9 >= KIDNAP_TIME:
             r.teleport(*kidnap)
-            kidnap = None
-            times, errors, headings = [], [], []  # scored from the kidnapping on
+            kidnap, kidnapped_at = None, sim.time
+            times, errors, headings, localized = [], [], [], []  # scored from the kidnapping on
         sim.step()
         if sim.time + 1e-9 >= next_sample:
             next_sample += 1.0 / SAMPLE_RATE
@@ -173,6 +185,7 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
             times.append(sim.time)
             errors.append(float(np.hypot(*(est[:2] - truth[:2]))))
             headings.append(abs(math.remainder(float(est[2] - truth[2]), math.tau)))
+            localized.append(bool(getattr(r.localizer, "localized", True)))
         if r.goal_reached:
             break
     e, h = np.asarray(errors), np.asarray(headings)
@@ -182,8 +195,14 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     t = np.asarray(times)
     out.converged_at = (float(t[0]) if bad.size == 0 else
                         float(t[bad[-1] + 1]) if bad[-1] + 1 < t.size else math.inf)
+    said = np.asarray(localized, dtype=bool)
     if localizer == "mcl_kidnap":
         out.converged_at -= KIDNAP_TIME
+        said &= t >= kidnapped_at + KIDNAP_NOTICE  # still on the old estimate: not a verdict
+    if said.any():
+        out.localized_at = float(t[np.argmax(said)]) - (KIDNAP_TIME if localizer == "mcl_kidnap" else 0.0)
+    wrong = said & ((e > GLOBAL_POSITION) | (h > GLOBAL_HEADING))
+    out.wrong_localized = float(wrong.sum()) / SAMPLE_RATE
     out.collisions = int(r.collisions)
     out.goal_reached = bool(r.goal_reached)
     if localizer == "slam":  # the map it built against the scenario's, at its resolution
@@ -195,13 +214,17 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     return out
 
 
-def _kidnap_target(mcl, seed: int) -> tuple[float, float, float]:
-    """A free point at least KIDNAP_CLEARANCE from the map's obstacles and a heading, from the
-    seed (the localizer's map, so the drop point is where the robot fits)."""
+def _kidnap_target(mcl, seed: int, goal: tuple[float, float] | None) -> tuple[float, float, float]:
+    """A free point at least KIDNAP_CLEARANCE from the map's obstacles and KIDNAP_GOAL_DISTANCE
+    from the robot's goal (a robot dropped on its goal leaves nothing to score), and a heading,
+    from the seed (the localizer's map, so the drop point is where the robot fits)."""
     rng = np.random.default_rng([seed, 22])
     free = mcl.field.free_xy
     open_xy = free[mcl.field.distance(free[None])[0] > KIDNAP_CLEARANCE]
-    x, y = open_xy[rng.integers(open_xy.shape[0])]
+    for _ in range(MAX_KIDNAP_DRAWS):
+        x, y = open_xy[rng.integers(open_xy.shape[0])]
+        if goal is None or math.hypot(x - goal[0], y - goal[1]) >= KIDNAP_GOAL_DISTANCE:
+            break
     return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
 
 
@@ -235,6 +258,12 @@ def summary(outcomes: list[Outcome]) -> dict[str, Any]:
                        "rmse_median": float(np.median(rmse)), "rmse_worst": float(np.max(rmse)),
                        "heading_rmse_deg_median": math.degrees(float(np.median([o.heading_rmse for o in group]))),
                        "converged_at_median": float(np.median([o.converged_at for o in group]))}
+        if group[0].localizer in ("mcl_global", "mcl_kidnap"):
+            # a failure is a wrong mode (the filter said "localized" on a wrong estimate) or
+            # slow (it never did, or only once right, but after GLOBAL_TIME)
+            wrong = [o for o in group if o.wrong_localized > 0]
+            result[key]["localized_on_a_wrong_pose"] = len(wrong)
+            result[key]["slow"] = sum(not o.success and o.wrong_localized == 0 for o in group)
     total = len(outcomes)
     result["all"] = {"runs": total, "success": sum(o.success for o in outcomes)}
     return result

@@ -48,7 +48,8 @@ class Controller:
     def hold_until_localized(self, obs: Observation) -> Command | None:
         """Localize before driving: while the estimate is not trustworthy (``obs.localized``
         False: a global start, a kidnapping, a spread above the localizer's bounds) the robot
-        turns once on the spot, then explores on its LiDAR alone (controllers/localizing.py),
+        turns on the spot through what its LiDAR does not see, then explores towards the
+        localizer's ``obs.explore_heading`` or on its LiDAR alone (controllers/localizing.py),
         or stands still if it cannot turn in place without sweeping its outline over
         something. Returns that command, or None once it may drive."""
         if getattr(obs, "localized", True):

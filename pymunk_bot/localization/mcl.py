@@ -16,7 +16,10 @@ Per update (after ``update_min_d`` of travel or ``update_min_a`` of turn, on a f
    (not AMCL's; see ``_restart_if_lost``);
 5. while not localized (and, sparingly, while the scan fits poorly), a share of the particles
    is put on poses where the scan fits the map better than at the estimate (not AMCL's: sensor
-   resetting, see ``_reseed_from_scan`` and posesearch.py).
+   resetting, see ``_reseed_from_scan`` and posesearch.py);
+6. while not localized, ``explore_heading`` names where to drive so that the heaviest
+   clusters would see different scans (not AMCL's: active localization, explore.py); the
+   controllers that localize before driving follow it (controllers/localizing.py).
 The pose is the weighted mean of the heaviest cluster of particles (AMCL's choice, which stays
 right while a global localization still has several candidates), composed with the odometry
 motion since the last update; the covariance is that cluster's weighted sample covariance.
@@ -30,10 +33,11 @@ import numpy as np
 
 from .base import Localizer, LocalizerContext, LocalizerInputs
 from .config import MclConfig
+from .explore import Explorer, trace
 from .likelihood import LikelihoodField
 from .motion import sample_motion
-from .particles import (CLUSTER_BIN, cluster_labels, kld_limit, low_variance_indices, roughen,
-                        weighted_pose_stats)
+from .particles import (CLUSTER_BIN, cluster_labels, cluster_modes, kld_limit,
+                        low_variance_indices, roughen, weighted_pose_stats)
 from .posesearch import beam_log_pz, refine, search
 from .se2 import between, compose, scan_points, transform_points, wrap
 
@@ -65,6 +69,12 @@ SUSPECT_MARGIN = 0.1  # mean log pz per beam
 SUSPECT_PERIOD = 1.0  # [s]
 RESEED_FRACTION = 0.1
 RESEED_MARGIN = 0.005  # mean log pz per beam a found pose must gain over the estimate
+# Active localization (explore.py): while not localized, the heading in which the hypotheses
+# (up to EXPLORE_MODES clusters of at least EXPLORE_MODE_WEIGHT of the belief) would see the
+# most different scans; a localizing controller drives that way.
+EXPLORE_MODES = 6
+EXPLORE_MODE_WEIGHT = 0.02
+EXPLORE_CLEARANCE = 0.1  # [m] a side of the robot, in the corridor its scan must show free
 
 
 class MclLocalizer(Localizer):
@@ -103,6 +113,10 @@ class MclLocalizer(Localizer):
         free = self.field.free_xy
         roomy = free[self.field.distance(free[None])[0] >= 0.5 * context.robot.radius]
         self._places = roomy if roomy.shape[0] else free
+        # [rad, robot frame] where to drive to tell the hypotheses apart (explore.py); None
+        # while localized or when they agree; kept in the odometry frame between updates
+        self.explore_heading: float | None = None
+        self._explorer = Explorer(context.robot.radius, EXPLORE_CLEARANCE)
         self._beam_mean: np.ndarray | None = None  # per particle: geometric mean pz of the last scan
         self._odom_at_update: np.ndarray | None = None  # odometry when the filter last moved
         self._filter_pose, self.covariance = weighted_pose_stats(self.particles, self.weights)
@@ -131,6 +145,7 @@ class MclLocalizer(Localizer):
         since = (np.zeros(3) if self._odom_at_update is None
                  else between(self._odom_at_update, odom))
         self.pose = compose(self._filter_pose, since)
+        self.explore_heading = self._explorer.heading(odom)
 
     def debug(self) -> dict[str, Any]:
         return {"particles": self.particles.copy(), "weights": self.weights.copy(),
@@ -189,7 +204,10 @@ class MclLocalizer(Localizer):
         self._restart_if_lost()
         if not self.localized:
             self._reseed_from_scan(scan, RESEED_MARGIN)
-        elif self.scan_fit < SUSPECT_SCAN_FIT and scan.time >= self._suspect_search + SUSPECT_PERIOD:
+            self._explore(scan)
+            return
+        self._explorer.forget()
+        if self.scan_fit < SUSPECT_SCAN_FIT and scan.time >= self._suspect_search + SUSPECT_PERIOD:
             self._suspect_search = scan.time
             self._reseed_from_scan(scan, SUSPECT_MARGIN)
 
@@ -218,6 +236,17 @@ class MclLocalizer(Localizer):
         self.weights[slots] = self.weights.mean()
         self.weights /= self.weights.sum()
         self.reseeded += slots.size
+
+    def _explore(self, scan) -> None:
+        """Active localization (explore.py) from the heaviest clusters of the belief."""
+        labels = cluster_labels(self.particles)
+        if labels is None or self._odom_at_update is None:
+            self._explorer.forget()
+            return
+        modes, share = cluster_modes(self.particles, self.weights, labels, EXPLORE_MODE_WEIGHT,
+                                     EXPLORE_MODES)
+        self._explorer.update(self.field, modes, share, scan_points(scan)[0], scan.max_range,
+                              self._odom_at_update, scan.time)
 
     def _used_points(self, scan) -> np.ndarray:
         """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned."""
@@ -291,7 +320,7 @@ class MclLocalizer(Localizer):
             part = self.particles[start:start + chunk]
             origin = transform_points(part, mount)[:, 0, :]  # (n, 2)
             heading = part[:, 2:3] + angles[None, :]  # (n, m)
-            expected = self._trace(origin, heading, scan.max_range)
+            expected = trace(self.field, origin, heading, scan.max_range)
             z = ranges[None, :] - expected
             pz = c.z_hit * np.exp(-z * z / (2.0 * c.sigma_hit ** 2))
             short = z < 0
@@ -300,22 +329,6 @@ class MclLocalizer(Localizer):
             pz += np.where(at_max, c.z_max, c.z_rand / scan.max_range)
             p[start:start + chunk] += (pz ** 3).sum(axis=1)
         return p
-
-    def _trace(self, origin: np.ndarray, heading: np.ndarray, max_range: float) -> np.ndarray:
-        """Expected ranges (n, m) by sphere tracing the distance field from each origin."""
-        eps = self.field.resolution
-        direction = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-        t = np.zeros(heading.shape)
-        active = np.ones(heading.shape, dtype=bool)
-        for _ in range(200):
-            if not active.any():
-                break
-            pts = origin[:, None, :] + t[..., None] * direction
-            d = self.field.clearance(pts)
-            hit = d < 0.5 * eps
-            active &= ~hit & (t < max_range)
-            t = np.where(active, t + np.maximum(d, 0.5 * eps), t)
-        return np.minimum(t, max_range)
 
     def _resample(self) -> None:
         c = self.config

@@ -41,6 +41,18 @@ def cluster_labels(poses: np.ndarray) -> np.ndarray | None:
     return labels[cell[:, 0], cell[:, 1]]
 
 
+def cluster_modes(poses: np.ndarray, weights: np.ndarray, labels: np.ndarray, least: float,
+                  most: int) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted mean poses (k, 3) and shares of the belief (k,) of the heaviest clusters
+    (``labels`` from :func:`cluster_labels`), at most ``most`` of them, each holding at least
+    ``least`` of the weight; heaviest first."""
+    mass = np.bincount(labels, weights=weights)
+    share = mass / mass.sum()
+    order = [int(k) for k in np.argsort(share)[::-1][:most] if share[k] >= least]
+    means = [weighted_pose_stats(poses[labels == k], weights[labels == k])[0] for k in order]
+    return np.reshape(means, (len(order), 3)), share[order]
+
+
 def roughen(poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Jitter resampled poses by ``ROUGHENING * spread * n^(-1/3)`` per dimension (Gordon et
     al. 1993), the spread and n of each pose's own cluster: resampling copies particles, so
