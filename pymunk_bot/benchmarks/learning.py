@@ -209,10 +209,10 @@ VECTOR_TARGET = 2.0  # issue 12: 16 envs as one vector env >= 2x 16 separate env
 VECTOR_RATE_TARGET = 10_000.0  # issue 23: the 16-env vector env, random actions [env steps/s]
 ENV_RATE_TARGET = 3_000.0  # issue 23: one env [env steps/s]
 SCALING_TARGET = 1.8  # issue 23: the process sweep on 2 workers against serial
-# Runs of the scaling sweep (about 30 s serial): starting a worker costs about 1 s (imports,
-# compiled code loaded), which a short sweep cannot amortise (measured: 1.23x with 200 runs,
-# 1.66x with 1,000, 1.91x with 2,000).
-SCALING_RUNS = 2000
+# Runs of the scaling sweep (about a minute serial): starting a worker costs about 1 s (0.6 s
+# of imports, 0.3 s for numba to load its compiled code), which a short sweep cannot amortise
+# (measured: 1.23x with 200 runs, 1.66x with 1,000, 1.84-1.91x with 2,000, 1.95x with 4,000).
+SCALING_RUNS = 4000
 
 
 def run(quick: bool = False) -> dict:
