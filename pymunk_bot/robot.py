@@ -181,6 +181,7 @@ class Robot:
         self.localization_score: Any = None  # estimate vs truth, when the scenario names a localizer
         self.nav_goal: tuple[float, float] | None = None  # where the controller drives
         self._override = False
+        self._followed: Any = None  # the controller's command the drive holds now (follow)
 
     # ------------------------------------------------------------------ sensors
     def sensor(self, kind: str) -> Any | None:
@@ -339,26 +340,30 @@ class Robot:
             raise ValueError(f"a {self.config.drive} drive has no wheel speeds; use set_velocity")
         left, right = real_number("left", left), real_number("right", right)
         self._drive_group.set_wheel_speeds(self._di, left, right)  # raises before taking over
-        self._override = True
+        self._override, self._followed = True, None
 
     def command(self, command: Command) -> None:
         """Drive with this :class:`Command` until :meth:`clear_command`; the controller waits."""
         self._drive_group.set_command(self._di, command)  # raises before taking over
-        self._override = True
+        self._override, self._followed = True, None
 
     def clear_command(self) -> None:
         """Give the robot back to its controller."""
-        self._override = False
+        self._override, self._followed = False, None
 
     def take_over(self) -> None:
         """A command set for this robot's drive outside its handle (the vector env's batched
         commands) holds it, as :meth:`command` does; the controller waits."""
-        self._override = True
+        self._override, self._followed = True, None
 
     def follow(self, command: Any) -> None:
         """Drive with the controller's ``command`` (the simulation asks the controller only
-        while no command set by hand holds the robot: see :attr:`overridden`)."""
-        self._drive_group.set_command(self._di, command)
+        while no command set by hand holds the robot: see :attr:`overridden`). The very
+        command the drive already holds (commands are immutable; a controller that holds
+        one returns the same object) is not set again: a fleet's idle controllers cost less."""
+        if command is not self._followed:
+            self._drive_group.set_command(self._di, command)
+            self._followed = command
 
     def count_collision(self) -> None:
         """A contact episode of this robot began (the world's contact handler calls this)."""
