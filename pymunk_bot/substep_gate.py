@@ -130,6 +130,10 @@ class SubstepGate:
             else:
                 self.clear_until = now + self._clear_for(max(2.0 * self.dt, MIN_CLEAR))
                 if now + MIN_CLEAR > self.clear_until or end > self.clear_until:
+                    # A failed test stops at the first mover that can touch something soon:
+                    # the others were not looked at, so its time bounds nothing (kept, it let
+                    # a robot that was nearer its wall take single substeps into it).
+                    self.clear_until = -math.inf
                     self._failures += 1
                     self._wait = min(MAX_WAIT, 2 ** (self._failures - 1))
                     planned = self.full

@@ -103,3 +103,16 @@ def test_substeps_accepts_adaptive_and_refuses_other_words():
     parse_scenario(scenario([robot([1, 1, 0])], substeps="adaptive"), "test")
     with pytest.raises(ScenarioError, match="world.substeps"):
         parse_scenario(scenario([robot([1, 1, 0])], substeps="auto"), "test")
+
+
+def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at():
+    """The contact bench's head-on trial 443 (two robots at 2.6 m/s, dt 1/120 s), adaptive:
+    after passing each other they race to opposite walls. A test that fails stops at the
+    first mover that can touch something soon; the other one, nearer its wall, was not looked
+    at, and must not take single steps into it (it did: 12.9 mm deep)."""
+    from pymunk_bot.benchmarks import contacts
+    rng = np.random.default_rng(0)  # the bench's trials draw in turn from one generator
+    for i in range(443):
+        contacts.trial_scenario(contacts.KINDS[i % len(contacts.KINDS)], rng)
+    crossed, deepest = contacts.run_trial("head-on", rng, adaptive=True)
+    assert not crossed and deepest <= 0.01
