@@ -113,11 +113,6 @@ class RobotTask:
         """Contact episodes counted when the episode started."""
         return self._start_collisions
 
-    @property
-    def contact_free(self) -> bool:
-        """No contact so far this episode."""
-        return self.contact_time == 0.0 and self._collisions == self._start_collisions
-
     def remember(self, distance: float, collisions: int, contact_time: float) -> None:
         """What the step just observed [m, episodes, s], for the next step's progress and
         contacts (:func:`outcomes` tells each task)."""
