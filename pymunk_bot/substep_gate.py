@@ -128,8 +128,8 @@ class SubstepGate:
                 self._wait -= 1
                 planned = self.full
             else:
-                self.clear_until = now + self._clear_for(max(2.0 * self.dt, MIN_CLEAR))
-                if now + MIN_CLEAR > self.clear_until or end > self.clear_until:
+                until = now + self._clear_for(max(2.0 * self.dt, MIN_CLEAR))
+                if now + MIN_CLEAR > until or end > until:
                     # A failed test stops at the first mover that can touch something soon:
                     # the others were not looked at, so its time bounds nothing (kept, it let
                     # a robot that was nearer its wall take single substeps into it).
@@ -138,6 +138,7 @@ class SubstepGate:
                     self._wait = min(MAX_WAIT, 2 ** (self._failures - 1))
                     planned = self.full
                 else:
+                    self.clear_until = until
                     self._failures = 0
         self._planned = planned
         return current, planned

@@ -253,8 +253,7 @@ class Lidar:
         no_return = true < low
         no_return |= true >= high
         if any(dropout > 0.0 for _, _, _, dropout in models):
-            for row, lidar in zip(no_return, lidars):
-                dropout = lidar._model[3]
+            for row, lidar, (_, _, _, dropout) in zip(no_return, lidars, models):
                 if dropout > 0.0:
                     row |= lidar._periodic_rng.random(row.shape[0]) < dropout
         np.copyto(ranges, high, where=no_return)  # high broadcast along each row

@@ -115,6 +115,15 @@ def _ray_range(lo: float, hi: float, st: np.ndarray, t0: float, inv: float,
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _rejects(shape_filters: np.ndarray, o: int, group: int, categories: int, mask: int) -> bool:
+    """cpShapeFilterReject of shape ``o`` (its (group, categories, mask) a column of
+    ``shape_filters``) and a query's filter."""
+    return ((shape_filters[0, o] != 0 and shape_filters[0, o] == group)
+            or (shape_filters[1, o] & mask) == 0
+            or (categories & shape_filters[2, o]) == 0)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def endpoints_rows(ox: np.ndarray, oy: np.ndarray, ang: np.ndarray, rng: np.ndarray,
                    ends: np.ndarray) -> None:
     """The (K, 2, n) segment end points of :func:`.reference.endpoints_many` into ``ends``:
@@ -142,9 +151,7 @@ def near_admitted(boxes: np.ndarray, bound: np.ndarray, shape_filters: np.ndarra
         x, y, d = ox[k], oy[k], reach[k]
         near[k] = False
         for o in range(bound.shape[1]):
-            if ((shape_filters[0, o] != 0 and shape_filters[0, o] == group)
-                    or (shape_filters[1, o] & mask) == 0
-                    or (categories & shape_filters[2, o]) == 0):
+            if _rejects(shape_filters, o, group, categories, mask):
                 continue
             if o < n_static:
                 apart = (x < boxes[0, o] - d or x > boxes[2, o] + d
@@ -175,9 +182,7 @@ def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, boun
         group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
         for j in range(m):
             o = owner[j]
-            admitted[j] = not ((shape_filters[0, o] != 0 and shape_filters[0, o] == group)
-                               or (shape_filters[1, o] & mask) == 0
-                               or (categories & shape_filters[2, o]) == 0)
+            admitted[j] = not _rejects(shape_filters, o, group, categories, mask)
         n_flagged[k] = trace(rows, counts, admitted, owner, bound, rounded, ox[k], oy[k],
                              scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
                              order_given[k], best[k], flagged[k])
