@@ -101,7 +101,9 @@ class Propulsion:
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
         self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
         self._rows = -1  # bodies the last index was built for
-        self._held_twists: np.ndarray | None = None  # (n, 3) twists held (batched), or None
+        self._holding = False  # the fleet is held as a whole (batched)
+        self._held_twists = np.full((self.n, 3), np.nan)  # the twists held (batched; NaN: none)
+        self._changed = np.zeros(self.n, dtype=np.bool_)  # whose twist the last hold changed
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
@@ -125,7 +127,7 @@ class Propulsion:
         held: list[tuple[DriveUnits, list[int]]] = []
         loose: list[tuple[DriveUnits, list[int]]] = []
         for drives in self._drives:
-            if substeps > 1 and h_last == h:
+            if h_last == h:
                 calm, moving = _partition(drives.every_unit, drives.settled())
             else:
                 calm, moving = [], drives.every_unit
@@ -198,7 +200,7 @@ class Propulsion:
         else aimed every substep (the last for ``h_last``); bodies read and written through
         ``pymunk.batch``."""
         space = self.space
-        if substeps > 1 and h_last == h and all(group.settled() for group, _ in self.groups):
+        if h_last == h and all(group.settled() for group, _ in self.groups):
             twists = self._gather(lambda group: group.coast(h, substeps))
             if self._hold_all(twists, h):
                 for _ in range(substeps):
@@ -230,26 +232,25 @@ class Propulsion:
         out, anchors = self._held_out, self._anchors
         out[:] = state
         if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega, h,
-                         self.cog, _MAX_ANCHOR, anchors, out):
+                         self.cog, _MAX_ANCHOR, anchors, out, self._held_twists, self._changed):
             return False
-        turning = omega != 0.0
-        held = np.stack((ux, uy, omega), axis=1)
-        changed = np.flatnonzero((held != self._held_twists).any(axis=1))
-        for k in changed.tolist():  # pivot anchors are no batch field: written on change only
-            if turning[k] or self._anchored[k]:
+        for k in np.flatnonzero(self._changed).tolist():  # anchors are no batch field:
+            turning = omega[k] != 0.0  # written when a twist changes, or held ones let go
+            if turning or self._anchored[k]:
                 self.pivots[k].anchor_a = (float(anchors[k, 0]), float(anchors[k, 1]))
-                self._anchored[k] = bool(turning[k])
-        self._held_twists = held
+                self._anchored[k] = turning
+        self._holding = True
         batch.set_space_bodies(self.space, _READ, self._write_held)
         return True
 
     def _release_anchors(self) -> None:
         """Back from holding: every pivot anchor to its control body's centre."""
-        if self._held_twists is not None:
+        if self._holding:
             for k in np.flatnonzero(self._anchored).tolist():
                 self.pivots[k].anchor_a = (0.0, 0.0)
                 self._anchored[k] = False
-            self._held_twists = None
+            self._held_twists.fill(np.nan)
+            self._holding = False
 
     def adopt(self, previous: "Propulsion") -> None:
         """Take over what ``previous`` knew of the bodies both steer (anchors, last writes),
@@ -262,7 +263,8 @@ class Propulsion:
                 self._held[k] = previous._held[j]
                 self._anchored[k] = previous._anchored[j]
         if self.batched and any(self._anchored):
-            self._held_twists = np.full((self.n, 3), np.nan)  # every anchor written anew
+            self._holding = True  # so a release lets them go
+            self._held_twists.fill(np.nan)  # every anchor written anew
 
     def _read_state(self) -> np.ndarray:
         """Every body's (angle, vx, vy, omega), in pymunk's body order."""

@@ -19,6 +19,7 @@ from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .localization.score import LocalizationScore
 from .propulsion import Propulsion
+from .observing import Observer, observe
 from .readings import Observation
 from .robot import Robot, RobotsByName
 from .sensors.lidar import Lidar
@@ -31,12 +32,12 @@ from .world import World
 class TickPlan:
     """Runs that tick together (one, or copies sharing a Space), and which of them have work
     in each phase: controllers or actors before the physics, sensors and localizers after it,
-    LiDARs at all."""
+    and the ray caster their LiDARs share (None: no LiDAR)."""
 
     sims: tuple["Simulation", ...]
     acting: tuple["Simulation", ...]
     reading: tuple["Simulation", ...]
-    lidars: bool
+    caster: Any
     gate: SubstepGate | None  # adaptive substeps (world.substeps: adaptive), else None
 
 
@@ -96,6 +97,7 @@ class Simulation:
                           in zip(built.drive_groups, built.odometry_groups)]
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
+        self._observer = Observer(self._robots, built.fleet, built.odometry_groups)
         self._lidars = [lidar for lidar in (r.sensor("lidar") for r in self._robots)
                         if lidar is not None]
         self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self._lidars])
@@ -168,8 +170,9 @@ class Simulation:
         if first.world.adaptive:
             gate = SubstepGate(ground.space, [m for sim in sims for m in sim._built.movers],
                                first.substeps, first.dt, ground.take_disturbed)
+        caster = first.world.ray_caster() if any(s._lidars for s in sims) else None
         return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
-                        tuple(s for s in sims if s._reads), any(s._lidars for s in sims), gate)
+                        tuple(s for s in sims if s._reads), caster, gate)
 
     @staticmethod
     def step_together(plan: TickPlan, propulsion: Propulsion, stack: Any = None,
@@ -211,11 +214,12 @@ class Simulation:
         else:
             positions = propulsion.positions()
             nows = [sim._bookkeep(positions[start:stop]) for sim, (start, stop) in zip(sims, spans)]
-        if plan.lidars:
-            caster = first.world.ray_caster()  # the copies share one
-            caster.begin_frame()  # every LiDAR of this tick sees one scene
-            Lidar.scan_all(caster, [(lidar, now) for sim, now in zip(sims, nows)
-                                    for lidar in sim._due_lidars(now)])
+        caster = plan.caster
+        if caster is not None:
+            caster.begin_frame()  # every cast of this tick sees one scene
+            due = [(lidar, now) for sim, now in zip(sims, nows) for lidar in sim._due_lidars(now)]
+            if due:
+                Lidar.scan_all(caster, due)
         for sim in plan.reading:
             now = sim.time
             sim._read_other_sensors(now)
@@ -316,11 +320,15 @@ class Simulation:
     def _run_controllers(self, now: float) -> None:
         # Schedules advance even while a robot is driven by hand, so a controller given back
         # resumes at its own rate instead of catching up on every period it missed.
-        robots = self._robots
-        for k in self._control.due(now):
-            robot = robots[self._controlled[k]]
-            if not robot.overridden:
-                robot.follow(robot.controller.compute(self.observe(robot)))
+        due = self._control.due(now)
+        if not due:
+            return
+        robots, controlled = self._robots, self._controlled
+        indices = [controlled[k] for k in due if not robots[controlled[k]].overridden]
+        if indices:
+            for i, observation in zip(indices, self._observer.observe_many(indices, now)):
+                robot = robots[i]
+                robot.follow(robot.controller.compute(observation))
 
     def _due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
@@ -347,14 +355,7 @@ class Simulation:
 
     def observe(self, robot: Robot) -> Observation:
         """What ``robot``'s controller knows now."""
-        lidar = robot.sensor("lidar")
-        return Observation(
-            time=self.time, pose=robot.localizer.pose, odometry=robot.odometry.pose,
-            goal=robot.nav_goal, goal_tolerance=robot.goal_tolerance, robot=robot.spec,
-            scan=lidar.latest if lidar is not None else None,
-            read_extra=robot.readings,
-            localized=getattr(robot.localizer, "localized", True),  # a plugin's: trusted
-            explore_heading=getattr(robot.localizer, "explore_heading", None))
+        return observe(robot, self.time)
 
     # ------------------------------------------------------------------ results
     def check_expectations(self) -> list[Check]:

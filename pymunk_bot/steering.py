@@ -89,12 +89,14 @@ def aim_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray
 @numba.njit(cache=True)
 def hold_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray,
               ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: float, cog: np.ndarray,
-              max_anchor: float, anchors: np.ndarray, out: np.ndarray) -> bool:
+              max_anchor: float, anchors: np.ndarray, out: np.ndarray, held: np.ndarray,
+              changed: np.ndarray) -> bool:
     """Every robot held for a step of substeps ``h`` [s]: a turning one by its pivot's
     :func:`anchor` (into ``anchors``; its control body spinning at omega, headed as the robot
     will be at the solve), a straight one aimed once. Control bodies' (angle, vx, vy, omega) into
-    ``out`` (rows in pymunk's body order). False if some anchor would lie beyond ``max_anchor``
-    [m] (``out`` is then incomplete)."""
+    ``out`` (rows in pymunk's body order); ``held`` (n, 3), the twists held before (NaN: none),
+    becomes these, and ``changed`` says whose differ. False if some anchor would lie beyond
+    ``max_anchor`` [m] (``out`` is then incomplete, ``held`` untouched)."""
     for k in range(robot_rows.shape[0]):
         r, row = robot_rows[k], control_rows[k]
         angle, spin = state[r, 0], state[r, 3]
@@ -110,4 +112,9 @@ def hold_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarra
             out[row, 1], out[row, 2] = aim(angle, spin, ux[k], uy[k], 0.0, h, h,
                                            cog[k, 0], cog[k, 1])
         out[row, 3] = omega[k]
+    for k in range(robot_rows.shape[0]):
+        differs = held[k, 0] != ux[k] or held[k, 1] != uy[k] or held[k, 2] != omega[k]
+        changed[k] = differs
+        if differs:
+            held[k, 0], held[k, 1], held[k, 2] = ux[k], uy[k], omega[k]
     return True

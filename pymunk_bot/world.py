@@ -70,7 +70,7 @@ class World:
         self.actors: list[Any] = []
         self.time = 0.0  # simulated time [s], kept by the simulation
         # Substeps taken only where a contact can start (world.substeps: adaptive).
-        self.adaptive = config.world.substeps == "adaptive"
+        self.adaptive = config.world.substeps in (None, "adaptive")
         # [s] the pymunk step the bodies' velocities now move in (the next tick's first), kept
         # by the simulation: dt / substeps, unless the substeps are adaptive.
         self.substep = config.world.dt / self.substeps

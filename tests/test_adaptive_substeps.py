@@ -37,11 +37,14 @@ def test_open_space_takes_one_step_per_tick_and_keeps_the_arc_exact():
     assert np.hypot(*(np.array(points) - centre).T).std() < 1e-9  # on the circle
 
 
-def test_default_and_named_counts_take_every_substep():
-    for extra in ({}, {"substeps": 3}):
-        sim = _sim([robot([10, 10, 0], controller=wheels(0.5, 0.5))], **extra)
-        sim.run(1.0)
-        assert sim.single_substep_ticks == 0
+def test_a_named_count_takes_every_substep_and_the_default_only_where_contacts_can_start():
+    """In open space the default takes one pymunk step per tick; a named count every substep."""
+    named = _sim([robot([10, 10, 0], controller=wheels(0.5, 0.5))], substeps=3)
+    named.run(1.0)
+    assert named.single_substep_ticks == 0
+    default = _sim([robot([10, 10, 0], controller=wheels(0.5, 0.5))])
+    default.run(1.0)
+    assert default.single_substep_ticks >= 0.9 * default.steps
 
 
 @pytest.mark.parametrize("thickness", [0.01, 0.02])
@@ -106,7 +109,7 @@ def test_substeps_accepts_adaptive_and_refuses_other_words():
 
 
 def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at():
-    """The contact bench's head-on trial 443 (two robots at 2.6 m/s, dt 1/120 s), adaptive:
+    """The contact bench's head-on trial 443 (two robots at 2.6 m/s, dt 1/120 s), by default:
     after passing each other they race to opposite walls. A test that fails stops at the
     first mover that can touch something soon; the other one, nearer its wall, was not looked
     at, and must not take single steps into it (it did: 12.9 mm deep)."""
@@ -114,5 +117,5 @@ def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at()
     rng = np.random.default_rng(0)  # the bench's trials draw in turn from one generator
     for i in range(443):
         contacts.trial_scenario(contacts.KINDS[i % len(contacts.KINDS)], rng)
-    crossed, deepest = contacts.run_trial("head-on", rng, adaptive=True)
+    crossed, deepest = contacts.run_trial("head-on", rng)  # the default: adaptive
     assert not crossed and deepest <= 0.01

@@ -1,14 +1,23 @@
-"""Copies of a scenario sharing one Space: each plays exactly the run it would play alone,
-and no copy meets or sees another."""
+"""Copies of a scenario sharing one Space: with a named substep count each plays exactly the
+run it would play alone, and no copy meets or sees another."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from pymunk_bot.config import load_scenario, parse_scenario
+from pymunk_bot.config.substeps import required_substeps
 from pymunk_bot.physics import MAX_REPLICAS
 from pymunk_bot.replicas import Replicas
 from pymunk_bot.sim import Simulation
+
+
+def _named(data: dict, name: str):
+    """``data`` parsed with its substep count named: a shared space then takes every substep in
+    every tick, as each single run does (the default takes them only where some copy's
+    contacts can start: docs/learning.md)."""
+    data.setdefault("world", {})["substeps"] = required_substeps(parse_scenario(data, name))
+    return parse_scenario(data, name)
 
 
 def _lidar_default(crate: bool = True):
@@ -20,7 +29,7 @@ def _lidar_default(crate: bool = True):
     data["robots"][0]["pose"] = [4.0, 4.7, 0.0]  # facing the crate 1 m ahead
     if not crate:
         data["obstacles"] = [o for o in data["obstacles"] if not o.get("movable")]
-    return parse_scenario(data, "default")
+    return _named(data, "default")
 
 
 def _drive(sims, commands) -> None:
@@ -119,7 +128,7 @@ def _two_robot_fleet():
     and reach goals at different times."""
     noisy = {"wheel_noise_std": 0.02, "left_scale_error": 0.01, "track_width_error": -0.02,
              "encoder_resolution": 0.001}
-    return parse_scenario({
+    return _named({
         "name": "pair", "world": {"size": [6.0, 4.0]},
         "obstacles": [{"type": "circle", "center": [3.0, 2.0], "radius": 0.3},
                       {"type": "box", "center": [4.5, 1.0], "size": [0.4, 0.4]}],
@@ -188,7 +197,7 @@ def test_car_and_omni_copies_stay_exact_across_other_copies_resets(scenario):
     for robot in data["robots"]:
         robot["odometry"] = NOISY_ODOMETRY[scenario]
         robot["localization"] = {"type": "ground_truth"}  # its planner: no replans on drift
-    config = parse_scenario(data, scenario)
+    config = _named(data, scenario)
     seeds = [1, 2, 3]
     copies = Replicas(config, seeds)
     assert copies._stack is not None

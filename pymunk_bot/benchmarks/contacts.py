@@ -18,6 +18,7 @@ import pymunk
 
 from ..config.schema import MAX_ACCEL
 from ..sim import Simulation
+from .simulation import every_substep
 
 KINDS = ("wall", "post", "crate", "head-on")
 MAX_TRIAL_SPEED = 3.0  # [m/s]
@@ -98,11 +99,12 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0,
-              adaptive: bool = False) -> tuple[bool, float]:
-    """(crossed, deepest overlap [m]) of one trial (``adaptive``: world.substeps adaptive)."""
+              every: bool = False) -> tuple[bool, float]:
+    """(crossed, deepest overlap [m]) of one trial (``every``: every substep in every tick; by
+    default, only where a contact can start)."""
     data = trial_scenario(kind, rng)
-    if adaptive:
-        data["world"]["substeps"] = "adaptive"
+    if every:
+        every_substep(data)
     sim = Simulation.from_dict(data)
     a = sim.robots["a"]
     b = sim.robots.get("b")
@@ -126,19 +128,19 @@ def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0,
     return crossed, worst
 
 
-def run_trials(trials: int, seed: int = 0, adaptive: bool = False) -> Summary:
+def run_trials(trials: int, seed: int = 0, every: bool = False) -> Summary:
     """``trials`` randomized trials, the hazards in turn."""
     rng = np.random.default_rng(seed)
     summary = Summary()
     for i in range(trials):
         kind = KINDS[i % len(KINDS)]
-        summary.add(kind, *run_trial(kind, rng, adaptive=adaptive))
+        summary.add(kind, *run_trial(kind, rng, every=every))
     return summary
 
 
-def main(trials: int = 1000, adaptive: bool = False) -> Summary:
-    summary = run_trials(trials, adaptive=adaptive)
-    print(f"{summary.trials} trials{' (adaptive substeps)' if adaptive else ''}: "
+def main(trials: int = 1000, every: bool = False) -> Summary:
+    summary = run_trials(trials, every=every)
+    print(f"{summary.trials} trials{' (every substep)' if every else ''}: "
           f"{summary.crossings} crossings, "
           f"{summary.deeper_than_1cm} deeper than 1 cm, deepest {summary.max_penetration * 1000:.1f} mm")
     for kind, (n, crossed, worst) in summary.by_kind.items():

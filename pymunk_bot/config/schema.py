@@ -35,8 +35,9 @@ class WorldConfig(Section):
     map: str | None = None  # ROS map YAML or SVG plan, relative to the scenario file
     map_scale: PositiveFloat | None = None  # SVG only: metres per SVG user unit (default 0.01)
     dt: Annotated[PositiveFloat, Field(le=0.1, ge=1e-4)] = 1.0 / 60.0  # physics step [s]
-    # pymunk steps per dt; None = computed so nothing tunnels; "adaptive" = that count, taken
-    # only in ticks where a contact can start (one pymunk step in the others)
+    # pymunk steps per dt: a count, taken in every tick; None or "adaptive" (the default): the
+    # count computed so nothing tunnels, taken only in ticks where a contact can start (one
+    # pymunk step in the others)
     substeps: Annotated[PositiveInt, Field(le=MAX_SUBSTEPS)] | Literal["adaptive"] | None = None
     duration: Duration = 30.0  # default run length [s]
     wall_friction: Friction = 0.5  # contact friction of the arena walls

@@ -56,6 +56,9 @@ class Localizer:
 
     needs_map: bool = False  # True: the context carries the scenario's map (or world.map)
     needs_lidar: bool = False  # True: the scenario must give the robot a LiDAR
+    # True: ``pose`` is the robot's odometry estimate (controllers' observations read the
+    # odometry of many robots at once, and this one's pose with it)
+    reports_odometry: bool = False
 
     def __init__(self, config: Any, context: LocalizerContext) -> None:
         self.config = config

@@ -39,6 +39,7 @@ class OdometryLocalizer(Localizer):
     def __init__(self, config: Any, context: LocalizerContext, odometry: Any = None) -> None:
         super().__init__(config, context)
         self._odometry = odometry
+        self.reports_odometry = odometry is not None
 
     @property
     def pose(self) -> np.ndarray:

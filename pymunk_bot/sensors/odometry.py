@@ -73,15 +73,15 @@ class DiffOdometryGroup:
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
-        travel = np.asarray(travel, dtype=float)
+        if not isinstance(travel, np.ndarray):
+            travel = np.asarray(travel, dtype=float)
         if self._plain:
             wheels, scale = travel, self.scale
         else:
             wheels, scale = self.encoders.measure(travel), self._unit_scale
-        cos_h, sin_h, factor = self._mid
-        _dead_reckon(wheels, scale, self.believed_track, self.wheel_travel, self.pose,
-                     cos_h, sin_h, factor)
+        _dead_reckon(wheels, scale, self.believed_track, self.wheel_travel, self.pose, self._mid)
         if self._noisy:
+            cos_h, sin_h, factor = self._mid
             ds = 0.5 * (wheels[:, 0] + wheels[:, 1])
             self._propagate(ds * factor, cos_h, sin_h, ds, np.abs(wheels))
 
@@ -152,14 +152,13 @@ def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
 
 @numba.njit(cache=True)
 def _dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
-                 wheel_travel: np.ndarray, pose: np.ndarray, cos_mid: np.ndarray,
-                 sin_mid: np.ndarray, chord: np.ndarray) -> None:
+                 wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray) -> None:
     """Each robot's encoder readings (n, 2) [m] (times ``scale``: encoders that only scale, or
     ones) added to its wheel travel, and its pose moved along the arc they make with the track
-    width it believes [m]; fills the mid-step cos, sin and chord factors."""
+    width it believes [m]; fills ``mid`` (3, n): the mid-step cos, sin and chord factors."""
     for i in range(pose.shape[0]):
         left, right = wheels[i, 0] * scale[i, 0], wheels[i, 1] * scale[i, 1]
         wheel_travel[i, 0] += left
         wheel_travel[i, 1] += right
-        cos_mid[i], sin_mid[i], chord[i] = arc_step(pose, i, 0.5 * (left + right), 0.0,
-                                                    (right - left) / track[i])
+        mid[0, i], mid[1, i], mid[2, i] = arc_step(pose, i, 0.5 * (left + right), 0.0,
+                                                   (right - left) / track[i])

@@ -276,16 +276,15 @@ class RayCaster:
         # Per cast: origin x, y [m], max range [m], coordinate scale [m].
         ox, oy, rng, scale = np.array([[job.ox for job in jobs], [job.oy for job in jobs],
                                        [job.rng for job in jobs], [job.scale for job in jobs]])
-        if k == 1:  # a LiDAR's own cast: the same floats, without the batch's array set-up
+        if k == 1:  # a LiDAR's own cast: without the batch's array set-up
             job = jobs[0]
             angles = job.ang[None]
-            ends = endpoints(job.ox, job.oy, job.ang, job.rng)[2][None]
             filters = self._filter_row(job.filter)[None]
         else:
             angles = np.stack([job.ang for job in jobs])
-            ends = np.empty((k, 2, angles.shape[1]))
-            self._endpoints_rows(ox, oy, angles, rng, ends)  # endpoints_many's, compiled
             filters = np.concatenate([self._filter_row(job.filter)[None] for job in jobs])
+        ends = np.empty((k, 2, n))
+        self._endpoints_rows(ox, oy, angles, rng, ends)  # endpoints_many's, compiled
         counts = [len(job.directions) for job in jobs]
         if any(counts):
             n_sides = np.array(counts, dtype=np.intp)
