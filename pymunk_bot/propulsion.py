@@ -178,6 +178,10 @@ class Propulsion:
         """:meth:`_aim` for these robots (twists in their order; ``member_rows``: ``members``
         as an array): one by one when few, else as rows (the same compiled formula: the same
         floats)."""
+        if len(members) == 1:  # one robot: its twist's floats, without the lists
+            ux, uy, omega = twists
+            self._aim(members[0], (float(ux[0]), float(uy[0]), float(omega[0])), h, h_next)
+            return
         if len(members) < ROWS_AIM:
             for k, twist in zip(members, zip(*_floats(twists))):
                 self._aim(k, twist, h, h_next)

@@ -19,6 +19,8 @@ from .stacking import join_rows, split_rows
 def real_number(name: str, value: Any) -> float:
     """``value`` as a finite float; TypeError for text or booleans (as the scenario's YAML
     refuses them), ValueError for NaN and infinities. ``name`` is the argument in messages."""
+    if type(value) is float and math.isfinite(value):  # the usual case, without ABC checks
+        return value
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number (got {type(value).__name__} {value!r:.40})")
     number = float(value)
@@ -113,7 +115,7 @@ class Fleet:
         """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
         from every robot's new position [m]: an (n, 2) array, or a sequence of (x, y)."""
         if not isinstance(xy, np.ndarray):  # a few robots' Vec2d, read one by one
-            xy = np.array(xy, dtype=float).reshape(-1, 2)
+            xy = np.array([c for p in xy for c in p], dtype=float).reshape(-1, 2)
         if isinstance(time, np.ndarray):
             times = time
         else:

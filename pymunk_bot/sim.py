@@ -156,9 +156,13 @@ class Simulation:
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
+        Simulation.step_together(self._own_plan(), self._built.propulsion)
+
+    def _own_plan(self) -> TickPlan:
+        """This run's tick plan (a copy on a shared ground has none: its Replicas ticks it)."""
         if self._plan is None:
             raise RuntimeError("a copy on a shared ground advances with its Replicas.step()")
-        Simulation.step_together(self._plan, self._built.propulsion)
+        return self._plan
 
     @staticmethod
     def plan(sims: Sequence["Simulation"], ground: World) -> TickPlan:
@@ -272,8 +276,9 @@ class Simulation:
         """Advance ``duration`` simulated seconds (rounded to whole steps)."""
         if not (isinstance(duration, numbers.Real) and math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be a finite number >= 0 (got {duration!r})")
-        for _ in range(round(duration / self.dt)):
-            self.step()
+        step = Simulation.step_together
+        for _ in range(round(duration / self.dt)):  # read anew each tick: an observer may reset
+            step(self._own_plan(), self._built.propulsion)
 
     def attach(self, observer: Any) -> None:
         """Add ``observer`` (called after every step) once: if it has ``on_reset(sim)``, that

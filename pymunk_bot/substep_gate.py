@@ -119,6 +119,8 @@ class SubstepGate:
         current = self._planned
         if current == 1:
             self.single_ticks += 1
+            if now + 2.0 * self.dt <= self.clear_until:  # most ticks in open space
+                return 1, 1
         if self.full == 1:
             return 1, 1
         end = now + 2.0 * self.dt  # the next tick's end

@@ -99,7 +99,9 @@ class Lidar:
 
     def origin(self) -> tuple[float, float]:
         """Where the beams start now, in the world frame [m]."""
-        p = self._body.local_to_world(self._mount)
+        body = self._body
+        # At the body's origin: its position, exactly (what local_to_world gives, cheaper).
+        p = body.position if self._mount == (0.0, 0.0) else body.local_to_world(self._mount)
         return (p.x, p.y)
 
     def cast_request(self) -> tuple[tuple[float, float], np.ndarray, float, pymunk.ShapeFilter]:
@@ -190,13 +192,8 @@ class Lidar:
         origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
         origins, thetas, offsets, ranges, filters = [], [], [], [], []
         for lidar in lidars:
-            body = lidar._body
-            if lidar._mount == (0.0, 0.0):  # the body's origin: its position, exactly
-                p = body.position
-            else:
-                p = body.local_to_world(lidar._mount)
-            origins.append((p.x, p.y))
-            thetas.append(body.angle)
+            origins.append(lidar.origin())
+            thetas.append(lidar._body.angle)
             offsets.append(lidar._angles)
             ranges.append(lidar.config.max_range)
             filters.append(lidar._filter)

@@ -32,6 +32,7 @@ NEAR_SHAPE = 1e-6
 COMPILED_REFERENCE_RAYS = 6
 _MAX_CACHED = 4096  # query filters (one per robot, usually) and scratch sizes remembered
 _NO_SIDES = np.zeros((1, 2, 0))  # the tracer's side intervals when no ray runs along a side
+_NO_SIDE_COUNT = np.zeros(1, dtype=np.intp)
 _NO_ORDER = np.empty((1, 0), dtype=np.intp)  # the tracer's ray order when it needs none
 
 
@@ -69,6 +70,8 @@ class RayCaster:
             self._near_admitted, self._endpoints_rows = near_admitted, endpoints_rows
         self._cache = SceneCache(space, mover)
         self._filter_rows: dict[pymunk.ShapeFilter, np.ndarray] = {}
+        # A single cast's origin x, y, max range and scale (filled, then read by the tracer).
+        self._one = tuple(np.empty(1) for _ in range(4))
         self._scratch: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def _filter_row(self, f: pymunk.ShapeFilter) -> np.ndarray:
@@ -274,19 +277,23 @@ class RayCaster:
         world, bound = jobs[0].parts[0], jobs[0].bound
         k, n = len(jobs), jobs[0].ang.shape[0]
         # Per cast: origin x, y [m], max range [m], coordinate scale [m].
-        ox, oy, rng, scale = np.array([[job.ox for job in jobs], [job.oy for job in jobs],
-                                       [job.rng for job in jobs], [job.scale for job in jobs]])
         if k == 1:  # a LiDAR's own cast: without the batch's array set-up
             job = jobs[0]
+            ox, oy, rng, scale = self._one
+            ox[0], oy[0], rng[0], scale[0] = job.ox, job.oy, job.rng, job.scale
             angles = job.ang[None]
             filters = self._filter_row(job.filter)[None]
         else:
+            ox, oy, rng, scale = np.array([[job.ox for job in jobs], [job.oy for job in jobs],
+                                           [job.rng for job in jobs], [job.scale for job in jobs]])
             angles = np.stack([job.ang for job in jobs])
             filters = np.concatenate([self._filter_row(job.filter)[None] for job in jobs])
         ends = np.empty((k, 2, n))
         self._endpoints_rows(ox, oy, angles, rng, ends)  # endpoints_many's, compiled
         counts = [len(job.directions) for job in jobs]
-        if any(counts):
+        if k == 1 and not counts[0]:
+            n_sides, sides = _NO_SIDE_COUNT, _NO_SIDES
+        elif any(counts):
             n_sides = np.array(counts, dtype=np.intp)
             sides = np.zeros((k, 2, max(counts)))
             for row, job in zip(sides, jobs):
