@@ -176,31 +176,28 @@ def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, boun
     filters are applied here: ``filters`` (K, 3) and ``shape_filters`` (3, n_shapes) hold
     (group, categories, mask) of each cast and of each shape; a shape is traced unless
     cpShapeFilterReject rejects the pair."""
-    m = rows.shape[1]
-    admitted = np.empty(m, dtype=np.bool_)
     for k in range(ox.shape[0]):
-        group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
-        for j in range(m):
-            o = owner[j]
-            admitted[j] = not _rejects(shape_filters, o, group, categories, mask)
-        n_flagged[k] = trace(rows, counts, admitted, owner, bound, rounded, ox[k], oy[k],
-                             scale[k], rng[k], ang[k], ends[k], sides[k, :, :n_sides[k]],
-                             order_given[k], best[k], flagged[k])
+        n_flagged[k] = trace(rows, counts, shape_filters, filters[k], owner, bound, rounded,
+                             ox[k], oy[k], scale[k], rng[k], ang[k], ends[k],
+                             sides[k, :, :n_sides[k]], order_given[k], best[k], flagged[k])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.ndarray,
-          bound: np.ndarray, rounded: bool, ox: float, oy: float, scale: float, rng: float,
-          ang: np.ndarray, ends: np.ndarray, side: np.ndarray, order_given: np.ndarray,
-          best: np.ndarray, flagged: np.ndarray) -> int:
-    """Lower ``best`` (alpha per ray, starting at 1) by every hit of an admitted primitive
-    of the table ``rows`` (columns: ``counts`` edges, flags, circles, segments; ``owner``:
-    the shape of each, whose bounding circle (cx, cy, r) is a column of ``bound``); write the
+def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query: np.ndarray,
+          owner: np.ndarray, bound: np.ndarray, rounded: bool, ox: float, oy: float,
+          scale: float, rng: float, ang: np.ndarray, ends: np.ndarray, side: np.ndarray,
+          order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray) -> int:
+    """Lower ``best`` (alpha per ray, starting at 1) by every hit of a primitive of the table
+    ``rows`` (columns: ``counts`` edges, flags, circles, segments; ``owner``: the shape of
+    each, whose bounding circle (cx, cy, r) is a column of ``bound``) that the ``query``
+    filter (group, categories, mask) admits (``shape_filters``: each shape's; tested only
+    for shapes in range, the rest cost nothing per cast); write the
     rays that pass near a flag, or inside a ``side`` interval (2, k) [rad], to ``flagged``
     and return how many there are (a ray may appear more than once); -1 if they do not
     fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
     with their angle order)."""
     n = best.shape[0]
+    group, categories, mask = query[0], query[1], query[2]
     st, order, t0, inv, err, wrap = _sorted_rays(ang, order_given)
     if order.shape[0] != n:
         return -2
@@ -220,14 +217,16 @@ def trace(rows: np.ndarray, counts: np.ndarray, admitted: np.ndarray, owner: np.
         if rounded:
             d -= rows[RAD, j]
         an_edge[j], d_edge[j] = an, d
-        if admitted[j] and d >= 0.0 and d <= near_plane:
+        if d >= 0.0 and d <= near_plane and not _rejects(shape_filters, owner[j], group,
+                                                          categories, mask):
             on_plane = True
     for j in range(m):
-        if not admitted[j] or (j < ne and not d_edge[j] >= 0.0):
+        if j < ne and not d_edge[j] >= 0.0:
             continue
         o = owner[j]  # no ray reaches a shape whose bounding circle is out of range
         cx, cy, reach = bound[0, o] - ox, bound[1, o] - oy, rng + bound[2, o] + slack
-        if cx * cx + cy * cy > reach * reach:
+        if cx * cx + cy * cy > reach * reach or _rejects(shape_filters, o, group, categories,
+                                                          mask):
             continue
         kind = 0 if j < ne else (1 if j < ne + nf else (2 if j < ne + nf + nc else 3))
         ax, ay = rows[AX, j] - ox, rows[AY, j] - oy
