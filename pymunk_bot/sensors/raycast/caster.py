@@ -130,7 +130,8 @@ class RayCaster:
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
         scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
         sides, n_sides, cornered = sides_many(self._cache, ox, oy, scale)
-        f_all = np.array([self._filter_row(f) for f in filters], dtype=np.uint64).reshape(-1, 3)
+        # (group, categories, mask) per cast, as _filter_row gives them: a ShapeFilter is that tuple.
+        f_all = np.array(filters, dtype=np.uint64).reshape(-1, 3)
         near = np.empty(k, dtype=np.bool_)  # pymunk is asked only about origins near a shape
         self._near_admitted(self._cache.static_boxes, bound, self._cache.shape_filters, ox, oy,
                             NEAR_SHAPE * scale, f_all, near)

@@ -150,16 +150,14 @@ def near_admitted(boxes: np.ndarray, bound: np.ndarray, shape_filters: np.ndarra
         group, categories, mask = filters[k, 0], filters[k, 1], filters[k, 2]
         x, y, d = ox[k], oy[k], reach[k]
         near[k] = False
-        for o in range(bound.shape[1]):
-            if _rejects(shape_filters, o, group, categories, mask):
-                continue
+        for o in range(bound.shape[1]):  # the bounds first: the filter only for shapes near
             if o < n_static:
                 apart = (x < boxes[0, o] - d or x > boxes[2, o] + d
                          or y < boxes[1, o] - d or y > boxes[3, o] + d)
             else:
                 dx, dy, r = x - bound[0, o], y - bound[1, o], bound[2, o] + d
                 apart = dx * dx + dy * dy > r * r
-            if not apart:
+            if not apart and not _rejects(shape_filters, o, group, categories, mask):
                 near[k] = True
                 break
 
