@@ -99,6 +99,12 @@ class SubstepGate:
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
+        self._reach = np.array([m.reach for m in self.movers])  # [m]
+        # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
+        self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
+        self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
+        self._pairs = self._meeting(*np.triu_indices(len(self.movers), 1)) \
+            if len(self.movers) < _PAIRS_BY_TREE else None  # else found near, with a k-d tree
         self.full = full
         self.dt = dt
         self.clear_until = -math.inf  # [s] no contact can start before this time
@@ -175,28 +181,26 @@ class SubstepGate:
                     return clear
         return max(clear, 0.0)
 
+    def _meeting(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs (i, j) of movers that can touch: of one copy, not both kinematic."""
+        meet = (self._copy[i] == self._copy[j]) & (self._dynamic[i] | self._dynamic[j])
+        return i[meet], j[meet]
+
     def _clear_between_movers(self, speeds: np.ndarray) -> float:
         """How long [s] no two movers of one copy can touch (bounding discs), up to HORIZON."""
         n = len(self.movers)
         if n < 2:
             return HORIZON
-        xy = np.array([tuple(m.body.position) for m in self.movers])
-        reach = np.array([m.reach for m in self.movers])
-        if n < _PAIRS_BY_TREE:
-            i, j = np.triu_indices(n, 1)
+        xy = np.array([c for m in self.movers for c in m.body.position]).reshape(n, 2)
+        reach = self._reach
+        if self._pairs is not None:
+            i, j = self._pairs
         else:
             near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
-            pairs = cKDTree(xy).query_pairs(near, output_type="ndarray")
-            if len(pairs) == 0:
-                return HORIZON
-            i, j = pairs[:, 0], pairs[:, 1]
-        copies = [m.copy for m in self.movers]
-        dynamic = np.array([m.collides_with_static for m in self.movers])
-        meet = np.array([copies[a] == copies[b] for a, b in zip(i.tolist(), j.tolist())],
-                        dtype=bool) & (dynamic[i] | dynamic[j])  # kinematic pairs never touch
-        if not meet.any():
+            found = cKDTree(xy).query_pairs(near, output_type="ndarray")
+            i, j = self._meeting(found[:, 0], found[:, 1]) if len(found) else (found, found)
+        if len(i) == 0:
             return HORIZON
-        i, j = i[meet], j[meet]
         gap = np.hypot(*(xy[i] - xy[j]).T) - reach[i] - reach[j] - MARGIN
         closing = speeds[i] + speeds[j]
         with np.errstate(divide="ignore", invalid="ignore"):
