@@ -415,6 +415,7 @@ class Simulation:
             "sim_time": sim_time,
             "steps": self.steps,
             "substeps": self.substeps,
+            "single_step_ticks": self.single_substep_ticks,
             "wall_time": self.wall_time,
             "real_time_factor": sim_time / self.wall_time if self.wall_time > 0 else None,
             "passed": verdict.passed,

@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
+import numba
 import numpy as np
 import pymunk
 from scipy.spatial import cKDTree
@@ -80,10 +81,11 @@ def reach_of(body: pymunk.Body) -> float:
     return reach
 
 
-def _origin_speed(body: pymunk.Body) -> float:
-    """How fast ``body``'s origin moves now [m/s] (its centre of gravity's speed plus the turn
-    of the offset between the two)."""
-    return abs(body.velocity) + abs(body.angular_velocity) * abs(body.center_of_gravity)
+def _origin_speed(body: pymunk.Body, offset: float) -> float:
+    """How fast ``body``'s origin moves now [m/s]: its centre of gravity's speed plus the
+    turn of the ``offset`` [m] between the two."""
+    vx, vy = body.velocity
+    return math.hypot(vx, vy) + abs(body.angular_velocity) * offset
 
 
 class SubstepGate:
@@ -100,6 +102,7 @@ class SubstepGate:
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         self._reach = np.array([m.reach for m in self.movers])  # [m]
+        self._offset = [abs(m.body.center_of_gravity) for m in self.movers]  # [m] cog to origin
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
         self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
         self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
@@ -127,6 +130,9 @@ class SubstepGate:
             self.single_ticks += 1
             if now + 2.0 * self.dt <= self.clear_until:  # most ticks in open space
                 return 1, 1
+        elif self._wait > 0:  # most ticks of a crowded scene: the count, no test
+            self._wait -= 1
+            return current, current
         if self.full == 1:
             return 1, 1
         end = now + 2.0 * self.dt  # the next tick's end
@@ -157,8 +163,9 @@ class SubstepGate:
         movers = self.movers
         if not movers:
             return HORIZON
-        speeds = np.array([_origin_speed(m.body) if m.speed is None
-                           else max(m.speed, _origin_speed(m.body)) for m in movers])
+        speeds = np.array([_origin_speed(m.body, offset) if m.speed is None
+                           else max(m.speed, _origin_speed(m.body, offset))
+                           for m, offset in zip(movers, self._offset)])
         clear = self._clear_between_movers(speeds)
         if clear < needed:
             return clear
@@ -199,10 +206,21 @@ class SubstepGate:
             near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
             found = cKDTree(xy).query_pairs(near, output_type="ndarray")
             i, j = self._meeting(found[:, 0], found[:, 1]) if len(found) else (found, found)
-        if len(i) == 0:
-            return HORIZON
-        gap = np.hypot(*(xy[i] - xy[j]).T) - reach[i] - reach[j] - MARGIN
-        closing = speeds[i] + speeds[j]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(closing > 0.0, gap / closing, np.where(gap > 0.0, HORIZON, 0.0))
-        return float(min(HORIZON, max(0.0, t.min())))
+        return _pairs_clear(xy, reach, speeds, i.astype(np.intp), j.astype(np.intp))
+
+
+@numba.njit(cache=True)
+def _pairs_clear(xy: np.ndarray, reach: np.ndarray, speeds: np.ndarray, i: np.ndarray,
+                 j: np.ndarray) -> float:
+    """How long [s] (at most HORIZON) none of the pairs (i, j) of discs (centres ``xy`` [m],
+    radii ``reach`` [m], moving at most ``speeds`` [m/s]) can touch, MARGIN kept."""
+    clear = HORIZON
+    for k in range(i.shape[0]):
+        a, b = i[k], j[k]
+        gap = math.hypot(xy[a, 0] - xy[b, 0], xy[a, 1] - xy[b, 1]) - reach[a] - reach[b] - MARGIN
+        closing = speeds[a] + speeds[b]
+        if closing > 0.0:
+            clear = min(clear, gap / closing)
+        elif not gap > 0.0:
+            clear = 0.0
+    return max(0.0, clear)
