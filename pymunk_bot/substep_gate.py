@@ -205,7 +205,7 @@ class SubstepGate:
         else:
             near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
             found = cKDTree(xy).query_pairs(near, output_type="ndarray")
-            i, j = self._meeting(found[:, 0], found[:, 1]) if len(found) else (found, found)
+            i, j = self._meeting(found[:, 0], found[:, 1])
         return _pairs_clear(xy, reach, speeds, i.astype(np.intp), j.astype(np.intp))
 
 

@@ -119,3 +119,17 @@ def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at()
         contacts.trial_scenario(contacts.KINDS[i % len(contacts.KINDS)], rng)
     crossed, deepest = contacts.run_trial("head-on", rng)  # the default: adaptive
     assert not crossed and deepest <= 0.01
+
+
+@pytest.mark.parametrize("spacing, single", [(3.0, True), (0.5, False)])
+def test_a_large_fleet_takes_single_steps_only_when_its_robots_are_apart(spacing, single):
+    """60 robots (the gate finds their pairs with a k-d tree) driving side by side: far apart
+    in open space most ticks take one step; 0.5 m apart (a 0.1 m gap) every tick takes every
+    substep."""
+    robots = [robot([10 + spacing * (k % 10), 10 + spacing * (k // 10), 0], name=f"r{k}",
+                    controller=wheels(0.3, 0.3)) for k in range(60)]
+    sim = _sim(robots, size=(60.0, 60.0))
+    sim.run(1.0)
+    assert (sim.single_substep_ticks >= 0.8 * sim.steps) if single else \
+        (sim.single_substep_ticks == 0)
+    assert all(r.collisions == 0 for r in sim.robots.values())
