@@ -43,9 +43,6 @@ class Observer:
             if isinstance(getattr(group, "pose", None), np.ndarray):
                 self._group_of[list(members)] = g
                 self._row_of[list(members)] = np.arange(len(members))
-        # The robots whose localizer reports their odometry, read with it.
-        self._from_odometry = np.array(
-            [getattr(r.localizer, "reports_odometry", False) for r in self._robots], dtype=bool)
         # What does not change between resets: each robot, its spec, LiDAR and readings.
         self._fixed = [(r, r.spec, r.sensor("lidar"), r.readings) for r in self._robots]
 
@@ -60,14 +57,17 @@ class Observer:
         robots, fixed = self._robots, self._fixed
         idx = np.asarray(indices, dtype=np.intp)
         odometry = self._odometry_rows(idx)
-        from_odometry = self._from_odometry[idx]
-        poses: list[Any] = list(odometry.copy()) if from_odometry.all() else [
-            row.copy() if own else robots[i].localizer.pose
-            for i, own, row in zip(indices, from_odometry.tolist(), odometry)]
+        # A localizer that reports the odometry (asked now: a robot's localizer may be swapped)
+        # has its pose read with it.
+        localizers = [robots[i].localizer for i in indices]
+        own = [getattr(localizer, "reports_odometry", False) for localizer in localizers]
+        poses: list[Any] = list(odometry.copy()) if all(own) else [
+            row.copy() if mine else localizer.pose
+            for localizer, mine, row in zip(localizers, own, odometry)]
         tolerances = self._fleet.tolerance[idx].tolist()  # [m]
-        for i, pose, odometry_row, tolerance in zip(indices, poses, odometry, tolerances):
+        for i, localizer, pose, odometry_row, tolerance in zip(indices, localizers, poses,
+                                                                odometry, tolerances):
             robot, spec, lidar, readings = fixed[i]
-            localizer = robot.localizer
             yield Observation(now, pose, odometry_row, robot.nav_goal, tolerance, spec,
                               None if lidar is None else lidar.latest, None, readings,
                               getattr(localizer, "localized", True),

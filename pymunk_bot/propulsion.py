@@ -239,7 +239,7 @@ class Propulsion:
                          self.cog, _MAX_ANCHOR, anchors, out, self._held_twists, self._changed):
             return False
         for k in np.flatnonzero(self._changed).tolist():  # anchors are no batch field:
-            turning = omega[k] != 0.0  # written when a twist changes, or held ones let go
+            turning = bool(omega[k] != 0.0)  # written when a twist changes, or held ones let go
             if turning or self._anchored[k]:
                 self.pivots[k].anchor_a = (float(anchors[k, 0]), float(anchors[k, 1]))
                 self._anchored[k] = turning

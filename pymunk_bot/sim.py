@@ -18,8 +18,8 @@ from .events import EventSchedule
 from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .localization.score import LocalizationScore
-from .propulsion import Propulsion
 from .observing import Observer, observe
+from .propulsion import Propulsion
 from .readings import Observation
 from .robot import Robot, RobotsByName
 from .sensors.lidar import Lidar
@@ -38,7 +38,7 @@ class TickPlan:
     acting: tuple["Simulation", ...]
     reading: tuple["Simulation", ...]
     caster: Any
-    gate: SubstepGate | None  # adaptive substeps (world.substeps: adaptive), else None
+    gate: SubstepGate | None  # substeps where contacts can start (the default); None: every tick
 
 
 class Simulation:

@@ -219,8 +219,8 @@ def _pairs_clear(xy: np.ndarray, reach: np.ndarray, speeds: np.ndarray, i: np.nd
         a, b = i[k], j[k]
         gap = math.hypot(xy[a, 0] - xy[b, 0], xy[a, 1] - xy[b, 1]) - reach[a] - reach[b] - MARGIN
         closing = speeds[a] + speeds[b]
-        if closing > 0.0:
-            clear = min(clear, gap / closing)
-        elif not gap > 0.0:
-            clear = 0.0
-    return max(0.0, clear)
+        t = gap / closing if closing > 0.0 else (HORIZON if gap > 0.0 else 0.0)
+        if not t > 0.0:  # touching now (or NaN: a body thrown out of the world): not clear
+            return 0.0
+        clear = min(clear, t)
+    return clear
