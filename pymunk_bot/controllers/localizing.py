@@ -72,12 +72,18 @@ def free_lengths(obs: Observation, headings: np.ndarray) -> np.ndarray:
                             scan.max_range)
 
 
-def room_ahead(obs: Observation) -> bool:
-    """Whether the latest scan shows the corridor ahead of the robot free of returns."""
+def way_to(obs: Observation, heading: float) -> bool:
+    """Whether the latest scan shows the corridor towards ``heading`` [rad, robot frame] free
+    of returns for the robot's radius plus LOCALIZING_LOOKAHEAD."""
     if obs.scan is None:
         return False
-    free = free_lengths(obs, np.zeros(1))[0]
+    free = free_lengths(obs, np.array([heading]))[0]
     return bool(free >= obs.robot.radius + LOCALIZING_LOOKAHEAD)
+
+
+def room_ahead(obs: Observation) -> bool:
+    """Whether the latest scan shows the corridor ahead of the robot free of returns."""
+    return way_to(obs, 0.0)
 
 
 def most_open_heading(obs: Observation) -> float:
@@ -115,11 +121,13 @@ def localizing_command(obs: Observation, waited: float) -> Command:
         return Command(0.0, turn)
     speed = float(min(LOCALIZING_SPEED, 0.5 * robot.max_speed))
     target = obs.explore_heading
-    if target is not None:
-        if abs(target) > ALIGNED:
+    # Towards the explore heading only where the scan shows a way there: a blocked one left
+    # the robot turning between it and the most open way, on the spot, for good (measured:
+    # a kidnapped warehouse run stood still from 6 s after the kidnapping to the end, 84 s).
+    if target is not None and way_to(obs, target):
+        if abs(target) > ALIGNED or not room_ahead(obs):  # the last bit of the turn too
             return Command(0.0, math.copysign(turn, target))
-        if room_ahead(obs):
-            return Command(speed, float(np.clip(STEER_GAIN * target, -turn, turn)))
+        return Command(speed, float(np.clip(STEER_GAIN * target, -turn, turn)))
     if room_ahead(obs):
         return Command(speed, 0.0)
     return Command(0.0, math.copysign(turn, most_open_heading(obs)))

@@ -145,3 +145,18 @@ def test_where_the_scan_shows_no_room_ahead_the_robot_turns_towards_the_most_ope
     assert most_open_heading(_obs(boxed)) < 0.0
     command = localizing_command(_obs(boxed, explore_heading=0.0), 0.0)  # even when told ahead
     assert command.v == 0.0 and command.omega < 0.0
+
+
+def test_an_explore_heading_with_no_way_there_is_left_for_the_most_open_way():
+    """The localizer's heading lies behind a wall: the robot turns to the open side instead of
+    towards the wall (it used to turn between the two on the spot until the run ended)."""
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    # A wall 0.5 m off from -1.2 to +0.6 rad, open to the left, walls 1 m off to the right
+    ranges = np.where((angles > -1.2) & (angles < 0.6), 0.5, np.where(angles > 0.0, 4.0, 1.0))
+    walled = _scan(ranges, angles)
+    assert most_open_heading(_obs(walled)) > 0.0
+    for target in (-0.1, -0.3, -1.0):  # aligned, a little and far off: all behind the wall
+        command = localizing_command(_obs(walled, explore_heading=target), 0.0)
+        assert command.v == 0.0 and command.omega > 0.0
+    towards = localizing_command(_obs(walled, explore_heading=1.5), 0.0)  # open: followed
+    assert towards.v == 0.0 and towards.omega > 0.0
