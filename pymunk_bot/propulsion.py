@@ -135,7 +135,7 @@ class Propulsion:
                 held.append((drives, calm))
             if moving:
                 loose.append((drives, moving))
-        steady = self._hold_units(held, h, substeps)  # held, yet aimed every substep
+        steady = self._hold_units(held, h, substeps) if held else []  # held, yet aimed each substep
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
                 space.step(h)
