@@ -17,11 +17,16 @@ from .readings import Observation
 
 def observe(robot: Any, now: float) -> Observation:
     """What ``robot``'s controller knows at ``now`` [s]."""
-    lidar = robot.sensor("lidar")
     localizer = robot.localizer
-    return Observation(now, localizer.pose, robot.odometry.pose, robot.nav_goal,
-                       robot.goal_tolerance, robot.spec,
-                       lidar.latest if lidar is not None else None, None, robot.readings,
+    return _observation(now, robot, robot.spec, robot.sensor("lidar"), robot.readings,
+                        localizer, localizer.pose, robot.odometry.pose, robot.goal_tolerance)
+
+
+def _observation(now: float, robot: Any, spec: Any, lidar: Any, readings: Any, localizer: Any,
+                 pose: np.ndarray, odometry: np.ndarray, tolerance: float) -> Observation:
+    """The Observation of ``robot`` at ``now`` [s] from what was read of it."""
+    return Observation(now, pose, odometry, robot.nav_goal, tolerance, spec,
+                       None if lidar is None else lidar.latest, None, readings,
                        getattr(localizer, "localized", True),  # a plugin's: trusted
                        getattr(localizer, "explore_heading", None))
 
@@ -67,11 +72,7 @@ class Observer:
         tolerances = self._fleet.tolerance[idx].tolist()  # [m]
         for i, localizer, pose, odometry_row, tolerance in zip(indices, localizers, poses,
                                                                 odometry, tolerances):
-            robot, spec, lidar, readings = fixed[i]
-            yield Observation(now, pose, odometry_row, robot.nav_goal, tolerance, spec,
-                              None if lidar is None else lidar.latest, None, readings,
-                              getattr(localizer, "localized", True),
-                              getattr(localizer, "explore_heading", None))
+            yield _observation(now, *fixed[i], localizer, pose, odometry_row, tolerance)
 
     def _odometry_rows(self, idx: np.ndarray) -> np.ndarray:
         """(k, 3) odometry poses of the robots at ``idx``: a fresh array, one read per group."""

@@ -80,7 +80,7 @@ class RayCaster:
         if row is None:
             if len(self._filter_rows) >= _MAX_CACHED:
                 self._filter_rows.clear()
-            row = self._filter_rows[f] = np.array((f.group, f.categories, f.mask), dtype=np.uint64)
+            row = self._filter_rows[f] = np.array(f, dtype=np.uint64)  # (group, categories, mask)
         return row
 
     def _buffers(self, k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -130,8 +130,7 @@ class RayCaster:
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
         scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
         sides, n_sides, cornered = sides_many(self._cache, ox, oy, scale)
-        # (group, categories, mask) per cast, as _filter_row gives them: a ShapeFilter is that tuple.
-        f_all = np.array(filters, dtype=np.uint64).reshape(-1, 3)
+        f_all = np.array(filters, dtype=np.uint64).reshape(-1, 3)  # as _filter_row reads them
         near = np.empty(k, dtype=np.bool_)  # pymunk is asked only about origins near a shape
         self._near_admitted(self._cache.static_boxes, bound, self._cache.shape_filters, ox, oy,
                             NEAR_SHAPE * scale, f_all, near)
