@@ -31,6 +31,7 @@ import pymunk.batch as batch
 from .drives.base import SMALL_GROUP
 from .stacking import DriveUnits
 from .steering import aim, aim_rows, anchor, hold_rows
+from .substep_gate import spin_reach
 
 # A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
 # [m] (an almost straight path) it is aimed substep by substep instead.
@@ -98,6 +99,7 @@ class Propulsion:
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
         self._cog = [(float(x), float(y)) for x, y in self.cog.tolist()]  # the same, as floats
         self._everyone = np.arange(self.n, dtype=np.intp)
+        self._spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
         self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
         self._rows = -1  # bodies the last index was built for
@@ -111,6 +113,12 @@ class Propulsion:
                        for control in self.controls]
         self._held: list[tuple[float, float, float] | None] = [None] * self.n  # twist held
         self._anchored = [False] * self.n  # the pivot's anchor is off the control body's centre
+
+    def fastest_driven(self, seconds: float) -> float:
+        """The fastest any robot's footprint can be driven within ``seconds`` [m/s] (see
+        ``DriveGroup.fastest``)."""
+        return max((group.fastest(self._spin[idx], seconds) for group, idx in self.groups),
+                   default=0.0)
 
     def step(self, h: float, substeps: int, h_next: float | None = None) -> None:
         """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s];

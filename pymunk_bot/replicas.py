@@ -131,4 +131,4 @@ class Replicas:
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
         self._propulsion, self._spans = propulsion, spans
-        self._plan = Simulation.plan(self.sims, self.ground)
+        self._plan = Simulation.plan(self.sims, self.ground, propulsion)

@@ -122,7 +122,8 @@ class Simulation:
         self._reads = bool(self._sensors or self._mapping or self._localized or self._scores
                            or built.metrics)
         # A copy on a shared ground ticks in its Replicas' plan, never in one of its own.
-        self._plan = None if self._ground is not None else Simulation.plan((self,), self.world)
+        self._plan = None if self._ground is not None else \
+            Simulation.plan((self,), self.world, built.propulsion)
 
     # ------------------------------------------------------------------ state
     @property
@@ -137,10 +138,19 @@ class Simulation:
 
     @property
     def single_substep_ticks(self) -> int:
-        """Ticks so far (since the last reset) that took one pymunk step, no contact being
-        able to start in them (adaptive substeps, a run of its own; 0 otherwise)."""
+        """Ticks so far (since the last reset) that took one pymunk step: no contact could
+        start in them, or everything went slowly enough for one step to hold contacts
+        (adaptive substeps, a run of its own; 0 otherwise)."""
         gate = self._plan.gate if self._plan is not None else None
         return gate.single_ticks if gate is not None else 0
+
+    @property
+    def pymunk_steps(self) -> int:
+        """pymunk steps taken so far (since the last reset): ``substeps`` per tick with a named
+        count; with adaptive substeps, one per tick where no contact can start and as many as
+        the speeds need elsewhere (of a run of its own)."""
+        gate = self._plan.gate if self._plan is not None else None
+        return gate.steps if gate is not None else self.steps * self.substeps
 
     def __repr__(self) -> str:
         return (f"Simulation({self.config.name!r}, seed={self.seed}, t={self.time:.3f} s of "
@@ -165,15 +175,17 @@ class Simulation:
         return self._plan
 
     @staticmethod
-    def plan(sims: Sequence["Simulation"], ground: World) -> TickPlan:
-        """Which of ``sims`` (runs in ``ground``'s Space) have work in each phase of a tick,
-        and the Space's substep gate when its substeps are adaptive (made again after any of
-        them is rebuilt: a new gate's first tick takes every substep)."""
+    def plan(sims: Sequence["Simulation"], ground: World, propulsion: Propulsion) -> TickPlan:
+        """Which of ``sims`` (runs in ``ground``'s Space, steered by ``propulsion``) have work
+        in each phase of a tick, and the Space's substep gate when its substeps are adaptive
+        (made again after any of them is rebuilt: a new gate's first tick takes every
+        substep)."""
         first = sims[0]
         gate = None
         if first.world.adaptive:
             gate = SubstepGate(ground.space, [m for sim in sims for m in sim._built.movers],
-                               first.substeps, first.dt, ground.take_disturbed)
+                               first.substeps, first.dt, ground.take_disturbed, ground.need,
+                               propulsion.fastest_driven)
         caster = first.world.ray_caster() if any(s._lidars for s in sims) else None
         return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
                         tuple(s for s in sims if s._reads), caster, gate)
@@ -416,6 +428,7 @@ class Simulation:
             "steps": self.steps,
             "substeps": self.substeps,
             "single_step_ticks": self.single_substep_ticks,
+            "pymunk_steps": self.pymunk_steps,
             "wall_time": self.wall_time,
             "real_time_factor": sim_time / self.wall_time if self.wall_time > 0 else None,
             "passed": verdict.passed,

@@ -25,9 +25,18 @@ always near (a crowded fleet) fails the test again and again: each failure waits
 ticks before the next test (at most ``MAX_WAIT``), so the test costs little where it cannot pay.
 Bodies moved outside the physics (a teleport) make the next tick take every substep and the
 one after it be tested anew.
+
+A tick that takes substeps takes as many as the speeds of the coming two ticks need, not as
+many as the drives' top speeds need: the scenario's count is chosen for robots at full speed
+(:class:`~pymunk_bot.config.substeps.SubstepNeed`), and most robots of a crowded scene go
+slower. The bound is the fastest footprint point any drive can drive within two ticks (its
+motors' speeds now, and what they can add by then), or of any body now (a contact may have
+just pushed it), and the count never exceeds the scenario's. Contacts are inelastic and the
+joints velocity-only, so nothing pushed goes faster than what pushes it.
 """
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -35,7 +44,10 @@ from typing import Callable, Sequence
 import numba
 import numpy as np
 import pymunk
+import pymunk.batch as batch
 from scipy.spatial import cKDTree
+
+from .config.substeps import SubstepNeed
 
 HORIZON = 0.5  # [s] the farthest ahead one test looks: nearer shapes are all it queries
 # [s] the least clear time a test must find to grant single substeps: near shapes, where it
@@ -44,6 +56,9 @@ MIN_CLEAR = 0.1
 MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the contact slop)
 MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
 _PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
+_SPEEDS_IN_ONE_READ = 8  # bodies from which their speeds are read in one pymunk.batch call
+_VELOCITIES = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+_STATE = batch.BodyFields.POSITION | _VELOCITIES
 
 
 @dataclass
@@ -81,6 +96,26 @@ def reach_of(body: pymunk.Body) -> float:
     return reach
 
 
+def spin_reach(body: pymunk.Body) -> float:
+    """How far [m] from ``body``'s origin the points lie that a turn about its centre of
+    gravity moves (a circle's centre, a polygon's or segment's corners), plus the distance
+    from the origin to that centre (a control body moves the origin): a turn at omega moves
+    no footprint point faster than omega times this, relative to the origin."""
+    cx, cy = body.center_of_gravity
+    far = 0.0
+    for shape in body.shapes:
+        if isinstance(shape, pymunk.Circle):
+            points = [tuple(shape.offset)]
+        elif isinstance(shape, pymunk.Poly):
+            points = [tuple(v) for v in shape.get_vertices()]
+        elif isinstance(shape, pymunk.Segment):
+            points = [tuple(shape.a), tuple(shape.b)]
+        else:  # an unknown shape kind: as far as anything of it reaches
+            return reach_of(body) + math.hypot(cx, cy)
+        far = max([far] + [math.hypot(x - cx, y - cy) for x, y in points])
+    return far + math.hypot(cx, cy)
+
+
 def _origin_speed(body: pymunk.Body, offset: float) -> float:
     """How fast ``body``'s origin moves now [m/s]: its centre of gravity's speed plus the
     turn of the ``offset`` [m] between the two."""
@@ -92,17 +127,33 @@ class SubstepGate:
     """Chooses the substep count of each tick (see the module docstring).
 
     ``full`` is the scenario's count; ``dt`` the tick [s]. ``disturbed()`` says whether bodies
-    were moved outside the physics since it was last asked (a teleport)."""
+    were moved outside the physics since it was last asked (a teleport). ``need``: the count
+    for any speed bound (its ``full`` is ``full``); ``driven(seconds)``: the fastest
+    any robot's footprint can be driven within ``seconds`` [m/s] (either None: every tick with
+    substeps takes ``full``)."""
 
     def __init__(self, space: pymunk.Space, movers: Sequence[Mover], full: int, dt: float,
-                 disturbed: Callable[[], bool]) -> None:
+                 disturbed: Callable[[], bool], need: SubstepNeed | None = None,
+                 driven: Callable[[float], float] | None = None) -> None:
         self.space = space
         self.disturbed = disturbed
+        self._driven = driven
+        # The highest speed [m/s] that each count from 1 up holds: a count is a bisection.
+        self._limits = None if need is None else need.limits()
+        # How far the turn of any mover moves its footprint [m / rad].
+        self._spin = max([spin_reach(m.body) for m in movers], default=0.0)
+        self._speeds = batch.Buffer()
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         self._offset = [abs(m.body.center_of_gravity) for m in self.movers]  # [m] cog to origin
+        self._offset_array = np.array(self._offset)
+        # [m/s] each mover's top speed (0: none, a crate: only its speed now counts)
+        self._top = np.array([m.speed or 0.0 for m in self.movers])
+        self._state = batch.Buffer()  # every body's position, velocity and turn rate
+        self._rows = np.zeros(0, dtype=np.intp)  # each mover's row in it
+        self._space_rows = -1  # bodies in the space when _rows was found
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
         self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
         self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
@@ -115,7 +166,8 @@ class SubstepGate:
         self._wait = 0  # ticks left before the next test
         self._failures = 0  # failed tests in a row
         self._first = 0  # the mover that failed the last test: tested first next time
-        self.single_ticks = 0  # ticks taken in one substep (for results and benchmarks)
+        self.single_ticks = 0  # ticks taken in one pymunk step (for results and benchmarks)
+        self.steps = 0  # pymunk steps taken (for results and benchmarks)
 
     def counts(self) -> tuple[int, int]:
         """The substep counts of the coming tick and of the one after it."""
@@ -126,13 +178,15 @@ class SubstepGate:
             self._planned = self.full
             self._wait = 0
         current = self._planned
+        self.steps += current
         if current == 1:
             self.single_ticks += 1
             if now + 2.0 * self.dt <= self.clear_until:  # most ticks in open space
                 return 1, 1
-        elif self._wait > 0:  # most ticks of a crowded scene: the count, no test
+        elif self._wait > 0:  # most ticks of a crowded scene: substeps, no test
             self._wait -= 1
-            return current, current
+            self._planned = self._graded()
+            return current, self._planned
         if self.full == 1:
             return 1, 1
         end = now + 2.0 * self.dt  # the next tick's end
@@ -140,7 +194,7 @@ class SubstepGate:
         if end > self.clear_until:
             if self._wait > 0:
                 self._wait -= 1
-                planned = self.full
+                planned = self._graded()
             else:
                 until = now + self._clear_for(max(2.0 * self.dt, MIN_CLEAR))
                 if now + MIN_CLEAR > until or end > until:
@@ -150,12 +204,34 @@ class SubstepGate:
                     self.clear_until = -math.inf
                     self._failures += 1
                     self._wait = min(MAX_WAIT, 2 ** (self._failures - 1))
-                    planned = self.full
+                    planned = self._graded()
                 else:
                     self.clear_until = until
                     self._failures = 0
         self._planned = planned
         return current, planned
+
+    def _graded(self) -> int:
+        """The substeps the next tick needs at the speeds bodies can have within two ticks
+        (see the module docstring), at most ``full``."""
+        if self._limits is None or self._driven is None:
+            return self.full
+        # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
+        # no faster than its pusher, but a contact may have just sped it up).
+        bodies = self.movers
+        if len(bodies) < _SPEEDS_IN_ONE_READ:
+            linear = max([abs(m.body.velocity) for m in bodies], default=0.0)
+            turn = max([abs(m.body.angular_velocity) for m in bodies], default=0.0)
+        else:  # every body of the space (other copies' too: they share the count)
+            self._speeds.clear()
+            batch.get_space_bodies(self.space, _VELOCITIES, self._speeds)
+            rows = np.frombuffer(self._speeds.float_buf()).reshape(-1, 3)
+            linear = float(np.hypot(rows[:, 0], rows[:, 1]).max(initial=0.0))
+            turn = float(np.abs(rows[:, 2]).max(initial=0.0))
+        speed = max(self._driven(2.0 * self.dt), linear + turn * self._spin)
+        if not speed < math.inf:  # NaN: a body thrown out of the world; inf: a drive unknown
+            return self.full
+        return bisect.bisect_left(self._limits, speed) + 1
 
     def _clear_for(self, needed: float) -> float:
         """How long [s] (at most HORIZON) no two shapes can touch; stops early, returning
@@ -163,13 +239,14 @@ class SubstepGate:
         movers = self.movers
         if not movers:
             return HORIZON
-        speeds = np.array([_origin_speed(m.body, offset) if m.speed is None
-                           else max(m.speed, _origin_speed(m.body, offset))
-                           for m, offset in zip(movers, self._offset)])
-        clear = self._clear_between_movers(speeds)
+        xy, speeds = self._origins_and_speeds()
+        if not (np.isfinite(xy).all() and np.isfinite(speeds).all()):
+            return 0.0  # a body thrown out of the world: no telling
+        clear = self._clear_between_movers(xy, speeds)
         if clear < needed:
             return clear
         moving = self._bodies
+        origins = xy.tolist()
         order = list(range(self._first, len(movers))) + list(range(self._first))
         for k in order:
             mover = movers[k]
@@ -177,7 +254,7 @@ class SubstepGate:
                 continue
             speed = float(speeds[k])
             look = mover.reach + speed * min(clear, HORIZON) + MARGIN
-            for hit in self.space.point_query(mover.body.position, look, pymunk.ShapeFilter()):
+            for hit in self.space.point_query(origins[k], look, pymunk.ShapeFilter()):
                 shape = hit.shape
                 if shape is None or shape.sensor or shape.body in moving:
                     continue  # movers meet movers in _clear_between_movers
@@ -193,12 +270,39 @@ class SubstepGate:
         meet = (self._copy[i] == self._copy[j]) & (self._dynamic[i] | self._dynamic[j])
         return i[meet], j[meet]
 
-    def _clear_between_movers(self, speeds: np.ndarray) -> float:
-        """How long [s] no two movers of one copy can touch (bounding discs), up to HORIZON."""
+    def _origins_and_speeds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
+        (see _origin_speed), or its top speed if that is more."""
+        movers = self.movers
+        if len(movers) < _SPEEDS_IN_ONE_READ:
+            xy = np.array([tuple(m.body.position) for m in movers]).reshape(-1, 2)
+            now = np.array([_origin_speed(m.body, offset)
+                            for m, offset in zip(movers, self._offset)])
+        else:  # one read of every body of the space, the movers' rows taken from it
+            self._state.clear()
+            batch.get_space_bodies(self.space, _STATE, self._state)
+            state = np.frombuffer(self._state.float_buf()).reshape(-1, 5)
+            if state.shape[0] != self._space_rows:
+                self._index(state.shape[0])
+            rows = state[self._rows]
+            xy = rows[:, :2]
+            now = np.hypot(rows[:, 2], rows[:, 3]) + np.abs(rows[:, 4]) * self._offset_array
+        return xy, np.maximum(now, self._top)
+
+    def _index(self, rows: int) -> None:
+        """Where each mover sits in pymunk's body order (``rows`` bodies in the space)."""
+        ids = batch.Buffer()
+        batch.get_space_bodies(self.space, batch.BodyFields.BODY_ID, ids)
+        order = {int(b): k for k, b in enumerate(np.frombuffer(ids.int_buf(), dtype=np.uintp))}
+        self._rows = np.array([order[m.body.id] for m in self.movers], dtype=np.intp)
+        self._space_rows = rows
+
+    def _clear_between_movers(self, xy: np.ndarray, speeds: np.ndarray) -> float:
+        """How long [s] no two movers of one copy (origins ``xy`` [m], at most ``speeds``
+        [m/s]) can touch (bounding discs), up to HORIZON."""
         n = len(self.movers)
         if n < 2:
             return HORIZON
-        xy = np.array([c for m in self.movers for c in m.body.position]).reshape(n, 2)
         reach = self._reach
         if self._pairs is not None:
             i, j = self._pairs

@@ -8,7 +8,7 @@ import pymunk
 
 from . import physics
 from .config.schema import ScenarioConfig
-from .config.substeps import ARENA_WALL_THICKNESS, required_substeps
+from .config.substeps import ARENA_WALL_THICKNESS, SubstepNeed, substep_need
 from .obstacles import Obstacle
 from .plugins import obstacles as obstacle_kinds
 
@@ -35,7 +35,13 @@ class World:
             self.map = config.world.map_geometry()  # a MapGeometry, or None
             self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
             named = config.world.substeps
-            self.substeps = named if isinstance(named, int) else required_substeps(config)
+            # What the substep count depends on (None: the scenario names the count).
+            self.need: SubstepNeed | None = None
+            if isinstance(named, int):
+                self.substeps = named
+            else:
+                self.need = substep_need(config)
+                self.substeps = self.need.full
             self._caster: Any = None
             self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
             # Robot shapes whose contact impulses someone reads (navmetrics); empty: no cost.
@@ -45,7 +51,8 @@ class World:
             self._fixed: dict[int, Obstacle] = {}
         else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
             self.space, self.map, self.arena_shapes = ground.space, ground.map, ground.arena_shapes
-            self.substeps, self._on_contact = ground.substeps, ground._on_contact
+            self.substeps, self.need = ground.substeps, ground.need
+            self._on_contact = ground._on_contact
             self._on_solved = ground._on_solved
             self._ground = ground
             self._fixed = ground._fixed

@@ -123,13 +123,42 @@ def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at()
 
 @pytest.mark.parametrize("spacing, single", [(3.0, True), (0.5, False)])
 def test_a_large_fleet_takes_single_steps_only_when_its_robots_are_apart(spacing, single):
-    """60 robots (the gate finds their pairs with a k-d tree) driving side by side: far apart
-    in open space most ticks take one step; 0.5 m apart (a 0.1 m gap) every tick takes every
-    substep."""
+    """60 robots (the gate finds their pairs with a k-d tree) driving side by side at 0.3 m/s:
+    far apart in open space most ticks take one step; 0.5 m apart (a 0.1 m gap) every tick
+    takes the substeps that speed needs (fewer than the scenario's count, which is for robots
+    at their 1 m/s top speed)."""
     robots = [robot([10 + spacing * (k % 10), 10 + spacing * (k // 10), 0], name=f"r{k}",
                     controller=wheels(0.3, 0.3)) for k in range(60)]
     sim = _sim(robots, size=(60.0, 60.0))
-    sim.run(1.0)
-    assert (sim.single_substep_ticks >= 0.8 * sim.steps) if single else \
-        (sim.single_substep_ticks == 0)
+    sim.run(0.5)  # the motors reach their 0.3 m/s
+    ones, steps, ticks = sim.single_substep_ticks, sim.pymunk_steps, sim.steps
+    sim.run(0.5)
+    ticks = sim.steps - ticks
+    # 0.3 m/s, plus what the motors could add within two ticks, closing head-on: 2 substeps
+    needed = sim.world.need.count(0.3 + 3.0 * 2 * sim.dt)
+    assert (needed, sim.substeps) == (2, 5)
+    if single:
+        assert sim.single_substep_ticks - ones >= 0.8 * ticks
+    else:
+        assert sim.single_substep_ticks == ones
+        assert sim.pymunk_steps - steps == needed * ticks
     assert all(r.collisions == 0 for r in sim.robots.values())
+
+
+def test_the_substeps_a_speed_needs_come_from_the_scenarios_own_formula():
+    """The gate's table of speeds gives, for every speed up to the top, the count the
+    scenario's formula gives (robots, a crate and a walker), and the top speed's is the
+    scenario's count."""
+    from pymunk_bot.config.substeps import required_substeps, substep_need
+    from pymunk_bot.substep_gate import SubstepGate
+    config = parse_scenario(scenario(
+        [robot([2, 2, 0]), robot([5, 2, 0], name="s")],
+        [{"type": "box", "center": [8, 8], "size": [0.3, 0.3], "movable": True, "mass": 2.0}]),
+        "test")
+    need = substep_need(config)
+    assert need.full == required_substeps(config) == 6  # the crate: 6 mm steps
+    gate = SubstepGate(Simulation(config).world.space, [], need.full, config.world.dt,
+                       lambda: False, need, lambda seconds: 0.0)
+    for speed in np.linspace(0.0, need.top_speed, 401):
+        gate._driven = lambda seconds, v=float(speed): v
+        assert gate._graded() == need.count(float(speed))

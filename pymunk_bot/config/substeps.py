@@ -113,6 +113,82 @@ def mover_speed(obstacle) -> float:
     return motion.speed + abs(motion.angular_speed) * reach
 
 
+@dataclass(frozen=True)
+class SubstepNeed:
+    """What a scenario's substep count depends on, but for how fast its robots go: the count
+    for any speed bound, so that ticks whose robots go slower than their drives allow can
+    take fewer (:mod:`pymunk_bot.substep_gate`). See :func:`required_substeps`."""
+
+    dt: float  # [s] the tick
+    top_speed: float  # [m/s] the fastest robot's top speed
+    several: bool  # more than one robot: two can close on each other head-on
+    smallest: float  # [m] half the thinnest extent of anything that moves
+    thinnest: float  # [m] half the thinnest extent of anything fixed
+    # (speed [m/s], half width [m]) of every scripted obstacle and pedestrian that moves
+    scripted: tuple[tuple[float, float], ...]
+    step: float  # [m] the deepest a contact may start (less where robots push bodies)
+    walker_speed: float  # [m/s] the fastest pedestrian: it pushes crates too (0: none)
+    shove: float | None  # the hardest push's squeeze factor (None: nothing to push)
+
+    @property
+    def full(self) -> int:
+        """Substeps with every robot at its top speed: the scenario's count."""
+        return self.count(self.top_speed)
+
+    def limits(self) -> tuple[float, ...]:
+        """The highest robot speeds [m/s] that 1, 2, ... ``full - 1`` substeps hold (each found
+        by bisection, from below): a table for ticks that cannot afford :meth:`count`."""
+        found = []
+        for k in range(1, self.full):
+            low, high = 0.0, self.top_speed
+            if self.count(low) > k:
+                found.append(-math.inf)  # not even at rest (scripted movers need more)
+                continue
+            for _ in range(60):
+                middle = 0.5 * (low + high)
+                low, high = (middle, high) if self.count(middle) <= k else (low, middle)
+            found.append(low)
+        return tuple(found)
+
+    def count(self, fastest: float) -> int:
+        """Substeps while no robot goes faster than ``fastest`` [m/s] (any footprint point)."""
+        dt, smallest = self.dt, self.smallest
+        closing = 2 * fastest if self.several else fastest  # two robots head-on
+        closing = max([closing] + [fastest + speed for speed, _ in self.scripted])
+        substeps = max(substeps_against_tunnelling(dt, fastest, smallest, self.thinnest),
+                       substeps_against_tunnelling(dt, closing, smallest, smallest),
+                       substeps_against_overlap(dt, closing, self.step))
+        if self.shove is not None:
+            pushed = max(fastest, self.walker_speed) * self.shove
+            substeps = max(substeps, substeps_against_overlap(dt, pushed, PUSHING_CONTACT_STEP))
+        for speed, width in self.scripted:
+            substeps = max(substeps, substeps_against_tunnelling(dt, fastest + speed, smallest,
+                                                                 width))
+        return substeps
+
+
+def substep_need(scenario: ScenarioConfig) -> SubstepNeed:
+    """The scenario's :class:`SubstepNeed`."""
+    from ..footprint import of_robot
+    robots, obstacles = scenario.robots, scenario.obstacles
+    movable = [o for o in obstacles if getattr(o, "movable", False)]
+    smallest = min([of_robot(r).half_thickness for r in robots] + [half_width(o) for o in movable])
+    thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in obstacles
+                                                 if not getattr(o, "movable", False)]
+                   + map_half_widths(scenario))
+    scripted = tuple((speed, half_width(o)) for o in obstacles
+                     if (speed := mover_speed(o)) > 0)
+    walkers = [mover_speed(o) for o in obstacles if getattr(o, "type", "") == "pedestrian"]
+    shove = None
+    if movable:
+        heaviest = max([r.mass for r in robots] + [o.mass for o in movable]
+                       + [o.mass for o in obstacles if getattr(o, "type", "") == "pedestrian"])
+        shove = shove_factor(heaviest / min(o.mass for o in movable))
+    return SubstepNeed(scenario.world.dt, max(r.top_speed() for r in robots), len(robots) > 1, smallest, thinnest, scripted,
+                       PUSHING_CONTACT_STEP if movable else CONTACT_STEP, max(walkers, default=0.0),
+                       shove)
+
+
 def required_substeps(scenario: ScenarioConfig) -> int:
     """Substeps so that nothing tunnels and no contact starts deeper than CONTACT_STEP.
 
@@ -121,28 +197,4 @@ def required_substeps(scenario: ScenarioConfig) -> int:
     smallest movable obstacle is what must not skip through the thinnest wall, and the lightest
     must not be squeezed into it by the heaviest pusher: :func:`hardest_shove`), and scripted
     movers and pedestrians closing on a robot."""
-    from ..footprint import of_robot
-    dt = scenario.world.dt
-    robots = scenario.robots
-    fastest = max(r.top_speed() for r in robots)
-    movers = [of_robot(r).half_thickness for r in robots] + [
-        half_width(o) for o in scenario.obstacles if getattr(o, "movable", False)]
-    smallest = min(movers)
-    thinnest = min([ARENA_WALL_THICKNESS / 2] + [half_width(o) for o in scenario.obstacles
-                                                 if not getattr(o, "movable", False)]
-                   + map_half_widths(scenario))
-    closing = 2 * fastest if len(robots) > 1 else fastest  # two robots head-on
-    scripted = [mover_speed(o) for o in scenario.obstacles]
-    closing = max([closing] + [fastest + speed for speed in scripted])
-    substeps = max(substeps_against_tunnelling(dt, fastest, smallest, thinnest),
-                   substeps_against_tunnelling(dt, closing, smallest, smallest),
-                   substeps_against_overlap(dt, closing, PUSHING_CONTACT_STEP if any(
-                       getattr(o, "movable", False) for o in scenario.obstacles) else CONTACT_STEP))
-    shove = hardest_shove(scenario)
-    if shove is not None:
-        substeps = max(substeps, shove.substeps)
-    for obstacle, speed in zip(scenario.obstacles, scripted):
-        if speed > 0:
-            substeps = max(substeps, substeps_against_tunnelling(
-                dt, fastest + speed, smallest, half_width(obstacle)))
-    return substeps
+    return substep_need(scenario).full

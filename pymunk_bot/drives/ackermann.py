@@ -35,6 +35,7 @@ class AckermannDriveGroup(DriveGroup):
         self.steer_rate = np.array([c.max_steer_rate for c in configs], dtype=float)  # [rad/s]
         self.max_v = np.array([c.max_speed for c in configs], dtype=float)  # [m/s]
         self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2]
+        self._min_radius = np.array([c.min_turn_radius() for c in configs])  # [m]
         self.target_speed = np.zeros(self.n)  # [m/s] after the limit
         self.target_steer = np.zeros(self.n)  # [rad] after the limit
         self.speed = np.zeros(self.n)  # acceleration-limited speed of the rear axle [m/s]
@@ -105,6 +106,12 @@ class AckermannDriveGroup(DriveGroup):
 
     def max_speed(self, i: int) -> float:
         return float(self.max_v[i])
+
+    def fastest(self, spin: np.ndarray, seconds: float) -> float:
+        # At any steering angle: omega <= v / R_min, so a point is at most 1 + spin / R_min
+        # times as fast as the rear axle (as in top_speed).
+        speed = np.maximum(np.abs(self.speed), np.abs(self.driven_speed)) + self.max_accel * seconds
+        return float((speed * (1.0 + spin / self._min_radius)).max(initial=0.0))
 
     def spec(self, i: int) -> RobotSpec:
         c = self.configs[i]

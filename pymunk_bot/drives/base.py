@@ -113,6 +113,14 @@ class DriveGroup:
         """Fastest any point of robot ``i``'s body origin can move [m/s] (for substep choice)."""
         raise NotImplementedError
 
+    def fastest(self, spin: np.ndarray, seconds: float) -> float:
+        """The fastest any footprint point of these robots can be driven within ``seconds``
+        [m/s]: its motors' speeds now and what they can add by then (a tick with substeps
+        takes as many as this speed needs). ``spin`` [m], per robot: how far from its origin
+        the points lie that its turn moves (:func:`pymunk_bot.substep_gate.spin_reach`). A
+        drive that does not say: its top speed."""
+        return max((c.top_speed() for c in self.configs), default=0.0)
+
 
 def limit_step(current: np.ndarray, target: np.ndarray, step: np.ndarray | float) -> np.ndarray:
     """Move ``current`` toward ``target`` by at most ``step`` (in place), elementwise."""

@@ -128,6 +128,9 @@ class DiffDriveGroup(DriveGroup):
     def max_speed(self, i: int) -> float:
         return float(self.max_wheel[i])
 
+    def fastest(self, spin: np.ndarray, seconds: float) -> float:
+        return _fastest(self.commanded, self.turning, self.track, self.max_accel, spin, seconds)
+
     def handle(self, i: int) -> "DiffDrive":
         return DiffDrive(self, i)
 
@@ -276,3 +279,19 @@ def _settled_units(commanded: np.ndarray, target: np.ndarray, starts: np.ndarray
     for u in range(starts.shape[0]):
         stop = starts[u + 1] if u + 1 < starts.shape[0] else commanded.shape[0]
         flags[u] = _equal_rows(commanded[starts[u]:stop], target[starts[u]:stop])
+
+
+@numba.njit(cache=True)
+def _fastest(commanded: np.ndarray, turning: np.ndarray, track: np.ndarray,
+             max_accel: np.ndarray, spin: np.ndarray, seconds: float) -> float:
+    """The fastest footprint point [m/s] within ``seconds``: |v| + |omega| * spin of the
+    motors' (``commanded``) and the wheels' (``turning``) speeds, plus what the wheels gain
+    (each at most ``max_accel``: the centre too, the turn twice that over the track)."""
+    fastest = 0.0
+    for i in range(track.shape[0]):
+        lever = spin[i] / track[i]
+        gain = max_accel[i] * (1.0 + 2.0 * lever) * seconds
+        for wheels in (commanded, turning):
+            left, right = wheels[i, 0], wheels[i, 1]
+            fastest = max(fastest, 0.5 * abs(left + right) + abs(right - left) * lever + gain)
+    return fastest

@@ -90,6 +90,11 @@ class OmniDriveGroup(DriveGroup):
     def max_speed(self, i: int) -> float:
         return float(self.max_v[i])
 
+    def fastest(self, spin: np.ndarray, seconds: float) -> float:
+        vx, vy, omega = self.current.T
+        gain = (self.max_accel + self.max_alpha * spin) * seconds
+        return float((np.hypot(vx, vy) + np.abs(omega) * spin + gain).max(initial=0.0))
+
     def spec(self, i: int) -> RobotSpec:
         c = self.configs[i]
         return RobotSpec(c.name, of_robot(c).bounding_radius, 0.0, float(self.max_v[i]),
