@@ -99,7 +99,8 @@ class Propulsion:
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
         self._cog = [(float(x), float(y)) for x, y in self.cog.tolist()]  # the same, as floats
         self._everyone = np.arange(self.n, dtype=np.intp)
-        self._spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
+        spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
+        self._spins = [(group, spin[idx]) for group, idx in self.groups]  # each group's rows
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
         self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
         self._rows = -1  # bodies the last index was built for
@@ -117,8 +118,7 @@ class Propulsion:
     def fastest_driven(self, seconds: float) -> float:
         """The fastest any robot's footprint can be driven within ``seconds`` [m/s] (see
         ``DriveGroup.fastest``)."""
-        return max((group.fastest(self._spin[idx], seconds) for group, idx in self.groups),
-                   default=0.0)
+        return max([group.fastest(spin, seconds) for group, spin in self._spins], default=0.0)
 
     def step(self, h: float, substeps: int, h_next: float | None = None) -> None:
         """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s];

@@ -6,6 +6,10 @@ Each trial drives robots of random size, speed and acceleration at one of four h
 wall, a small post, a light crate pushed into a 1 cm wall, another robot head-on. It counts
 crossings (a robot or crate ending up on the far side of a wall, or a centre passing through a
 post or another robot) and the deepest overlap pymunk reports in any contact.
+
+The robots drive at their top speed (the scenario's substep count holds them), and in a third
+set (``slower``) at 20-90 % of it, with diff, car-like and omni drives in turn: by default a
+tick with substeps then takes only as many as those speeds need (substep_gate.py).
 """
 from __future__ import annotations
 
@@ -21,6 +25,7 @@ from ..sim import Simulation
 from .simulation import every_substep
 
 KINDS = ("wall", "post", "crate", "head-on")
+DRIVES = ("diff", "ackermann", "omni")  # the slower trials' drives, in turn
 MAX_TRIAL_SPEED = 3.0  # [m/s]
 DTS = (1 / 30, 1 / 60, 1 / 120, 1 / 240)  # [s]
 WALL_X = 3.0  # [m]
@@ -60,8 +65,9 @@ def deepest_overlap(space: pymunk.Space) -> float:
     return worst
 
 
-def trial_scenario(kind: str, rng: np.random.Generator) -> dict:
-    """One randomized trial as scenario data."""
+def trial_scenario(kind: str, rng: np.random.Generator, drive: str | None = None) -> dict:
+    """One randomized trial as scenario data; ``drive``: the robots have that drive and are
+    commanded 20-90 % of its top speed (None: diff drives at their top speed)."""
     v = float(rng.uniform(0.2, MAX_TRIAL_SPEED))
     accel = float(10 ** rng.uniform(0.0, math.log10(MAX_ACCEL)))
     radius = float(rng.uniform(0.05, 0.3))
@@ -87,8 +93,16 @@ def trial_scenario(kind: str, rng: np.random.Generator) -> dict:
     else:
         robots.append(dict(a, name="b", pose=[5.0, 2.0 + float(rng.uniform(-radius, radius)),
                                              math.pi - heading]))
-    return {"name": "contact-trial", "world": {"size": [6.0, 4.0], "dt": float(rng.choice(DTS))},
+    data = {"name": "contact-trial", "world": {"size": [6.0, 4.0], "dt": float(rng.choice(DTS))},
             "obstacles": obstacles, "robots": robots}
+    if drive is not None:  # drawn after the rest: the top-speed trials stay as they were
+        share = float(rng.uniform(0.2, 0.9))
+        for robot in robots:
+            robot["controller"] = dict(robot["controller"], v=share * v)
+            if drive != "diff":
+                del robot["max_wheel_speed"], robot["track_width"]
+                robot.update(drive=drive, max_speed=v)
+    return data
 
 
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -99,10 +113,10 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0,
-              every: bool = False) -> tuple[bool, float]:
+              every: bool = False, drive: str | None = None) -> tuple[bool, float]:
     """(crossed, deepest overlap [m]) of one trial (``every``: every substep in every tick; by
-    default, only where a contact can start)."""
-    data = trial_scenario(kind, rng)
+    default, only where a contact can start; ``drive``: see trial_scenario)."""
+    data = trial_scenario(kind, rng, drive)
     if every:
         every_substep(data)
     sim = Simulation.from_dict(data)
@@ -128,19 +142,23 @@ def run_trial(kind: str, rng: np.random.Generator, seconds: float = 4.0,
     return crossed, worst
 
 
-def run_trials(trials: int, seed: int = 0, every: bool = False) -> Summary:
-    """``trials`` randomized trials, the hazards in turn."""
+def run_trials(trials: int, seed: int = 0, every: bool = False,
+               slower: bool = False) -> Summary:
+    """``trials`` randomized trials, the hazards in turn (``slower``: below top speed, the
+    drives in turn too)."""
     rng = np.random.default_rng(seed)
     summary = Summary()
     for i in range(trials):
         kind = KINDS[i % len(KINDS)]
-        summary.add(kind, *run_trial(kind, rng, every=every))
+        drive = DRIVES[(i // len(KINDS)) % len(DRIVES)] if slower else None
+        summary.add(kind, *run_trial(kind, rng, every=every, drive=drive))
     return summary
 
 
-def main(trials: int = 1000, every: bool = False) -> Summary:
-    summary = run_trials(trials, every=every)
-    print(f"{summary.trials} trials{' (every substep)' if every else ''}: "
+def main(trials: int = 1000, every: bool = False, slower: bool = False) -> Summary:
+    summary = run_trials(trials, every=every, slower=slower)
+    how = " (every substep)" if every else " (below top speed; diff, car, omni)" if slower else ""
+    print(f"{summary.trials} trials{how}: "
           f"{summary.crossings} crossings, "
           f"{summary.deeper_than_1cm} deeper than 1 cm, deepest {summary.max_penetration * 1000:.1f} mm")
     for kind, (n, crossed, worst) in summary.by_kind.items():
