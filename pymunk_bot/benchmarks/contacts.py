@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -72,7 +73,7 @@ def trial_scenario(kind: str, rng: np.random.Generator, drive: str | None = None
     accel = float(10 ** rng.uniform(0.0, math.log10(MAX_ACCEL)))
     radius = float(rng.uniform(0.05, 0.3))
     heading = float(rng.uniform(-0.6, 0.6))
-    a = {"name": "a", "pose": [1.0, 2.0, heading], "radius": radius,
+    a: dict[str, Any] = {"name": "a", "pose": [1.0, 2.0, heading], "radius": radius,
          "track_width": max(0.06, 1.5 * radius), "max_wheel_speed": v, "max_accel": accel,
          "controller": {"type": "velocity", "v": v}}
     robots, obstacles = [a], []
