@@ -184,9 +184,10 @@ def substep_need(scenario: ScenarioConfig) -> SubstepNeed:
         heaviest = max([r.mass for r in robots] + [o.mass for o in movable]
                        + [o.mass for o in obstacles if getattr(o, "type", "") == "pedestrian"])
         shove = shove_factor(heaviest / min(o.mass for o in movable))
-    return SubstepNeed(scenario.world.dt, max(r.top_speed() for r in robots), len(robots) > 1, smallest, thinnest, scripted,
-                       PUSHING_CONTACT_STEP if movable else CONTACT_STEP, max(walkers, default=0.0),
-                       shove)
+    return SubstepNeed(scenario.world.dt, max(r.top_speed() for r in robots), len(robots) > 1,
+                       smallest, thinnest, scripted,
+                       PUSHING_CONTACT_STEP if movable else CONTACT_STEP,
+                       max(walkers, default=0.0), shove)
 
 
 def required_substeps(scenario: ScenarioConfig) -> int:
