@@ -73,9 +73,10 @@ def trial_scenario(kind: str, rng: np.random.Generator, drive: str | None = None
     accel = float(10 ** rng.uniform(0.0, math.log10(MAX_ACCEL)))
     radius = float(rng.uniform(0.05, 0.3))
     heading = float(rng.uniform(-0.6, 0.6))
-    a: dict[str, Any] = {"name": "a", "pose": [1.0, 2.0, heading], "radius": radius,
-         "track_width": max(0.06, 1.5 * radius), "max_wheel_speed": v, "max_accel": accel,
-         "controller": {"type": "velocity", "v": v}}
+    a: dict[str, Any] = {
+        "name": "a", "pose": [1.0, 2.0, heading], "radius": radius,
+        "track_width": max(0.06, 1.5 * radius), "max_wheel_speed": v, "max_accel": accel,
+        "controller": {"type": "velocity", "v": v}}
     robots, obstacles = [a], []
     if kind == "wall":
         thickness = float(rng.uniform(0.01, 0.05))
