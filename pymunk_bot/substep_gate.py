@@ -56,9 +56,9 @@ MIN_CLEAR = 0.1
 MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the contact slop)
 MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
 _PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
-_SPEEDS_IN_ONE_READ = 8  # bodies from which their speeds are read in one pymunk.batch call
-_VELOCITIES = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
-_STATE = batch.BodyFields.POSITION | _VELOCITIES
+_IN_ONE_READ = 8  # movers from which the bodies are read in one pymunk.batch call
+# (x, y, vx, vy, omega) of every body
+_STATE = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
 
 @dataclass
@@ -140,18 +140,17 @@ class SubstepGate:
         self._driven = driven
         # The highest speed [m/s] that each count from 1 up holds: a count is a bisection.
         self._limits = None if need is None else need.limits()
-        # How far the turn of any mover moves its footprint [m / rad].
-        self._spin = max([spin_reach(m.body) for m in movers], default=0.0)
-        self._speeds = batch.Buffer()
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         self._reach = np.array([m.reach for m in self.movers])  # [m]
-        self._offset = [abs(m.body.center_of_gravity) for m in self.movers]  # [m] cog to origin
-        self._offset_array = np.array(self._offset)
+        # [m] cog to origin
+        self._offset = np.array([abs(m.body.center_of_gravity) for m in self.movers])
+        # How far the turn of any mover moves its footprint [m / rad].
+        self._spin = max([spin_reach(m.body) for m in self.movers], default=0.0)
         # [m/s] each mover's top speed (0: none, a crate: only its speed now counts)
         self._top = np.array([m.speed or 0.0 for m in self.movers])
-        self._state = batch.Buffer()  # every body's position, velocity and turn rate
+        self._state = batch.Buffer()  # every body's _STATE
         self._rows = np.zeros(0, dtype=np.intp)  # each mover's row in it
         self._space_rows = -1  # bodies in the space when _rows was found
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
@@ -219,15 +218,13 @@ class SubstepGate:
         # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
         # no faster than its pusher, but a contact may have just sped it up).
         bodies = self.movers
-        if len(bodies) < _SPEEDS_IN_ONE_READ:
+        if len(bodies) < _IN_ONE_READ:
             linear = max([abs(m.body.velocity) for m in bodies], default=0.0)
             turn = max([abs(m.body.angular_velocity) for m in bodies], default=0.0)
         else:  # every body of the space (other copies' too: they share the count)
-            self._speeds.clear()
-            batch.get_space_bodies(self.space, _VELOCITIES, self._speeds)
-            rows = np.frombuffer(self._speeds.float_buf()).reshape(-1, 3)
-            linear = float(np.hypot(rows[:, 0], rows[:, 1]).max(initial=0.0))
-            turn = float(np.abs(rows[:, 2]).max(initial=0.0))
+            state = self._space_state()
+            linear = float(np.hypot(state[:, 2], state[:, 3]).max(initial=0.0))
+            turn = float(np.abs(state[:, 4]).max(initial=0.0))
         speed = max(self._driven(2.0 * self.dt), linear + turn * self._spin)
         if not speed < math.inf:  # NaN: a body thrown out of the world; inf: a drive unknown
             return self.full
@@ -274,20 +271,24 @@ class SubstepGate:
         """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
         (see _origin_speed), or its top speed if that is more."""
         movers = self.movers
-        if len(movers) < _SPEEDS_IN_ONE_READ:
+        if len(movers) < _IN_ONE_READ:
             xy = np.array([tuple(m.body.position) for m in movers]).reshape(-1, 2)
             now = np.array([_origin_speed(m.body, offset)
-                            for m, offset in zip(movers, self._offset)])
-        else:  # one read of every body of the space, the movers' rows taken from it
-            self._state.clear()
-            batch.get_space_bodies(self.space, _STATE, self._state)
-            state = np.frombuffer(self._state.float_buf()).reshape(-1, 5)
+                            for m, offset in zip(movers, self._offset.tolist())])
+        else:  # the movers' rows of every body's state
+            state = self._space_state()
             if state.shape[0] != self._space_rows:
                 self._index(state.shape[0])
             rows = state[self._rows]
             xy = rows[:, :2]
-            now = np.hypot(rows[:, 2], rows[:, 3]) + np.abs(rows[:, 4]) * self._offset_array
+            now = np.hypot(rows[:, 2], rows[:, 3]) + np.abs(rows[:, 4]) * self._offset
         return xy, np.maximum(now, self._top)
+
+    def _space_state(self) -> np.ndarray:
+        """(x, y, vx, vy, omega) of every body of the space, in pymunk's order: one read."""
+        self._state.clear()
+        batch.get_space_bodies(self.space, _STATE, self._state)
+        return np.frombuffer(self._state.float_buf()).reshape(-1, 5)
 
     def _index(self, rows: int) -> None:
         """Where each mover sits in pymunk's body order (``rows`` bodies in the space)."""

@@ -67,6 +67,7 @@ class Shove:
     pusher_mass: float  # [kg]
     speed: float  # [m/s] the fastest it can be shoved
     substeps: int
+    squeeze: float  # how many times its substep's travel it sinks into a wall (shove_factor)
 
 
 def hardest_shove(scenario: ScenarioConfig) -> Shove | None:
@@ -81,7 +82,7 @@ def hardest_shove(scenario: ScenarioConfig) -> Shove | None:
     index, lightest = min(movable, key=lambda item: item[1].mass)
     factor = shove_factor(heaviest / lightest.mass)
     needed = substeps_against_overlap(scenario.world.dt, speed * factor, PUSHING_CONTACT_STEP)
-    return Shove(index, lightest.mass, heaviest, speed, needed)
+    return Shove(index, lightest.mass, heaviest, speed, needed, factor)
 
 
 def map_half_widths(scenario: ScenarioConfig) -> list[float]:
@@ -128,7 +129,7 @@ class SubstepNeed:
     scripted: tuple[tuple[float, float], ...]
     step: float  # [m] the deepest a contact may start (less where robots push bodies)
     walker_speed: float  # [m/s] the fastest pedestrian: it pushes crates too (0: none)
-    shove: float | None  # the hardest push's squeeze factor (None: nothing to push)
+    shove: Shove | None  # the hardest push (None: nothing to push)
 
     @property
     def full(self) -> int:
@@ -159,7 +160,7 @@ class SubstepNeed:
                        substeps_against_tunnelling(dt, closing, smallest, smallest),
                        substeps_against_overlap(dt, closing, self.step))
         if self.shove is not None:
-            pushed = max(fastest, self.walker_speed) * self.shove
+            pushed = max(fastest, self.walker_speed) * self.shove.squeeze
             substeps = max(substeps, substeps_against_overlap(dt, pushed, PUSHING_CONTACT_STEP))
         for speed, width in self.scripted:
             substeps = max(substeps, substeps_against_tunnelling(dt, fastest + speed, smallest,
@@ -179,15 +180,10 @@ def substep_need(scenario: ScenarioConfig) -> SubstepNeed:
     scripted = tuple((speed, half_width(o)) for o in obstacles
                      if (speed := mover_speed(o)) > 0)
     walkers = [mover_speed(o) for o in obstacles if getattr(o, "type", "") == "pedestrian"]
-    shove = None
-    if movable:
-        heaviest = max([r.mass for r in robots] + [o.mass for o in movable]
-                       + [o.mass for o in obstacles if getattr(o, "type", "") == "pedestrian"])
-        shove = shove_factor(heaviest / min(o.mass for o in movable))
     return SubstepNeed(scenario.world.dt, max(r.top_speed() for r in robots), len(robots) > 1,
                        smallest, thinnest, scripted,
                        PUSHING_CONTACT_STEP if movable else CONTACT_STEP,
-                       max(walkers, default=0.0), shove)
+                       max(walkers, default=0.0), hardest_shove(scenario))
 
 
 def required_substeps(scenario: ScenarioConfig) -> int:
