@@ -17,9 +17,10 @@ from .se2 import transform_points, wrap
 POINT_CORRELATION = 3.0  # variance inflation for correlated neighbouring beams (as ekf's match_cov_scale)
 MIN_POINT_STD = 0.002  # [m] floor of the per-point residual std
 SURFACE_RADIUS = 0.2  # [m] neighbourhood of a reference point's line fit
+SURFACE_MAX_RADIUS = 0.5  # [m] the widest it grows to where points are sparse
 SURFACE_NEIGHBOURS = 32  # at most this many neighbours per fit (enough to fill SURFACE_RADIUS)
 SURFACE_CELL = 0.04  # [m] the submap's points are thinned to one per cell of this size
-SURFACE_MIN_POINTS = 5  # fewer neighbours within SURFACE_RADIUS: no fit
+SURFACE_MIN_POINTS = 5  # fewer neighbours within SURFACE_MAX_RADIUS: no fit
 SURFACE_THINNESS = 0.4  # std across / std along the line at most this
 
 
@@ -49,7 +50,13 @@ class Reference:
         points = np.column_stack([np.bincount(cell, points[:, 0]), np.bincount(cell, points[:, 1])]) / per_cell[:, None]
         if points.shape[0] < SURFACE_MIN_POINTS:
             return empty
-        _, idx = cKDTree(points).query(points, k=SURFACE_NEIGHBOURS, distance_upper_bound=radius)
+        # Where a sparse scan leaves fewer than SURFACE_MIN_POINTS within ``radius`` (one scan
+        # of 180 beams has 17 cm between points at 5 m), the neighbourhood widens to hold
+        # them, up to SURFACE_MAX_RADIUS: else the first keyframes had no surfaces to match.
+        dist, idx = cKDTree(points).query(points, k=SURFACE_NEIGHBOURS,
+                                          distance_upper_bound=max(radius, SURFACE_MAX_RADIUS))
+        reach = np.maximum(radius, dist[:, SURFACE_MIN_POINTS - 1])  # inf: too few within max
+        idx = np.where(dist <= reach[:, None], idx, points.shape[0])
         padded = np.vstack([points, np.full((1, 2), np.nan)])
         near = padded[idx]  # (n, k, 2); NaN where fewer than k neighbours
         count = np.count_nonzero(idx < points.shape[0], axis=1)

@@ -3,9 +3,10 @@
 - **Front end.** Every ``keyframe_d`` of travel or ``keyframe_a`` of turn (by odometry), the
   new scan is aligned by point-to-line ICP (icp.py) with line fits of the end points of the
   latest ``LOCAL_KEYFRAMES`` keyframes, from the odometry prediction, with the odometry as the
-  match's prior (``odometry_information``: an uncalibrated robot's step error). (Matching against the
-  occupancy grid itself was tried: its 5 cm cells bias each match by millimetres and
-  milliradians, and those add up over hundreds of keyframes.) The matched pose becomes a
+  match's prior (odometry_trust.py: an uncalibrated robot's step error, fitted to what the
+  matches show of this robot's odometry). (Matching against the occupancy grid itself was
+  tried: its 5 cm cells bias each match by millimetres and milliradians, and those add up
+  over hundreds of keyframes.) The matched pose becomes a
   keyframe, joined to the previous one by an edge with the match's covariance, and its scan
   is folded into the map (mapping.py).
 - **Loop closures.** A keyframe within ``loop_radius`` of one passed at least
@@ -27,35 +28,16 @@ from ..maps.grid import OccupancyGrid
 from .base import Localizer, LocalizerContext, LocalizerInputs
 from .config import MappingConfig, SlamConfig
 from .mapping import OccupancyMapper
+from .odometry_trust import OdometryTrust
 from .posegraph import Edge, optimize
 from .icp import Reference, icp
 from .scanmatch import subsample
-from .se2 import between, compose, scan_points, transform_points
+from .se2 import between, scan_points, transform_points
 
 EDGE_FLOOR = np.diag([0.01, 0.01, 0.005]) ** 2  # [m^2, m^2, rad^2] added to every edge covariance
 LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes
 SUBMAP_NEIGHBOURS = 10  # keyframes either side of a loop candidate in its submap
 MIN_KEYFRAMES_BETWEEN_CLOSURES = 10
-
-
-# How far the odometry of an uncalibrated robot may be off over one keyframe step (the EKF's
-# defaults, docs/localization.md): a systematic share of the motion (wheel radii, track
-# width) and a random walk per metre driven and per radian turned.
-ODOMETRY_SCALE_ERROR = 0.03  # fraction of the step
-ODOMETRY_TRANS_NOISE = 0.03  # [m/sqrt(m)]
-ODOMETRY_ROT_NOISE = 0.1  # [rad/sqrt(m)]
-ODOMETRY_TURN_NOISE = 0.1  # [rad/sqrt(rad)]
-
-
-def odometry_information(step: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-    """Information matrix (world frame) of the pose ``predicted`` by an odometry ``step``
-    (robot frame, from the last keyframe): the front end's prior."""
-    d, a = float(np.hypot(step[0], step[1])), abs(float(step[2]))
-    trans = (ODOMETRY_SCALE_ERROR * d) ** 2 + ODOMETRY_TRANS_NOISE ** 2 * d + 1e-8
-    rot = (ODOMETRY_SCALE_ERROR * a) ** 2 + ODOMETRY_ROT_NOISE ** 2 * d + ODOMETRY_TURN_NOISE ** 2 * a + 1e-8
-    c, s = np.cos(predicted[2]), np.sin(predicted[2])
-    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return rotation @ np.diag([1.0 / trans, 1.0 / trans, 1.0 / rot]) @ rotation.T
 
 
 class SlamLocalizer(Localizer):
@@ -80,6 +62,7 @@ class SlamLocalizer(Localizer):
         self.loop_closures: list[tuple[int, int]] = []
         self.keyframe_limit_reached = False  # past max_keyframes the estimate is odometry only
         self._last_closure = -MIN_KEYFRAMES_BETWEEN_CLOSURES
+        self.odometry_trust = OdometryTrust()  # the front end's odometry prior, learned
 
     @property
     def grid(self) -> OccupancyGrid:
@@ -108,7 +91,7 @@ class SlamLocalizer(Localizer):
                                    0.0, None)
             return
         moved = between(self._odom[-1], odom)
-        predicted = compose(self.keyframes[-1], moved)
+        predicted, prior = self.odometry_trust.predict(self.keyframes[-1], moved)
         self.pose = predicted
         if self.keyframe_limit_reached:  # the graph is full: dead reckoning from here on
             return
@@ -119,9 +102,12 @@ class SlamLocalizer(Localizer):
             c = self.config
             match = icp(self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
                                               len(self.keyframes))), points, predicted,
-                        c.iterations, c.max_pair, c.huber, prior=odometry_information(moved, predicted))
-            pose, cov = (match.pose, match.covariance) if match.ok and match.inliers > 0.5 else (
-                predicted, np.diag([0.05, 0.05, 0.05]) ** 2)
+                        c.iterations, c.max_pair, c.huber, prior=prior)
+            if match.ok and match.inliers > 0.5:
+                pose, cov = match.pose, match.covariance
+                self.odometry_trust.learn(moved, predicted, pose, cov, prior)
+            else:
+                pose, cov = predicted, np.diag([0.05, 0.05, 0.05]) ** 2
             self._add_keyframe(pose, odom, scan, travel, cov)
             self.pose = pose
             self.covariance = cov
