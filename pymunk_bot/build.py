@@ -135,15 +135,19 @@ def build(config: ScenarioConfig, seed: int, source: str,
         elif hasattr(robot.localizer, "grid"):  # slam builds its own map
             robot.mapper = robot.localizer
     built = Built(world, robots, fleet, drive_groups, odometry_groups,
-                  Propulsion(world.space, [r.body for r in ordered], [r.control for r in ordered],
-                             [(g, idx) for g, idx in drive_groups]),
+                  Propulsion(world.contact_space, [r.body for r in ordered],
+                             [r.control for r in ordered], [(g, idx) for g, idx in drive_groups],
+                             apart=world.apart_space),
                   schedules, maps)
     crowd = any(getattr(o, "type", "") == "pedestrian" for o in config.obstacles)
     for robot in ordered:
         expectation = config.expect.get(robot.name)
+        never_enter = expectation.never_enter if expectation else []
+        clearance = expectation is not None and expectation.min_clearance is not None
+        # Metrics that query the world see all of it (a robot stepping apart too).
         robot.metrics = RobotMetrics(
-            world.space, robot, expectation.never_enter if expectation else [],
-            track_clearance=expectation is not None and expectation.min_clearance is not None)
+            world.space if never_enter or clearance else world.contact_space, robot,
+            never_enter, track_clearance=clearance)
         if crowd or (expectation is not None and bounds_of(expectation)):  # navmetrics/
             robot.metrics.navigation = NavMetrics(world, robot, ordered, config, maps)
         if robot.metrics.active or robot.metrics.navigation is not None:
@@ -209,7 +213,7 @@ def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id
     gear = pymunk.GearJoint(control, body, 0.0, 1.0)
     gear.max_bias = 0.0
     gear.max_force = torque
-    world.space.add(body, *shapes, control, pivot, gear)
+    world.contact_space.add(body, *shapes, control, pivot, gear)
     robot.body, robot.shape, robot.control = body, shape, control
     robot.shapes = shapes
     for piece in shapes:

@@ -83,8 +83,15 @@ class Propulsion:
     def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body],
                  controls: Sequence[pymunk.Body], groups: Sequence[tuple[Any, Sequence[int]]],
                  stacked: Sequence[tuple[Any, Sequence[int], Sequence[int]]] | None = None,
-                 copies: bool = False) -> None:
+                 copies: bool = False, apart: pymunk.Space | None = None) -> None:
         self.space = space
+        # The Spaces whose bodies are read as rows, in that order: the contact Space, and the
+        # one robots nothing can reach step in (substep_split.py), when there is one.
+        self.spaces = [space] if apart is None else [space, apart]
+        self._reads = [batch.Buffer() for _ in self.spaces]
+        self._writes = [batch.Buffer() for _ in self.spaces]
+        self._held_writes = [batch.Buffer() for _ in self.spaces]
+        self._bounds = [0] * (len(self.spaces) + 1)  # each Space's first row, and the end
         self.bodies, self.controls = list(bodies), list(controls)
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         # What the per-robot path advances: each group, or each stacked group with the first
@@ -102,14 +109,16 @@ class Propulsion:
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
         self._spins = [(group, spin[idx]) for group, idx in self.groups]  # each group's rows
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
-        self._read, self._write, self._write_held = batch.Buffer(), batch.Buffer(), batch.Buffer()
-        self._rows = -1  # bodies the last index was built for
+        self._rows = -1  # bodies the last index was built for (-1: look again)
+        self._counts: list[int] = []  # ... of each Space
         self._holding = False  # the fleet is held as a whole (batched)
         self._held_twists = np.full((self.n, 3), np.nan)  # the twists held (batched; NaN: none)
         self._changed = np.zeros(self.n, dtype=np.bool_)  # whose twist the last hold changed
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
+        # pymunk's ids of the robots' bodies, then of their control bodies (to find their rows)
+        self._ids = np.array([b.id for b in self.bodies + self.controls], dtype=np.uintp)
         self.pivots = [next(c for c in control.constraints if isinstance(c, pymunk.PivotJoint))
                        for control in self.controls]
         self._held: list[tuple[float, float, float] | None] = [None] * self.n  # twist held
@@ -120,13 +129,18 @@ class Propulsion:
         ``DriveGroup.fastest``)."""
         return max([group.fastest(spin, seconds) for group, spin in self._spins], default=0.0)
 
-    def step(self, h: float, substeps: int, h_next: float | None = None) -> None:
+    def step(self, h: float, substeps: int, h_next: float | None = None,
+             apart: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         """Advance the drives and the physics by ``substeps`` substeps of ``h`` [s];
         ``h_next``: the next tick's substep [s], when it differs (the velocities solved in this
         tick's last substep move the robots through the next tick's first, so that substep is
-        aimed for it)."""
+        aimed for it). ``apart``: which robots step apart (one step of the whole tick, in the
+        second Space) in this tick and in the next, two boolean rows (batched only)."""
         space = self.space
         h_last = h if h_next is None else h_next
+        if apart is not None:
+            self._step_split(h, substeps, h_last, *apart)
+            return
         if self.batched:
             self._step_batched(h, substeps, h_last)
             return
@@ -228,6 +242,40 @@ class Propulsion:
             self.substep(h, h_last if sub == substeps - 1 else h)
             space.step(h)
 
+    def _step_split(self, h: float, substeps: int, h_last: float, apart: np.ndarray,
+                    apart_next: np.ndarray) -> None:
+        """``step`` with the robots ``apart`` (a boolean row) stepping apart: every drive
+        advances each substep, as in any tick; the others are aimed substep by substep and
+        step in the contact Space, then those apart are aimed once, for the whole tick, and
+        their Space takes one step of it. Each robot's last aim is for the step it takes
+        first in the next tick: the tick when it steps apart then (``apart_next``), else
+        ``h_last``."""
+        self._release_anchors()
+        dt = h * substeps
+        near, away = np.flatnonzero(~apart), np.flatnonzero(apart)
+        first_next = np.where(apart_next, dt, h_last)  # [s] each robot's next step
+        contact, other = self.spaces
+        for sub in range(substeps):
+            twists = self._gather(lambda group: group.advance(h))
+            if near.size:
+                after = first_next[near] if sub == substeps - 1 else np.full(near.size, h)
+                self._aim_members_for(near, twists, np.full(near.size, h), after, slice(0, 1))
+            contact.step(h)
+        if away.size:  # their motors advanced the whole tick, in substeps, as the others'
+            self._aim_members_for(away, twists, np.full(away.size, dt), first_next[away],
+                                  slice(1, 2))
+            other.step(dt)
+
+    def _aim_members_for(self, members: np.ndarray, twists: tuple[np.ndarray, ...],
+                         h: np.ndarray, h_next: np.ndarray, spaces: slice) -> None:
+        """Aim robots ``members`` (rows of ``twists``) for steps ``h`` then ``h_next`` [s],
+        one each; write the rows of the Spaces ``spaces`` (where they are)."""
+        ux, uy, omega = (np.ascontiguousarray(t[members]) for t in twists)
+        state = self._read_rows(_READ, 4, first_only=spaces.start == 0 and spaces.stop == 1)
+        aim_rows(state, self._robot_rows, self._control_rows, members, ux, uy, omega, h, h_next,
+                 self.cog, self._out)
+        self._write_rows(_WRITE, self._writes, spaces)
+
     def _gather(self, twists_of: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(ux, uy, omega) of every robot, each group's from ``twists_of(group)``."""
         ux, uy, omega = np.empty(self.n), np.empty(self.n), np.empty(self.n)
@@ -243,8 +291,9 @@ class Propulsion:
         state = self._read_state()
         out, anchors = self._held_out, self._anchors
         out[:] = state
-        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega, h,
-                         self.cog, _MAX_ANCHOR, anchors, out, self._held_twists, self._changed):
+        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega,
+                         np.full(self.n, h), self.cog, _MAX_ANCHOR, anchors, out,
+                         self._held_twists, self._changed):
             return False
         for k in np.flatnonzero(self._changed).tolist():  # anchors are no batch field:
             turning = bool(omega[k] != 0.0)  # written when a twist changes, or held ones let go
@@ -252,7 +301,7 @@ class Propulsion:
                 self.pivots[k].anchor_a = (float(anchors[k, 0]), float(anchors[k, 1]))
                 self._anchored[k] = turning
         self._holding = True
-        batch.set_space_bodies(self.space, _READ, self._write_held)
+        self._write_rows(_READ, self._held_writes)
         return True
 
     def _release_anchors(self) -> None:
@@ -278,14 +327,39 @@ class Propulsion:
             self._holding = True  # so a release lets them go
             self._held_twists.fill(np.nan)  # every anchor written anew
 
+    def relocated(self) -> None:
+        """Bodies moved between the Spaces: where each sits is looked up at the next read."""
+        self._rows = -1
+
+    def _read_rows(self, fields: batch.BodyFields, width: int, first_only: bool = False
+                   ) -> np.ndarray:
+        """Every body's ``fields`` (``width`` floats each) in pymunk's body order, the contact
+        Space's rows first, then the apart Space's (``first_only``: the contact Space's alone,
+        for robots known to be there)."""
+        parts = []
+        for space, buffer in zip(self.spaces, self._reads):
+            buffer.clear()
+            batch.get_space_bodies(space, fields, buffer)
+            parts.append(np.frombuffer(buffer.float_buf()).reshape(-1, width))
+            if first_only and self._rows >= 0 and parts[0].shape[0] == self._counts[0]:
+                return parts[0]
+        rows = parts[0] if len(parts) == 1 or not parts[1].shape[0] else np.concatenate(parts)
+        counts = [part.shape[0] for part in parts]
+        if self._rows < 0 or counts != self._counts:  # bodies came, went or moved Space
+            self._index(counts)
+        return rows
+
+    def _write_rows(self, fields: batch.BodyFields, buffers: list[batch.Buffer],
+                    spaces: slice = slice(None)) -> None:
+        """Write the output rows of the Spaces (all, or those of ``spaces``)."""
+        for space, buffer, start, stop in list(zip(self.spaces, buffers, self._bounds,
+                                                   self._bounds[1:]))[spaces]:
+            if stop > start:
+                batch.set_space_bodies(space, fields, buffer)
+
     def _read_state(self) -> np.ndarray:
         """Every body's (angle, vx, vy, omega), in pymunk's body order."""
-        self._read.clear()
-        batch.get_space_bodies(self.space, _READ, self._read)
-        state = np.frombuffer(self._read.float_buf()).reshape(-1, 4)
-        if state.shape[0] != self._rows:
-            self._index(state.shape[0])
-        return state
+        return self._read_rows(_READ, 4)
 
     def substep(self, h: float, h_next: float) -> None:
         """Advance every drive by one substep of ``h`` [s] and set the control velocities for
@@ -305,8 +379,9 @@ class Propulsion:
         if not isinstance(ux, np.ndarray):  # a plugin drive's lists
             ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
         aim_rows(self._read_state(), self._robot_rows, self._control_rows, members, ux, uy,
-                 omega, h, h_next, self.cog, self._out)
-        batch.set_space_bodies(self.space, _WRITE, self._write)
+                 omega, np.full(members.shape[0], h), np.full(members.shape[0], h_next),
+                 self.cog, self._out)
+        self._write_rows(_WRITE, self._writes)
 
     def positions(self) -> Any:
         """Every robot body's position now, (n, 2) [m]: an array, or a list of (x, y) when few."""
@@ -321,12 +396,7 @@ class Propulsion:
 
     def position_array(self) -> np.ndarray:
         """Every robot body's position now, (n, 2) [m], read in one call."""
-        self._read.clear()
-        batch.get_space_bodies(self.space, batch.BodyFields.POSITION, self._read)
-        xy = np.frombuffer(self._read.float_buf()).reshape(-1, 2)
-        if xy.shape[0] != self._rows:
-            self._index(xy.shape[0])
-        return xy[self._robot_rows]
+        return self._read_rows(batch.BodyFields.POSITION, 2)[self._robot_rows]
 
     def _aim(self, k: int, twist: tuple[float, float, float], h: float, h_next: float) -> None:
         """Robot k's control body velocity for the next substep, of ``h_next`` [s], after this
@@ -378,16 +448,25 @@ class Propulsion:
             _SET_ANGLE(control, heading)
         return True
 
-    def _index(self, rows: int) -> None:
-        """Where each robot's body and control body sit in pymunk's body order."""
-        ids = batch.Buffer()
-        batch.get_space_bodies(self.space, batch.BodyFields.BODY_ID, ids)
-        order = {int(b): k for k, b in enumerate(np.frombuffer(ids.int_buf(), dtype=np.uintp))}
-        self._robot_rows = np.array([order[b.id] for b in self.bodies], dtype=np.intp)
-        self._control_rows = np.array([order[b.id] for b in self.controls], dtype=np.intp)
+    def _index(self, counts: list[int]) -> None:
+        """Where each robot's body and control body sit in the rows (``counts``: the bodies
+        of each Space)."""
+        found = []
+        for space in self.spaces:
+            ids = batch.Buffer()
+            batch.get_space_bodies(space, batch.BodyFields.BODY_ID, ids)
+            found.append(np.frombuffer(ids.int_buf(), dtype=np.uintp))
+        every = np.concatenate(found)
+        by_id = np.argsort(every, kind="stable")
+        found_rows = by_id[np.searchsorted(every[by_id], self._ids)]
+        self._robot_rows, self._control_rows = found_rows[:self.n], found_rows[self.n:]
+        self._bounds = np.concatenate([[0], np.cumsum(counts)]).tolist()
+        rows = self._bounds[-1]
         self._out = np.zeros((rows, 3))
-        self._write.set_float_buf(self._out)
         self._held_out = np.zeros((rows, 4))
-        self._write_held.set_float_buf(self._held_out)
-        self._rows = rows
+        for k, (start, stop) in enumerate(zip(self._bounds, self._bounds[1:])):
+            if stop > start:
+                self._writes[k].set_float_buf(self._out[start:stop])
+                self._held_writes[k].set_float_buf(self._held_out[start:stop])
+        self._rows, self._counts = rows, list(counts)
 

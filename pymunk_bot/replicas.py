@@ -126,7 +126,7 @@ class Replicas:
             for group, idx in sim.built.drive_groups:
                 groups.append((group, [start + i for i in idx]))
             spans.append((start, len(bodies)))
-        propulsion = Propulsion(self.ground.space, bodies, controls, groups,
+        propulsion = Propulsion(self.ground.contact_space, bodies, controls, groups,
                                 self._stack.drive_groups if self._stack else None, copies=True)
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)

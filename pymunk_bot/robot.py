@@ -316,8 +316,9 @@ class Robot:
             body.angle = theta
             body.velocity = (0.0, 0.0)
             body.angular_velocity = 0.0
-            if body.space is not None:
-                body.space.reindex_shapes_for_body(body)
+        for shape in self.shapes:  # in the Space that holds them (their body may step apart)
+            if shape.space is not None:
+                shape.space.reindex_shape(shape)
         fleet = self._fleet  # the jump is no distance travelled (a copy: xy may be shared)
         xy = fleet.xy.copy()
         xy[self._i] = (x, y)

@@ -25,6 +25,7 @@ from .robot import Robot, RobotsByName
 from .sensors.lidar import Lidar
 from .sensors.schedule import TIME_TOLERANCE, ScheduleArray
 from .substep_gate import SubstepGate
+from .substep_split import SPLIT_FROM, SplitPlanner
 from .world import World
 
 
@@ -39,6 +40,7 @@ class TickPlan:
     reading: tuple["Simulation", ...]
     caster: Any
     gate: SubstepGate | None  # substeps where contacts can start (the default); None: every tick
+    split: SplitPlanner | None = None  # robots nothing can reach step apart (batched fleets)
 
 
 class Simulation:
@@ -183,12 +185,18 @@ class Simulation:
         first = sims[0]
         gate = None
         if first.world.adaptive:
-            gate = SubstepGate(ground.space, [m for sim in sims for m in sim._built.movers],
+            gate = SubstepGate(ground.contact_space, [m for sim in sims for m in sim._built.movers],
                                first.substeps, first.dt, ground.take_disturbed, ground.need,
                                propulsion.fastest_driven)
         caster = first.world.ray_caster() if any(s._lidars for s in sims) else None
+        split = None
+        if (gate is not None and propulsion.batched and ground.can_split
+                and propulsion.n >= SPLIT_FROM):
+            assert ground.apart_space is not None
+            split = SplitPlanner(ground.contact_space, ground.apart_space, propulsion.bodies,
+                                 gate.movers, first.dt)
         return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
-                        tuple(s for s in sims if s._reads), caster, gate)
+                        tuple(s for s in sims if s._reads), caster, gate, split)
 
     @staticmethod
     def step_together(plan: TickPlan, propulsion: Propulsion, stack: Any = None,
@@ -203,7 +211,9 @@ class Simulation:
 
         1. controllers whose period has come read their observation and set a command; scenario
            events fire; actors (moving obstacles, pedestrians) set their motion;
-        2. ``substeps`` times: every drive advances and steers its control body, then pymunk steps;
+        2. ``substeps`` times: every drive advances and steers its control body, then pymunk steps
+           (in fleets of 2000 robots and more, those nothing can reach are then steered once
+           and step once, apart: substep_split.py);
         3. bookkeeping: each run's clock, distance and goals, odometry from the encoders;
         4. sensors whose period has come read the world (every body has moved): every due LiDAR
            of every run in one cast;
@@ -214,9 +224,26 @@ class Simulation:
         sims = plan.sims
         for sim in plan.acting:
             sim._before_physics()
-        first, gate = sims[0], plan.gate
+        first, gate, split = sims[0], plan.gate, plan.split
+        if split is not None and split.apart.any() and split.layout != first.world.layout:
+            split.reset()  # someone gathered the robots (asked for the world's Space)
+            propulsion.relocated()
+            assert gate is not None
+            gate.relocated()
         if gate is None:
             propulsion.step(first.dt / first.substeps, first.substeps)
+        elif split is not None and first.world.can_split:  # substep_split.py
+            disturbed = first.world.take_disturbed()
+            if disturbed:  # a teleport: every robot back, decided anew
+                split.settle(first.world, propulsion, gate, np.zeros(split.n, dtype=bool))
+                split.reset(teleported=True)
+            apart, following_apart = split.apart, split.next_apart(propulsion)
+            substeps, following = gate.counts_apart(
+                disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
+            propulsion.step(first.dt / substeps, substeps, first.dt / following,
+                            (apart, following_apart))
+            split.settle(first.world, propulsion, gate, following_apart)
+            first.world.substep = first.dt / following
         else:  # one pymunk step where no contact can start (substep_gate.py)
             substeps, following = gate.counts()
             propulsion.step(first.dt / substeps, substeps, first.dt / following)

@@ -116,7 +116,7 @@ def spin_reach(body: pymunk.Body) -> float:
     return far + math.hypot(cx, cy)
 
 
-def _origin_speed(body: pymunk.Body, offset: float) -> float:
+def origin_speed(body: pymunk.Body, offset: float) -> float:
     """How fast ``body``'s origin moves now [m/s]: its centre of gravity's speed plus the
     turn of the ``offset`` [m] between the two."""
     vx, vy = body.velocity
@@ -210,6 +210,28 @@ class SubstepGate:
         self._planned = planned
         return current, planned
 
+    def counts_apart(self, disturbed: bool, crowded_next: bool, apart: bool) -> tuple[int, int]:
+        """:meth:`counts` while robots step apart (substep_split.py), for the contact Space:
+        the coming tick takes what was chosen in the one before (every substep after a
+        teleport, ``disturbed``); the next takes what the speeds need if anything moves in the
+        contact Space then (``crowded_next``), else one step. ``apart``: robots step apart in
+        the coming tick (one more pymunk step). The gate's own test starts afresh when robots
+        stop stepping apart."""
+        self.ticks += 1
+        if disturbed:
+            self._planned = self.full
+        current = self._planned
+        self.steps += current + int(apart)
+        if current == 1:
+            self.single_ticks += 1
+        self._planned = self._graded() if crowded_next else 1
+        self.clear_until, self._wait, self._failures = -math.inf, 0, 0
+        return current, self._planned
+
+    def relocated(self) -> None:
+        """Bodies moved between Spaces: where each mover sits is looked up at the next read."""
+        self._space_rows = -1
+
     def _graded(self) -> int:
         """The substeps the next tick needs at the speeds bodies can have within two ticks
         (see the module docstring), at most ``full``."""
@@ -269,11 +291,11 @@ class SubstepGate:
 
     def _origins_and_speeds(self) -> tuple[np.ndarray, np.ndarray]:
         """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
-        (see _origin_speed), or its top speed if that is more."""
+        (see origin_speed), or its top speed if that is more."""
         movers = self.movers
         if len(movers) < _IN_ONE_READ:
             xy = np.array([tuple(m.body.position) for m in movers]).reshape(-1, 2)
-            now = np.array([_origin_speed(m.body, offset)
+            now = np.array([origin_speed(m.body, offset)
                             for m, offset in zip(movers, self._offset.tolist())])
         else:  # the movers' rows of every body's state
             state = self._space_state()

@@ -30,7 +30,7 @@ class World:
         self.replica = replica
         self._own: list[Obstacle] = []  # the movable obstacles this world added to the space
         if ground is None:
-            self.space = physics.new_space(
+            self._space = physics.new_space(
                 pushable=any(getattr(o, "movable", False) for o in config.obstacles))
             self.map = config.world.map_geometry()  # a MapGeometry, or None
             self.arena_shapes = self._build_arena() if self.map is None else self._build_map()
@@ -46,26 +46,35 @@ class World:
             self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
             # Robot shapes whose contact impulses someone reads (navmetrics); empty: no cost.
             self._on_solved: dict[pymunk.Shape, list[Callable[[pymunk.Arbiter], None]]] = {}
-            for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
-                self.space.on_collision(physics.ROBOT, other, begin=self._begin)
+            # Robots that nothing can reach within the coming ticks step there, once a tick
+            # (substep_split.py); anyone who asks for the world's Space gets them back.
+            self.apart_space: pymunk.Space | None = None
+            if replica is None:
+                self.apart_space = physics.new_space()
+                self.apart_space.iterations = self._space.iterations  # the joints solved alike
+            for space in (self._space, self.apart_space):
+                if space is not None:
+                    for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
+                        space.on_collision(physics.ROBOT, other, begin=self._begin)
             self._fixed: dict[int, Obstacle] = {}
         else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
-            self.space, self.map, self.arena_shapes = ground.space, ground.map, ground.arena_shapes
+            self._space, self.map, self.arena_shapes = ground._space, ground.map, ground.arena_shapes
             self.substeps, self.need = ground.substeps, ground.need
             self._on_contact = ground._on_contact
             self._on_solved = ground._on_solved
             self._ground = ground
             self._fixed = ground._fixed
+            self.apart_space = None  # copies share one Space and never step apart
         self.obstacles: list[Obstacle] = []
         for index, o in enumerate(config.obstacles):  # in the file's order, for determinism
             fixed = self._fixed.get(index)
             if fixed is not None:  # a copy: the ground's
                 self.obstacles.append(fixed)
                 continue
-            obstacle = obstacle_kinds.get(o.type)(self.space, o)
+            obstacle = obstacle_kinds.get(o.type)(self._space, o)
             if obstacle.movable:
                 if not movables:  # the ground holds no moving body: each copy adds its own
-                    self.space.remove(*obstacle.body.constraints, *obstacle.shapes, obstacle.body)
+                    self._space.remove(*obstacle.body.constraints, *obstacle.shapes, obstacle.body)
                     continue
                 if replica is not None:
                     for shape in obstacle.shapes:
@@ -82,6 +91,59 @@ class World:
         # by the simulation: dt / substeps, unless the substeps are adaptive.
         self.substep = config.world.dt / self.substeps
         self._disturbed = False  # bodies were moved outside the physics (see disturb)
+        self.dt = config.world.dt  # [s]
+        # Robots (body, control body) stepping in apart_space now, in the order they went.
+        self._apart: dict[pymunk.Body, pymunk.Body] = {}
+        self.whole = False  # someone holds the world's Space: every robot stays in it
+        self.layout = 0  # counts the moves between the two Spaces (batch readers re-index)
+
+    @property
+    def space(self) -> pymunk.Space:
+        """The world's pymunk Space, with every body in it. Robots that nothing can reach
+        within the coming ticks may step in a Space of their own (:mod:`pymunk_bot.substep_split`)
+        while nobody looks; asking for this brings them back, for the rest of the run (a
+        LiDAR, a crowd, a metric or a user's query sees the whole world)."""
+        self.whole = True
+        self.gather()
+        return self._space
+
+    @property
+    def contact_space(self) -> pymunk.Space:
+        """The Space where contacts happen: every body but the robots stepping apart (the
+        engine's own view, which leaves them there)."""
+        return self._space
+
+    @property
+    def can_split(self) -> bool:
+        """Whether robots may step apart: a world of its own that nobody holds the Space of."""
+        return self.apart_space is not None and not self.whole
+
+    def move_apart(self, robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
+        """Move these robots (body, control body) and their joints to the apart Space (their
+        shapes stay)."""
+        if robots:
+            assert self.apart_space is not None
+            _move(self._space, self.apart_space, robots)
+            self._apart.update(robots)
+            self.layout += 1
+
+    def move_back(self, robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
+        """Move these robots from the apart Space back to the contact Space."""
+        if robots:
+            assert self.apart_space is not None
+            _move(self.apart_space, self._space, robots)
+            for body, _ in robots:
+                del self._apart[body]
+            self.layout += 1
+
+    def gather(self) -> None:
+        """Every robot stepping apart back into the contact Space."""
+        self.move_back(list(self._apart.items()))
+
+    def substep_for(self, body: pymunk.Body) -> float:
+        """[s] the pymunk step ``body``'s velocity now moves it in: a tick for a robot
+        stepping apart, else :attr:`substep`."""
+        return self.dt if body in self._apart else self.substep
 
     @classmethod
     def ground(cls, config: ScenarioConfig) -> "World":
@@ -119,31 +181,31 @@ class World:
                 self._on_solved.pop(shape, None)
                 gone[shape] = None
             gone[body] = None
-        self.space.remove(*gone)
+        self._space.remove(*gone)
         self._own.clear()
         # Chipmunk fills a removed joint's slot with its last one, which can swap two joints
         # of another copy; its solver applies joints in that order, so put every joint back
         # in the order it was added (each copy's own build order, as in a space of its own).
-        kept = list(self.space.constraints)
-        self.space.remove(*kept)
-        self.space.add(*kept)
+        kept = list(self._space.constraints)
+        self._space.remove(*kept)
+        self._space.add(*kept)
 
     def _build_arena(self) -> list[pymunk.Shape]:
         w, h, t = self.width, self.height, ARENA_WALL_THICKNESS
         boxes = [(-t, -t, 0, h + t), (w, -t, w + t, h + t), (0, -t, w, 0), (0, h, w, h + t)]
         shapes: list[pymunk.Shape] = []
         for x0, y0, x1, y1 in boxes:
-            shape = pymunk.Poly(self.space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+            shape = pymunk.Poly(self._space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
             shape.friction = self.config.world.wall_friction
             shape.collision_type = physics.STATIC
             shapes.append(shape)
-        self.space.add(*shapes)
+        self._space.add(*shapes)
         return shapes
 
     def _build_map(self) -> list[pymunk.Shape]:
         """The map's static geometry instead of the four arena walls (its edge is closed)."""
         from .maps.geometry import add_to_space
-        return add_to_space(self.space, self.map, self.config.world.wall_friction, physics.STATIC)
+        return add_to_space(self._space, self.map, self.config.world.wall_friction, physics.STATIC)
 
     def ray_caster(self) -> Any:
         """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:
@@ -167,7 +229,7 @@ class World:
         nobody asks never pay for a post-solve callback."""
         if not self._on_solved:
             for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
-                self.space.on_collision(physics.ROBOT, other, begin=self._begin,
+                self._space.on_collision(physics.ROBOT, other, begin=self._begin,
                                         post_solve=self._solved)
         self._on_solved.setdefault(shape, []).append(on_solved)
 
@@ -182,3 +244,17 @@ class World:
             on_begin = self._on_contact.get(shape)
             if on_begin is not None:
                 on_begin()
+
+
+def _move(source: pymunk.Space, target: pymunk.Space,
+          robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
+    """Robots (body, control body) with their joints from ``source`` to ``target``, in their
+    order (joints after bodies, as when built). Their shapes stay in the contact Space, where
+    every query sees them: Chipmunk lets a shape's body be stepped by another Space (a "rogue"
+    body to its own), and keeps the shape where the body is; the apart Space then has no
+    shapes to sort, and a step of it is the bodies and joints alone."""
+    parts: list[pymunk.Body | pymunk.Constraint] = []
+    for body, control in robots:
+        parts += [body, control, *control.constraints]
+    source.remove(*parts)
+    target.add(*parts)

@@ -84,7 +84,10 @@ def _ticks(sim: Simulation, ticks: int) -> float:
 
 
 def _bare_ticks(sim: Simulation, ticks: int) -> float:
-    space, substeps = sim.world.space, sim.substeps
+    # Robots stepping apart (substep_split.py) come back first: the bare loop steps the whole
+    # world in one Space, every substep; the next tick of ours decides anew.
+    sim.world.gather()
+    space, substeps = sim.world.contact_space, sim.substeps
     h = sim.dt / substeps
     started = time.process_time()
     for _ in range(ticks * substeps):

@@ -23,7 +23,7 @@ def make_lidar(config: Any, robot: "Robot", world: "World", rng: np.random.Gener
 
 
 def make_imu(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Imu:
-    imu = Imu(config, robot.body, rng, substep=lambda: world.substep)
+    imu = Imu(config, robot.body, rng, substep=lambda: world.substep_for(robot.body))
     robot.fit("imu", imu)
     return imu
 

@@ -1,0 +1,138 @@
+"""Robots that nothing can reach step apart (pymunk_bot/substep_split.py): a fleet of
+SPLIT_FROM robots, where most step once a tick in a Space of their own while the others
+substep, keeps its contacts shallow, runs the same twice, and gives the whole world back to
+whoever asks for its Space."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+
+from pymunk_bot.benchmarks.fleet import swarm_scenario
+from pymunk_bot.sim import Simulation
+from pymunk_bot.substep_split import SPLIT_FROM, FixedOutlines
+
+
+def _swarm(**changes: object) -> Simulation:
+    data = swarm_scenario(SPLIT_FROM)
+    data["robots"][0].update(changes)
+    return Simulation.from_dict(data, source="swarm")
+
+
+def _apart(sim: Simulation) -> int:
+    """How many robots step in the apart Space now."""
+    return sum(r.body.space is sim.world.apart_space for r in sim.robots.values())
+
+
+def _deepest_overlap(sim: Simulation) -> float:
+    """[m] the deepest any robot overlaps anything now (pymunk's shape queries)."""
+    space = sim.world.contact_space  # every shape is there (a robot apart keeps its shapes)
+    deepest = 0.0
+    for robot in sim.robots.values():
+        for info in space.shape_query(robot.shape):
+            for point in info.contact_point_set.points:
+                deepest = max(deepest, -point.distance)
+    return deepest
+
+
+def test_most_robots_step_apart_and_every_contact_stays_shallow() -> None:
+    sim = _swarm()
+    deepest, apart = 0.0, []
+    for tick in range(120):  # 2 s: the swarm's robots meet and push each other
+        sim.step()
+        if tick % 10 == 9:
+            deepest = max(deepest, _deepest_overlap(sim))
+            apart.append(_apart(sim))
+    assert min(apart) > SPLIT_FROM // 2, apart
+    assert sum(r.collisions for r in sim.robots.values()) > 20  # there were contacts
+    assert deepest <= 0.01, deepest
+    # one pymunk step a tick of the apart Space, on top of the contact Space's
+    assert sim.pymunk_steps > sim.steps
+
+
+def test_a_robot_apart_driven_at_a_wall_stops_at_it() -> None:
+    # Robot r0 starts 1.5 m from the arena's left wall, nothing near, and drives at it at
+    # 1 m/s: it steps apart first, and is back in the contact Space before it can touch.
+    sim = _swarm(pose=[1.5, 1.0, math.pi], controller={"type": "velocity", "v": 1.0, "omega": 0.0})
+    robot = sim.robots["r0"]
+    radius = robot.radius
+    went_apart, touching_apart = False, False
+    deepest = 0.0
+    for _ in range(150):  # 2.5 s
+        sim.step()
+        x = robot.body.position.x
+        went_apart |= robot.body.space is sim.world.apart_space
+        touching_apart |= x - radius < 0.02 and robot.body.space is sim.world.apart_space
+        deepest = max(deepest, radius - x)
+    assert went_apart and not touching_apart
+    assert robot.collisions >= 1
+    assert deepest <= 0.01, deepest
+
+
+def test_the_same_seed_runs_the_same() -> None:
+    runs = []
+    for _ in range(2):
+        sim = _swarm()
+        sim.run(1.0)
+        assert _apart(sim) > 0
+        runs.append(np.array([r.pose for r in sim.robots.values()]))
+    assert np.array_equal(*runs)
+
+
+def test_one_solver_iteration_apart_moves_robots_as_ten() -> None:
+    # The swarm's robots are discs: their joints pull through the centre of gravity, and one
+    # iteration solves them (the Space apart takes one).
+    poses = []
+    for iterations in (None, 10):
+        sim = _swarm()
+        if iterations is not None:
+            sim.world.apart_space.iterations = iterations
+        assert sim.world.apart_space.iterations == (iterations or 1)
+        sim.run(1.0)
+        poses.append(np.array([r.pose for r in sim.robots.values()]))
+    assert np.abs(poses[0] - poses[1]).max() < 1e-12
+
+
+def test_asking_for_the_space_brings_every_robot_back() -> None:
+    sim = _swarm()
+    sim.run(0.5)
+    assert _apart(sim) > 0
+    space = sim.space
+    bodies = set(space.bodies)
+    assert all(r.body in bodies and r.control in bodies for r in sim.robots.values())
+    assert not sim.world.apart_space.bodies
+    sim.run(0.5)  # the run goes on in one Space
+    assert _apart(sim) == 0 and not sim.world.apart_space.bodies
+
+
+def test_a_robot_teleported_into_another_is_pushed_out() -> None:
+    sim = _swarm()
+    sim.run(0.5)
+    mover = next(r for r in sim.robots.values() if r.body.space is sim.world.apart_space)
+    other = next(r for r in sim.robots.values() if r is not mover
+                 and r.body.space is sim.world.apart_space)
+    x, y = other.body.position
+    mover.teleport(x + 0.1, y, 0.0)  # 10 cm from its centre: deep inside it
+    hits = sim.world.contact_space.point_query((x + 0.1, y), 0.0, pymunk.ShapeFilter())
+    assert mover.shape in {hit.shape for hit in hits}  # queries see it where it landed
+    sim.step()
+    assert mover.body.space is sim.world.contact_space
+    sim.run(0.5)
+    assert math.dist(mover.body.position, other.body.position) > mover.radius + other.radius - 0.01
+
+
+def test_outline_gaps_never_exceed_the_true_distance() -> None:
+    space = pymunk.Space()
+    turned = pymunk.Body(body_type=pymunk.Body.STATIC)
+    turned.position, turned.angle = (5.0, 5.0), 0.7
+    shapes = [pymunk.Poly.create_box(turned, (1.0, 0.5)),
+              pymunk.Segment(space.static_body, (0.0, 0.0), (10.0, 0.0), 0.05),
+              pymunk.Circle(space.static_body, 0.3, (8.0, 8.0))]
+    space.add(turned, *shapes)
+    points = np.random.default_rng(0).uniform(-1.0, 11.0, (2000, 2))
+    true = np.array([min(s.point_query(tuple(p)).distance for s in shapes) for p in points])
+    outside = true > 0.0  # inside a shape only a teleport puts an origin (checked by pymunk)
+    gaps = FixedOutlines(space).gaps(points, 20.0)
+    assert np.all(gaps[outside] <= true[outside] + 1e-12)
+    assert np.max(true[outside] - gaps[outside]) < 0.1  # and not far below it
