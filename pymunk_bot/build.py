@@ -136,8 +136,7 @@ def build(config: ScenarioConfig, seed: int, source: str,
             robot.mapper = robot.localizer
     built = Built(world, robots, fleet, drive_groups, odometry_groups,
                   Propulsion(world.contact_space, [r.body for r in ordered],
-                             [r.control for r in ordered], [(g, idx) for g, idx in drive_groups],
-                             apart=world.apart_space),
+                             [r.control for r in ordered], [(g, idx) for g, idx in drive_groups]),
                   schedules, maps)
     crowd = any(getattr(o, "type", "") == "pedestrian" for o in config.obstacles)
     for robot in ordered:

@@ -83,15 +83,15 @@ class Propulsion:
     def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body],
                  controls: Sequence[pymunk.Body], groups: Sequence[tuple[Any, Sequence[int]]],
                  stacked: Sequence[tuple[Any, Sequence[int], Sequence[int]]] | None = None,
-                 copies: bool = False, apart: pymunk.Space | None = None) -> None:
+                 copies: bool = False) -> None:
         self.space = space
         # The Spaces whose bodies are read as rows, in that order: the contact Space, and the
-        # one robots nothing can reach step in (substep_split.py), when there is one.
-        self.spaces = [space] if apart is None else [space, apart]
-        self._reads = [batch.Buffer() for _ in self.spaces]
-        self._writes = [batch.Buffer() for _ in self.spaces]
-        self._held_writes = [batch.Buffer() for _ in self.spaces]
-        self._bounds = [0] * (len(self.spaces) + 1)  # each Space's first row, and the end
+        # one robots nothing can reach step in (substep_split.py), once they may.
+        self.spaces = [space]
+        self._reads, self._writes, self._held_writes = [batch.Buffer()], [batch.Buffer()], \
+            [batch.Buffer()]
+        self._bounds = [0, 0]  # each Space's first row, and the end
+        self._h, self._h_next = np.empty(1), np.empty(1)  # one step for every robot aimed
         self.bodies, self.controls = list(bodies), list(controls)
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         # What the per-robot path advances: each group, or each stacked group with the first
@@ -291,9 +291,9 @@ class Propulsion:
         state = self._read_state()
         out, anchors = self._held_out, self._anchors
         out[:] = state
-        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega,
-                         np.full(self.n, h), self.cog, _MAX_ANCHOR, anchors, out,
-                         self._held_twists, self._changed):
+        self._h[0] = h
+        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega, self._h,
+                         self.cog, _MAX_ANCHOR, anchors, out, self._held_twists, self._changed):
             return False
         for k in np.flatnonzero(self._changed).tolist():  # anchors are no batch field:
             turning = bool(omega[k] != 0.0)  # written when a twist changes, or held ones let go
@@ -327,6 +327,14 @@ class Propulsion:
             self._holding = True  # so a release lets them go
             self._held_twists.fill(np.nan)  # every anchor written anew
 
+    def step_apart_in(self, apart: pymunk.Space) -> None:
+        """Robots may step apart, in ``apart`` (substep_split.py): its bodies are read too."""
+        self.spaces.append(apart)
+        self._reads.append(batch.Buffer())
+        self._writes.append(batch.Buffer())
+        self._held_writes.append(batch.Buffer())
+        self._rows = -1
+
     def relocated(self) -> None:
         """Bodies moved between the Spaces: where each sits is looked up at the next read."""
         self._rows = -1
@@ -336,26 +344,34 @@ class Propulsion:
         """Every body's ``fields`` (``width`` floats each) in pymunk's body order, the contact
         Space's rows first, then the apart Space's (``first_only``: the contact Space's alone,
         for robots known to be there)."""
-        parts = []
-        for space, buffer in zip(self.spaces, self._reads):
-            buffer.clear()
-            batch.get_space_bodies(space, fields, buffer)
-            parts.append(np.frombuffer(buffer.float_buf()).reshape(-1, width))
-            if first_only and self._rows >= 0 and parts[0].shape[0] == self._counts[0]:
-                return parts[0]
-        rows = parts[0] if len(parts) == 1 or not parts[1].shape[0] else np.concatenate(parts)
-        counts = [part.shape[0] for part in parts]
+        buffer = self._reads[0]
+        buffer.clear()
+        batch.get_space_bodies(self.space, fields, buffer)
+        rows = np.frombuffer(buffer.float_buf()).reshape(-1, width)
+        if len(self.spaces) == 1:
+            if rows.shape[0] != self._rows:
+                self._index([rows.shape[0]])
+            return rows
+        if first_only and self._rows >= 0 and rows.shape[0] == self._counts[0]:
+            return rows
+        other = self._reads[1]
+        other.clear()
+        batch.get_space_bodies(self.spaces[1], fields, other)
+        apart = np.frombuffer(other.float_buf()).reshape(-1, width)
+        counts = [rows.shape[0], apart.shape[0]]
         if self._rows < 0 or counts != self._counts:  # bodies came, went or moved Space
             self._index(counts)
-        return rows
+        return np.concatenate([rows, apart]) if apart.shape[0] else rows
 
     def _write_rows(self, fields: batch.BodyFields, buffers: list[batch.Buffer],
                     spaces: slice = slice(None)) -> None:
         """Write the output rows of the Spaces (all, or those of ``spaces``)."""
-        for space, buffer, start, stop in list(zip(self.spaces, buffers, self._bounds,
-                                                   self._bounds[1:]))[spaces]:
-            if stop > start:
-                batch.set_space_bodies(space, fields, buffer)
+        if len(self.spaces) == 1:
+            batch.set_space_bodies(self.space, fields, buffers[0])
+            return
+        for k in range(len(self.spaces))[spaces]:
+            if self._bounds[k + 1] > self._bounds[k]:
+                batch.set_space_bodies(self.spaces[k], fields, buffers[k])
 
     def _read_state(self) -> np.ndarray:
         """Every body's (angle, vx, vy, omega), in pymunk's body order."""
@@ -378,9 +394,9 @@ class Propulsion:
         ux, uy, omega = twists
         if not isinstance(ux, np.ndarray):  # a plugin drive's lists
             ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
+        self._h[0], self._h_next[0] = h, h_next
         aim_rows(self._read_state(), self._robot_rows, self._control_rows, members, ux, uy,
-                 omega, np.full(members.shape[0], h), np.full(members.shape[0], h_next),
-                 self.cog, self._out)
+                 omega, self._h, self._h_next, self.cog, self._out)
         self._write_rows(_WRITE, self._writes)
 
     def positions(self) -> Any:

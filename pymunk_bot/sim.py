@@ -130,7 +130,9 @@ class Simulation:
     # ------------------------------------------------------------------ state
     @property
     def space(self) -> pymunk.Space:
-        """The pymunk Space of this run (shared with other copies on a shared ground)."""
+        """The pymunk Space of this run (shared with other copies on a shared ground), with
+        every body in it: in fleets where robots step apart (docs/physics.md), asking for it
+        brings them back, and the rest of the run keeps them in it."""
         return self.world.space
 
     @property
@@ -195,6 +197,8 @@ class Simulation:
             assert ground.apart_space is not None
             split = SplitPlanner(ground.contact_space, ground.apart_space, propulsion.bodies,
                                  gate.movers, first.dt)
+            if len(propulsion.spaces) == 1:  # (a plan made again keeps its propulsion)
+                propulsion.step_apart_in(ground.apart_space)
         return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
                         tuple(s for s in sims if s._reads), caster, gate, split)
 

@@ -71,16 +71,17 @@ def aim_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray
              members: np.ndarray, ux: np.ndarray, uy: np.ndarray, omega: np.ndarray,
              h: np.ndarray, h_next: np.ndarray, cog: np.ndarray, out: np.ndarray) -> None:
     """:func:`aim` for robots ``members`` (their twists, steps ``h`` and next steps ``h_next``
-    [s] in the same order), from the bodies' ``state`` rows (angle, vx, vy, omega) in
-    pymunk's body order: each control body's (vx, vy, omega) into ``out`` (rows in the same
-    order), every other body's as it is."""
+    [s] in the same order; ``h`` or ``h_next`` of length 1: the same for all), from the
+    bodies' ``state`` rows (angle, vx, vy, omega) in pymunk's body order: each control body's
+    (vx, vy, omega) into ``out`` (rows in the same order), every other body's as it is."""
     for r in range(state.shape[0]):
         out[r, 0], out[r, 1], out[r, 2] = state[r, 1], state[r, 2], state[r, 3]
+    each, each_next = h.shape[0] > 1, h_next.shape[0] > 1
     for j in range(members.shape[0]):
         k = members[j]
         r = robot_rows[k]
-        vx, vy = aim(state[r, 0], state[r, 3], ux[j], uy[j], omega[j], h[j], h_next[j],
-                     cog[k, 0], cog[k, 1])
+        vx, vy = aim(state[r, 0], state[r, 3], ux[j], uy[j], omega[j], h[j if each else 0],
+                     h_next[j if each_next else 0], cog[k, 0], cog[k, 1])
         row = control_rows[k]
         out[row, 0] = vx
         out[row, 1] = vy
@@ -92,25 +93,28 @@ def hold_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarra
               ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: np.ndarray, cog: np.ndarray,
               max_anchor: float, anchors: np.ndarray, out: np.ndarray, held: np.ndarray,
               changed: np.ndarray) -> bool:
-    """Every robot held for a step of substeps ``h`` [s] (its own): a turning one by its pivot's
+    """Every robot held for a step of substeps ``h`` [s] (a row: its own; of length 1: the
+    same for all): a turning one by its pivot's
     :func:`anchor` (into ``anchors``; its control body spinning at omega, headed as the robot
     will be at the solve), a straight one aimed once. Control bodies' (angle, vx, vy, omega) into
     ``out`` (rows in pymunk's body order); ``held`` (n, 3), the twists held before (NaN: none),
     becomes these, and ``changed`` says whose differ. False if some anchor would lie beyond
     ``max_anchor`` [m] (``out`` is then incomplete, ``held`` untouched)."""
+    each = h.shape[0] > 1
     for k in range(robot_rows.shape[0]):
         r, row = robot_rows[k], control_rows[k]
         angle, spin = state[r, 0], state[r, 3]
+        hk = h[k if each else 0]
         if omega[k] != 0.0:
-            ax, ay = anchor(ux[k], uy[k], omega[k], h[k], cog[k, 0], cog[k, 1])
+            ax, ay = anchor(ux[k], uy[k], omega[k], hk, cog[k, 0], cog[k, 1])
             if not (abs(ax) <= max_anchor and abs(ay) <= max_anchor):
                 return False
             anchors[k, 0], anchors[k, 1] = ax, ay
-            out[row, 0] = angle + (spin - omega[k]) * h[k]
+            out[row, 0] = angle + (spin - omega[k]) * hk
             out[row, 1], out[row, 2] = 0.0, 0.0
         else:
             anchors[k, 0], anchors[k, 1] = 0.0, 0.0
-            out[row, 1], out[row, 2] = aim(angle, spin, ux[k], uy[k], 0.0, h[k], h[k],
+            out[row, 1], out[row, 2] = aim(angle, spin, ux[k], uy[k], 0.0, hk, hk,
                                            cog[k, 0], cog[k, 1])
         out[row, 3] = omega[k]
     for k in range(robot_rows.shape[0]):
