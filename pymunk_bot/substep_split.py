@@ -3,10 +3,14 @@
 The substep gate (substep_gate.py) makes a Space take substeps whenever a contact can start
 anywhere in it. In a crowd (10,000 robots) some pair is always about to touch, so every robot
 took every substep, though most had nothing within reach. A robot that nothing can reach
-within the coming ticks needs no substeps: it steps apart, in a second pymunk Space
-(``World.apart_space``, the same settings) that takes one step of the whole tick, while the
-others substep in the contact Space. Its joints pull it as they would in the contact Space;
-only the step length differs, as in a tick the gate takes in one step.
+within the coming ticks needs no substeps: it steps apart. Its body, control body and joints
+move to a second pymunk Space (``World.apart_space``, the same settings) that takes one step
+of the whole tick, while the others substep in the contact Space. Its shapes stay in the
+contact Space, which keeps them where the body is (Chipmunk steps a shape's body wherever
+that body is) and answers every query about them. Its joints pull it as they would in the
+contact Space; only the step length differs, as in a tick the gate takes in one step. Where
+the joints pull through the centre of gravity (discs), one solver iteration solves them, and
+the apart Space takes one.
 
 Every ``PLAN_TICKS`` ticks the planner decides which robots step apart until its next
 decision: those that neither another moving body nor a fixed shape can reach before the last
@@ -18,7 +22,8 @@ of those ticks ends, at their top speeds (or faster, if they go faster now):
   shapes (``SAMPLE_SPACING`` apart, so the true distance is at most half of that shorter;
   a k-d tree of them, built once) less the shapes' rounding radius.
 
-It plans only for fleets steered as rows (``Propulsion.batched``), in a world of its own
+It plans only for fleets of ``SPLIT_FROM`` robots or more, steered as rows
+(``Propulsion.batched``), in a world of its own
 (copies of a scenario share one Space), and only while nobody holds the world's Space
 (``World.space``): a LiDAR, a crowd, a metric that queries the world, or a user's code that
 asks for the Space bring every robot back for the rest of the run, so whatever looks at the

@@ -1,5 +1,6 @@
 """The physical world: one pymunk Space with the arena, obstacles and robot bodies, and the
-contact bookkeeping. Build order is fixed (arena, obstacles, robots) for determinism."""
+contact bookkeeping (in large fleets, a second Space where robots nothing can reach step
+apart: substep_split.py). Build order is fixed (arena, obstacles, robots) for determinism."""
 from __future__ import annotations
 
 from typing import Any, Callable
@@ -46,16 +47,15 @@ class World:
             self._on_contact: dict[pymunk.Shape, Callable[[], None]] = {}
             # Robot shapes whose contact impulses someone reads (navmetrics); empty: no cost.
             self._on_solved: dict[pymunk.Shape, list[Callable[[pymunk.Arbiter], None]]] = {}
-            # Robots that nothing can reach within the coming ticks step there, once a tick
-            # (substep_split.py); anyone who asks for the world's Space gets them back.
+            # Robots that nothing can reach within the coming ticks step there, once a tick,
+            # their bodies and joints alone (substep_split.py); anyone who asks for the
+            # world's Space gets them back. Copies on a shared ground never step apart.
             self.apart_space: pymunk.Space | None = None
-            if replica is None:
+            if replica is None and movables:
                 self.apart_space = physics.new_space()
                 self.apart_space.iterations = self._space.iterations  # the joints solved alike
-            for space in (self._space, self.apart_space):
-                if space is not None:
-                    for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
-                        space.on_collision(physics.ROBOT, other, begin=self._begin)
+            for other in (physics.STATIC, physics.MOVABLE, physics.ROBOT):
+                self._space.on_collision(physics.ROBOT, other, begin=self._begin)
             self._fixed: dict[int, Obstacle] = {}
         else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
             self._space, self.map, self.arena_shapes = ground._space, ground.map, ground.arena_shapes
@@ -64,7 +64,7 @@ class World:
             self._on_solved = ground._on_solved
             self._ground = ground
             self._fixed = ground._fixed
-            self.apart_space = None  # copies share one Space and never step apart
+            self.apart_space = None
         self.obstacles: list[Obstacle] = []
         for index, o in enumerate(config.obstacles):  # in the file's order, for determinism
             fixed = self._fixed.get(index)
