@@ -5,10 +5,10 @@ anywhere in it. In a crowd (10,000 robots) some pair is always about to touch, s
 took every substep, though most had nothing within reach. A robot that nothing can reach
 within the coming ticks needs no substeps: it steps apart. Its body, control body and joints
 move to a second pymunk Space (``World.apart_space``, the same settings) that takes one step
-of the whole tick, while the others substep in the contact Space. Its shapes stay in the
-contact Space, which keeps them where the body is (Chipmunk steps a shape's body wherever
-that body is) and answers every query about them. Its joints pull it as they would in the
-contact Space; only the step length differs, as in a tick the gate takes in one step. Where
+of the whole tick, while the others substep in the contact Space. Its shapes leave every
+Space meanwhile (nothing can touch them; the contact Space need not sort them each substep),
+and come back with it. Its joints pull it as they would in the contact Space; only the step
+length differs, as in a tick the gate takes in one step. Where
 the joints pull through the centre of gravity (discs), one solver iteration solves them, and
 the apart Space takes one.
 

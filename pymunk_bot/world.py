@@ -109,8 +109,8 @@ class World:
 
     @property
     def contact_space(self) -> pymunk.Space:
-        """The Space where contacts happen: every body but the robots stepping apart (the
-        engine's own view, which leaves them there)."""
+        """The Space where contacts happen: every body and shape but those of the robots
+        stepping apart (the engine's own view, which leaves them apart)."""
         return self._space
 
     @property
@@ -119,19 +119,23 @@ class World:
         return self.apart_space is not None and not self.whole
 
     def move_apart(self, robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
-        """Move these robots (body, control body) and their joints to the apart Space (their
-        shapes stay)."""
+        """Move these robots (body, control body) and their joints to the apart Space, and
+        take their shapes out of the contact Space."""
         if robots:
             assert self.apart_space is not None
+            # Their shapes leave every Space: nothing can touch them there, and the contact
+            # Space need not sort them each substep (whoever queries the world gathers first).
+            self._space.remove(*[shape for body, _ in robots for shape in body.shapes])
             _move(self._space, self.apart_space, robots)
             self._apart.update(robots)
             self.layout += 1
 
     def move_back(self, robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
-        """Move these robots from the apart Space back to the contact Space."""
+        """Move these robots from the apart Space back to the contact Space, shapes too."""
         if robots:
             assert self.apart_space is not None
             _move(self.apart_space, self._space, robots)
+            self._space.add(*[shape for body, _ in robots for shape in body.shapes])
             for body, _ in robots:
                 del self._apart[body]
             self.layout += 1
@@ -249,10 +253,7 @@ class World:
 def _move(source: pymunk.Space, target: pymunk.Space,
           robots: list[tuple[pymunk.Body, pymunk.Body]]) -> None:
     """Robots (body, control body) with their joints from ``source`` to ``target``, in their
-    order (joints after bodies, as when built). Their shapes stay in the contact Space, where
-    every query sees them: Chipmunk lets a shape's body be stepped by another Space (a "rogue"
-    body to its own), and keeps the shape where the body is; the apart Space then has no
-    shapes to sort, and a step of it is the bodies and joints alone."""
+    order (joints after bodies, as when built)."""
     parts: list[pymunk.Body | pymunk.Constraint] = []
     for body, control in robots:
         parts += [body, control, *control.constraints]
