@@ -28,6 +28,7 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
+from .body_rows import BodyRows
 from .drives.base import SMALL_GROUP
 from .stacking import DriveUnits
 from .steering import aim, aim_rows, anchor, hold_rows
@@ -85,14 +86,11 @@ class Propulsion:
                  stacked: Sequence[tuple[Any, Sequence[int], Sequence[int]]] | None = None,
                  copies: bool = False) -> None:
         self.space = space
-        # The Spaces whose bodies are read as rows, in that order: the contact Space, and the
-        # one robots nothing can reach step in (substep_split.py), once they may.
-        self.spaces = [space]
-        self._reads, self._writes, self._held_writes = [batch.Buffer()], [batch.Buffer()], \
-            [batch.Buffer()]
-        self._bounds = [0, 0]  # each Space's first row, and the end
-        self._h, self._h_next = np.empty(1), np.empty(1)  # one step for every robot aimed
         self.bodies, self.controls = list(bodies), list(controls)
+        # The bodies as rows of batch reads: of the contact Space, and of the one robots
+        # nothing can reach step in (substep_split.py), once they may.
+        self.rows = BodyRows(space, self.bodies, self.controls)
+        self._h, self._h_next = np.empty(1), np.empty(1)  # one step for every robot aimed
         self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         # What the per-robot path advances: each group, or each stacked group with the first
         # row of each copy's part (``stacked`` gives (group, robot indices, part starts)).
@@ -109,16 +107,12 @@ class Propulsion:
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
         self._spins = [(group, spin[idx]) for group, idx in self.groups]  # each group's rows
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
-        self._rows = -1  # bodies the last index was built for (-1: look again)
-        self._counts: list[int] = []  # ... of each Space
         self._holding = False  # the fleet is held as a whole (batched)
         self._held_twists = np.full((self.n, 3), np.nan)  # the twists held (batched; NaN: none)
         self._changed = np.zeros(self.n, dtype=np.bool_)  # whose twist the last hold changed
         # What each control body was last given: a write (a pymunk call) is skipped when the
         # new value is the same, as it is while a robot drives straight at a steady speed.
         self._given: list[tuple[float, float, float]] = [(math.nan,) * 3] * self.n
-        # pymunk's ids of the robots' bodies, then of their control bodies (to find their rows)
-        self._ids = np.array([b.id for b in self.bodies + self.controls], dtype=np.uintp)
         self.pivots = [next(c for c in control.constraints if isinstance(c, pymunk.PivotJoint))
                        for control in self.controls]
         self._held: list[tuple[float, float, float] | None] = [None] * self.n  # twist held
@@ -254,27 +248,18 @@ class Propulsion:
         dt = h * substeps
         near, away = np.flatnonzero(~apart), np.flatnonzero(apart)
         first_next = np.where(apart_next, dt, h_last)  # [s] each robot's next step
-        contact, other = self.spaces
+        contact, other = self.rows.spaces
         for sub in range(substeps):
             twists = self._gather(lambda group: group.advance(h))
+            ux, uy, omega = twists
             if near.size:
-                after = first_next[near] if sub == substeps - 1 else np.full(near.size, h)
-                self._aim_members_for(near, twists, np.full(near.size, h), after, slice(0, 1))
+                self._aim_rows(near, (ux[near], uy[near], omega[near]), h,
+                               first_next[near] if sub == substeps - 1 else h, slice(0, 1))
             contact.step(h)
         if away.size:  # their motors advanced the whole tick, in substeps, as the others'
-            self._aim_members_for(away, twists, np.full(away.size, dt), first_next[away],
-                                  slice(1, 2))
+            self._aim_rows(away, (ux[away], uy[away], omega[away]), dt, first_next[away],
+                           slice(1, 2))
             other.step(dt)
-
-    def _aim_members_for(self, members: np.ndarray, twists: tuple[np.ndarray, ...],
-                         h: np.ndarray, h_next: np.ndarray, spaces: slice) -> None:
-        """Aim robots ``members`` (rows of ``twists``) for steps ``h`` then ``h_next`` [s],
-        one each; write the rows of the Spaces ``spaces`` (where they are)."""
-        ux, uy, omega = (np.ascontiguousarray(t[members]) for t in twists)
-        state = self._read_rows(_READ, 4, first_only=spaces.start == 0 and spaces.stop == 1)
-        aim_rows(state, self._robot_rows, self._control_rows, members, ux, uy, omega, h, h_next,
-                 self.cog, self._out)
-        self._write_rows(_WRITE, self._writes, spaces)
 
     def _gather(self, twists_of: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(ux, uy, omega) of every robot, each group's from ``twists_of(group)``."""
@@ -289,10 +274,10 @@ class Propulsion:
         written) if some robot's anchor would lie beyond _MAX_ANCHOR."""
         ux, uy, omega = twists
         state = self._read_state()
-        out, anchors = self._held_out, self._anchors
+        out, anchors = self.rows.held_out, self._anchors
         out[:] = state
         self._h[0] = h
-        if not hold_rows(state, self._robot_rows, self._control_rows, ux, uy, omega, self._h,
+        if not hold_rows(state, self.rows.robot, self.rows.control, ux, uy, omega, self._h,
                          self.cog, _MAX_ANCHOR, anchors, out, self._held_twists, self._changed):
             return False
         for k in np.flatnonzero(self._changed).tolist():  # anchors are no batch field:
@@ -301,7 +286,7 @@ class Propulsion:
                 self.pivots[k].anchor_a = (float(anchors[k, 0]), float(anchors[k, 1]))
                 self._anchored[k] = turning
         self._holding = True
-        self._write_rows(_READ, self._held_writes)
+        self.rows.write(_READ, held=True)
         return True
 
     def _release_anchors(self) -> None:
@@ -328,54 +313,18 @@ class Propulsion:
             self._held_twists.fill(np.nan)  # every anchor written anew
 
     def step_apart_in(self, apart: pymunk.Space) -> None:
-        """Robots may step apart, in ``apart`` (substep_split.py): its bodies are read too."""
-        self.spaces.append(apart)
-        self._reads.append(batch.Buffer())
-        self._writes.append(batch.Buffer())
-        self._held_writes.append(batch.Buffer())
-        self._rows = -1
+        """Robots may step apart, in ``apart`` (substep_split.py): its bodies are read too
+        (once: a plan made again keeps its propulsion)."""
+        if apart not in self.rows.spaces:
+            self.rows.add(apart)
 
     def relocated(self) -> None:
         """Bodies moved between the Spaces: where each sits is looked up at the next read."""
-        self._rows = -1
-
-    def _read_rows(self, fields: batch.BodyFields, width: int, first_only: bool = False
-                   ) -> np.ndarray:
-        """Every body's ``fields`` (``width`` floats each) in pymunk's body order, the contact
-        Space's rows first, then the apart Space's (``first_only``: the contact Space's alone,
-        for robots known to be there)."""
-        buffer = self._reads[0]
-        buffer.clear()
-        batch.get_space_bodies(self.space, fields, buffer)
-        rows = np.frombuffer(buffer.float_buf()).reshape(-1, width)
-        if len(self.spaces) == 1:
-            if rows.shape[0] != self._rows:
-                self._index([rows.shape[0]])
-            return rows
-        if first_only and self._rows >= 0 and rows.shape[0] == self._counts[0]:
-            return rows
-        other = self._reads[1]
-        other.clear()
-        batch.get_space_bodies(self.spaces[1], fields, other)
-        apart = np.frombuffer(other.float_buf()).reshape(-1, width)
-        counts = [rows.shape[0], apart.shape[0]]
-        if self._rows < 0 or counts != self._counts:  # bodies came, went or moved Space
-            self._index(counts)
-        return np.concatenate([rows, apart]) if apart.shape[0] else rows
-
-    def _write_rows(self, fields: batch.BodyFields, buffers: list[batch.Buffer],
-                    spaces: slice = slice(None)) -> None:
-        """Write the output rows of the Spaces (all, or those of ``spaces``)."""
-        if len(self.spaces) == 1:
-            batch.set_space_bodies(self.space, fields, buffers[0])
-            return
-        for k in range(len(self.spaces))[spaces]:
-            if self._bounds[k + 1] > self._bounds[k]:
-                batch.set_space_bodies(self.spaces[k], fields, buffers[k])
+        self.rows.relocated()
 
     def _read_state(self) -> np.ndarray:
         """Every body's (angle, vx, vy, omega), in pymunk's body order."""
-        return self._read_rows(_READ, 4)
+        return self.rows.read(_READ, 4)
 
     def substep(self, h: float, h_next: float) -> None:
         """Advance every drive by one substep of ``h`` [s] and set the control velocities for
@@ -389,15 +338,21 @@ class Propulsion:
         self._aim_rows(self._everyone, twists, h, h_next)
 
     def _aim_rows(self, members: np.ndarray, twists: tuple[Any, Any, Any], h: float,
-                  h_next: float) -> None:
-        """:meth:`_aim` of robots ``members`` (twists in their order), read and written as rows."""
-        ux, uy, omega = twists
-        if not isinstance(ux, np.ndarray):  # a plugin drive's lists
-            ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)
-        self._h[0], self._h_next[0] = h, h_next
-        aim_rows(self._read_state(), self._robot_rows, self._control_rows, members, ux, uy,
-                 omega, self._h, self._h_next, self.cog, self._out)
-        self._write_rows(_WRITE, self._writes)
+                  h_next: float | np.ndarray, spaces: slice = slice(None)) -> None:
+        """:meth:`_aim` of robots ``members`` (twists in their order), read and written as rows;
+        ``h_next``: one for all, or each member's; ``spaces``: the Spaces they are in (the
+        contact Space's alone: only its rows are read)."""
+        ux, uy, omega = (np.asarray(t, dtype=np.float64) for t in twists)  # lists: a plugin's
+        self._h[0] = h
+        if isinstance(h_next, np.ndarray):
+            after = h_next
+        else:
+            self._h_next[0] = h_next
+            after = self._h_next
+        state = self.rows.read(_READ, 4, first_only=spaces == slice(0, 1))
+        aim_rows(state, self.rows.robot, self.rows.control, members, ux, uy, omega, self._h,
+                 after, self.cog, self.rows.out)
+        self.rows.write(_WRITE, spaces=spaces)
 
     def positions(self) -> Any:
         """Every robot body's position now, (n, 2) [m]: an array, or a list of (x, y) when few."""
@@ -408,11 +363,11 @@ class Propulsion:
     def motion_array(self) -> np.ndarray:
         """Every robot body's (angle [rad], vx, vy [m/s], omega [rad/s]) now, (n, 4), read in
         one call."""
-        return self._read_state()[self._robot_rows]
+        return self._read_state()[self.rows.robot]
 
     def position_array(self) -> np.ndarray:
         """Every robot body's position now, (n, 2) [m], read in one call."""
-        return self._read_rows(batch.BodyFields.POSITION, 2)[self._robot_rows]
+        return self.rows.read(batch.BodyFields.POSITION, 2)[self.rows.robot]
 
     def _aim(self, k: int, twist: tuple[float, float, float], h: float, h_next: float) -> None:
         """Robot k's control body velocity for the next substep, of ``h_next`` [s], after this
@@ -463,26 +418,3 @@ class Propulsion:
         if heading != control.angle:
             _SET_ANGLE(control, heading)
         return True
-
-    def _index(self, counts: list[int]) -> None:
-        """Where each robot's body and control body sit in the rows (``counts``: the bodies
-        of each Space)."""
-        found = []
-        for space in self.spaces:
-            ids = batch.Buffer()
-            batch.get_space_bodies(space, batch.BodyFields.BODY_ID, ids)
-            found.append(np.frombuffer(ids.int_buf(), dtype=np.uintp))
-        every = np.concatenate(found)
-        by_id = np.argsort(every, kind="stable")
-        found_rows = by_id[np.searchsorted(every[by_id], self._ids)]
-        self._robot_rows, self._control_rows = found_rows[:self.n], found_rows[self.n:]
-        self._bounds = np.concatenate([[0], np.cumsum(counts)]).tolist()
-        rows = self._bounds[-1]
-        self._out = np.zeros((rows, 3))
-        self._held_out = np.zeros((rows, 4))
-        for k, (start, stop) in enumerate(zip(self._bounds, self._bounds[1:])):
-            if stop > start:
-                self._writes[k].set_float_buf(self._out[start:stop])
-                self._held_writes[k].set_float_buf(self._held_out[start:stop])
-        self._rows, self._counts = rows, list(counts)
-

@@ -197,8 +197,7 @@ class Simulation:
             assert ground.apart_space is not None
             split = SplitPlanner(ground.contact_space, ground.apart_space, propulsion.bodies,
                                  gate.movers, first.dt)
-            if len(propulsion.spaces) == 1:  # (a plan made again keeps its propulsion)
-                propulsion.step_apart_in(ground.apart_space)
+            propulsion.step_apart_in(ground.apart_space)
         return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
                         tuple(s for s in sims if s._reads), caster, gate, split)
 

@@ -82,7 +82,8 @@ class FixedOutlines:
                 body = None
             rounding = max(rounding, float(getattr(shape, "radius", 0.0)))
             for a, b in zip(corners, corners[1:]):
-                along = np.linspace(0.0, 1.0, max(2, math.ceil(math.dist(a, b) / SAMPLE_SPACING) + 1))
+                samples = max(2, math.ceil(math.dist(a, b) / SAMPLE_SPACING) + 1)
+                along = np.linspace(0.0, 1.0, samples)
                 local = np.array(a) + np.outer(along, np.subtract(b, a))
                 points.append(local if body is None else _to_world(body, local))
         cloud = np.concatenate(points) if points else np.empty((0, 2))

@@ -58,7 +58,8 @@ class World:
                 self._space.on_collision(physics.ROBOT, other, begin=self._begin)
             self._fixed: dict[int, Obstacle] = {}
         else:  # a copy on a shared ground: its space, fixed geometry, caster and contacts
-            self._space, self.map, self.arena_shapes = ground._space, ground.map, ground.arena_shapes
+            self._space, self.map = ground.contact_space, ground.map
+            self.arena_shapes = ground.arena_shapes
             self.substeps, self.need = ground.substeps, ground.need
             self._on_contact = ground._on_contact
             self._on_solved = ground._on_solved
