@@ -17,7 +17,8 @@ def advance_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray, pending
                  goal: np.ndarray, tolerance2: np.ndarray, time: np.ndarray,
                  time_to_goal: np.ndarray, distance_to_goal: np.ndarray,
                  reached: np.ndarray) -> int:
-    """Add each robot's step from ``last`` to ``xy`` (n, 2) [m] to ``distance`` [m]; of the
+    """Add each robot's step from ``last`` to ``xy`` (n, 2) [m] to ``distance`` [m] and copy
+    ``xy`` into ``last`` (the fleet's positions change in place: copies' views stay live); of the
     ``pending`` robots (their goals (p, 2) [m] and squared tolerances [m^2] in that order),
     those now within tolerance get ``time`` [s] (each robot's, or one for all: shape (1,))
     and their path length, and are flagged in ``reached`` (p,). Returns how many were
@@ -27,6 +28,7 @@ def advance_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray, pending
         dx = xy[i, 0] - last[i, 0]
         dy = xy[i, 1] - last[i, 1]
         distance[i] += math.sqrt(dx * dx + dy * dy)
+        last[i, 0], last[i, 1] = xy[i, 0], xy[i, 1]
     count = 0
     for j in range(pending.shape[0]):
         i = pending[j]

@@ -20,6 +20,7 @@ import numpy as np
 import pymunk
 
 from .config import ScenarioConfig
+from .batch import Batch
 from .physics import MAX_REPLICAS
 from .propulsion import Propulsion
 from .sim import Simulation
@@ -49,6 +50,7 @@ class Replicas:
         self.substeps = self.sims[0].substeps
         self._propulsion: Propulsion | None = None
         self._stack: Stack | None = None
+        self._batch: Batch | None = None
         self._assemble()
 
     def reset(self, index: int, seed: int | None = None) -> None:
@@ -104,8 +106,8 @@ class Replicas:
     def step(self) -> None:
         """Advance every copy by one physics step of ``dt``: the tick of
         :meth:`Simulation.step <pymunk_bot.sim.Simulation.step>` for all of them at once."""
-        assert self._propulsion is not None
-        Simulation.step_together(self._plan, self._propulsion, self._stack, self._spans)
+        assert self._batch is not None
+        self._batch.step()
 
     def _assemble(self) -> None:
         """One Propulsion for every copy's robots and their bookkeeping stacked (both rebuilt
@@ -130,5 +132,5 @@ class Replicas:
                                 self._stack.drive_groups if self._stack else None, copies=True)
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
-        self._propulsion, self._spans = propulsion, spans
-        self._plan = Simulation.plan(self.sims, self.ground, propulsion)
+        self._propulsion = propulsion
+        self._batch = Batch(self.sims, self.ground, propulsion, spans, self._stack)

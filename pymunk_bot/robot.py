@@ -122,8 +122,7 @@ class Fleet:
             times = self._now
             times[0] = time
         p, reached = self._pending, self._reached
-        last, self.xy = self.xy, xy
-        if advance_rows(xy, last, self.distance, p, self._pending_goal, self._pending_tolerance2,
+        if advance_rows(xy, self.xy, self.distance, p, self._pending_goal, self._pending_tolerance2,
                         times, self.time_to_goal, self.distance_to_goal, reached):
             self._pending = p[~reached]
             self._refresh_targets()
@@ -319,10 +318,9 @@ class Robot:
         for shape in self.shapes:  # in the Space that holds them (their body may step apart)
             if shape.space is not None:
                 shape.space.reindex_shape(shape)
-        fleet = self._fleet  # the jump is no distance travelled (a copy: xy may be shared)
-        xy = fleet.xy.copy()
-        xy[self._i] = (x, y)
-        fleet.xy = xy
+        # The jump is no distance travelled. In place: a stacked copy's rows are views of
+        # the stack's, which does the copies' bookkeeping.
+        self._fleet.xy[self._i] = (x, y)
 
     def readings(self) -> dict:
         """Latest readings of the sensors beyond LiDAR and odometry, by name (e.g. "imu")."""

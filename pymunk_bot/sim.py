@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import math
 import numbers
-import time as wallclock
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 import pymunk
 
+from .batch import Batch, single
 from .build import Built, build
 from .config import ScenarioConfig, load_scenario
 from .config.checks import check_seed
@@ -19,34 +18,17 @@ from .expectations import Check, Verdict, evaluate, judge
 from .localization.base import LocalizerInputs
 from .localization.score import LocalizationScore
 from .observing import Observer, observe
-from .propulsion import Propulsion
 from .readings import Observation
 from .robot import Robot, RobotsByName
-from .sensors.lidar import Lidar
 from .sensors.schedule import TIME_TOLERANCE, ScheduleArray
-from .substep_gate import SubstepGate
-from .substep_split import SPLIT_FROM, SplitPlanner
 from .world import World
-
-
-@dataclass(frozen=True)
-class TickPlan:
-    """Runs that tick together (one, or copies sharing a Space), and which of them have work
-    in each phase: controllers or actors before the physics, sensors and localizers after it,
-    and the ray caster their LiDARs share (None: no LiDAR)."""
-
-    sims: tuple["Simulation", ...]
-    acting: tuple["Simulation", ...]
-    reading: tuple["Simulation", ...]
-    caster: Any
-    gate: SubstepGate | None  # substeps where contacts can start (the default); None: every tick
-    split: SplitPlanner | None = None  # robots nothing can reach step apart (batched fleets)
 
 
 class Simulation:
     """A scenario in motion. Build it from a file, a dict or a config; reset rebuilds from the seed.
 
-    One tick (:meth:`step`) runs in the order :meth:`step_together` gives.
+    One tick (:meth:`step`) runs in the order :meth:`Batch.step <pymunk_bot.batch.Batch.step>`
+    gives: a run of its own is a batch of one.
 
     ``ground`` and ``replica``: this run is copy ``replica`` of its scenario on a ground shared
     with other copies (:class:`~pymunk_bot.replicas.Replicas` builds, steps and resets these).
@@ -120,12 +102,12 @@ class Simulation:
             robot.localizer.update(self._localizer_inputs(robot, 0.0))
         self._score(0.0)
         # What this run does around the physics, so a tick skips the phases it has no work in.
-        self._acts = bool(self._controlled or self.world.actors or self.config.events)
-        self._reads = bool(self._sensors or self._mapping or self._localized or self._scores
-                           or built.metrics)
-        # A copy on a shared ground ticks in its Replicas' plan, never in one of its own.
-        self._plan = None if self._ground is not None else \
-            Simulation.plan((self,), self.world, built.propulsion)
+        self.acts = bool(self._controlled or self.world.actors or self.config.events)
+        self.reads = bool(self._sensors or self._mapping or self._localized or self._scores
+                          or built.metrics)
+        self.has_lidars = bool(self._lidars)
+        # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
+        self._batch = None if self._ground is not None else single(self)
 
     # ------------------------------------------------------------------ state
     @property
@@ -145,16 +127,15 @@ class Simulation:
         """Ticks so far (since the last reset) that took one pymunk step: no contact could
         start in them, or everything went slowly enough for one step to hold contacts
         (adaptive substeps, a run of its own; 0 otherwise)."""
-        gate = self._plan.gate if self._plan is not None else None
-        return gate.single_ticks if gate is not None else 0
+        return self._batch.single_substep_ticks if self._batch is not None else 0
 
     @property
     def pymunk_steps(self) -> int:
         """pymunk steps taken so far (since the last reset): ``substeps`` per tick with a named
         count; with adaptive substeps, one per tick where no contact can start and as many as
         the speeds need elsewhere (of a run of its own)."""
-        gate = self._plan.gate if self._plan is not None else None
-        return gate.steps if gate is not None else self.steps * self.substeps
+        steps = self._batch.pymunk_steps if self._batch is not None else None
+        return self.steps * self.substeps if steps is None else steps
 
     def __repr__(self) -> str:
         return (f"Simulation({self.config.name!r}, seed={self.seed}, t={self.time:.3f} s of "
@@ -170,115 +151,18 @@ class Simulation:
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
-        Simulation.step_together(self._own_plan(), self._built.propulsion)
+        self._own_batch().step()
 
-    def _own_plan(self) -> TickPlan:
-        """This run's tick plan (a copy on a shared ground has none: its Replicas ticks it)."""
-        if self._plan is None:
+    def _own_batch(self) -> Batch:
+        """This run's batch of one (a copy on a shared ground has none: its Replicas ticks it)."""
+        if self._batch is None:
             raise RuntimeError("a copy on a shared ground advances with its Replicas.step()")
-        return self._plan
+        return self._batch
 
-    @staticmethod
-    def plan(sims: Sequence["Simulation"], ground: World, propulsion: Propulsion) -> TickPlan:
-        """Which of ``sims`` (runs in ``ground``'s Space, steered by ``propulsion``) have work
-        in each phase of a tick, and the Space's substep gate when its substeps are adaptive
-        (made again after any of them is rebuilt: a new gate's first tick takes every
-        substep)."""
-        first = sims[0]
-        gate = None
-        if first.world.adaptive:
-            gate = SubstepGate(ground.contact_space, [m for sim in sims for m in sim._built.movers],
-                               first.substeps, first.dt, ground.take_disturbed, ground.need,
-                               propulsion.fastest_driven)
-        caster = first.world.ray_caster() if any(s._lidars for s in sims) else None
-        split = None
-        if (gate is not None and propulsion.batched and ground.can_split
-                and propulsion.n >= SPLIT_FROM):
-            assert ground.apart_space is not None
-            split = SplitPlanner(ground.contact_space, ground.apart_space, propulsion.bodies,
-                                 gate.movers, first.dt)
-            propulsion.step_apart_in(ground.apart_space)
-        return TickPlan(tuple(sims), tuple(s for s in sims if s._acts),
-                        tuple(s for s in sims if s._reads), caster, gate, split)
-
-    @staticmethod
-    def step_together(plan: TickPlan, propulsion: Propulsion, stack: Any = None,
-                      spans: Sequence[tuple[int, int]] | None = None) -> None:
-        """One tick of ``dt`` for every run of ``plan``: the one place where the tick order lives.
-
-        The runs (``plan``, from :meth:`plan`) share ``propulsion`` and its pymunk Space: one
-        run (:meth:`step`), or copies of one scenario (:meth:`Replicas.step
-        <pymunk_bot.replicas.Replicas.step>`), whose robots are ``propulsion``'s in ``spans``
-        (start, stop) and whose bookkeeping may be stacked (``stack``,
-        :mod:`pymunk_bot.stacking`).
-
-        1. controllers whose period has come read their observation and set a command; scenario
-           events fire; actors (moving obstacles, pedestrians) set their motion;
-        2. ``substeps`` times: every drive advances and steers its control body, then pymunk steps
-           (in fleets of 2000 robots and more, those nothing can reach are then steered once
-           and step once, apart: substep_split.py);
-        3. bookkeeping: each run's clock, distance and goals, odometry from the encoders;
-        4. sensors whose period has come read the world (every body has moved): every due LiDAR
-           of every run in one cast;
-        5. localizers fold in odometry and scans, maps integrate scans, the estimate is scored;
-        6. metrics that an expectation needs; then each run's observers (loggers, recorders, views).
-        """
-        started = wallclock.perf_counter()
-        sims = plan.sims
-        for sim in plan.acting:
-            sim._before_physics()
-        first, gate, split = sims[0], plan.gate, plan.split
-        if split is not None and split.apart.any() and split.layout != first.world.layout:
-            split.reset()  # someone gathered the robots (asked for the world's Space)
-            propulsion.relocated()
-            assert gate is not None
-            gate.relocated()
-        if gate is None:
-            propulsion.step(first.dt / first.substeps, first.substeps)
-        elif split is not None and first.world.can_split:  # substep_split.py
-            disturbed = first.world.take_disturbed()
-            if disturbed:  # a teleport: every robot back, decided anew
-                split.settle(first.world, propulsion, gate, np.zeros(split.n, dtype=bool))
-                split.reset(teleported=True)
-            apart, following_apart = split.apart, split.next_apart(propulsion)
-            substeps, following = gate.counts_apart(
-                disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
-            propulsion.step(first.dt / substeps, substeps, first.dt / following,
-                            (apart, following_apart))
-            split.settle(first.world, propulsion, gate, following_apart)
-            first.world.substep = first.dt / following
-        else:  # one pymunk step where no contact can start (substep_gate.py)
-            substeps, following = gate.counts()
-            propulsion.step(first.dt / substeps, substeps, first.dt / following)
-            for sim in sims:  # what the bodies' velocities now move in, for the IMUs
-                sim.world.substep = first.dt / following
-        if stack is not None:
-            nows = [sim._advance_clock() for sim in sims]
-            stack.bookkeep(propulsion.position_array(), nows)
-        elif spans is None:
-            nows = [first._bookkeep(propulsion.positions())]
-        else:
-            positions = propulsion.positions()
-            nows = [sim._bookkeep(positions[start:stop]) for sim, (start, stop) in zip(sims, spans)]
-        caster = plan.caster
-        if caster is not None:
-            caster.begin_frame()  # every cast of this tick sees one scene
-            due = [(lidar, now) for sim, now in zip(sims, nows) for lidar in sim._due_lidars(now)]
-            if due:
-                Lidar.scan_all(caster, due)
-        for sim in plan.reading:
-            now = sim.time
-            sim._read_other_sensors(now)
-            sim._after_sensors(now)
-        share = (wallclock.perf_counter() - started) / len(sims)
-        for sim in sims:
-            sim.wall_time += share
-            for observer in sim.observers:
-                observer(sim)
-
-    # The tick's phases, in the order step_together runs them.
-    def _before_physics(self) -> None:
-        """Controllers whose period has come set commands; actors set their motion."""
+    # The tick's phases, in the order Batch.step runs them.
+    def act(self) -> None:
+        """Controllers whose period has come set commands; events fire; actors set their
+        motion."""
         now = self.steps * self.dt  # self.time, inlined: this runs every tick
         if self._events.due(now):  # scenario events (teleports: events.py)
             self._events.fire(now, self.robots)
@@ -286,20 +170,33 @@ class Simulation:
         for actor in self.world.actors:
             actor.before_step(now, self.dt)
 
-    def _bookkeep(self, positions: Any) -> float:
-        """After the physics: the clock, distance and goals from the robots' new positions,
-        odometry from the encoders. Returns the time now [s]."""
-        now = self._advance_clock()
+    def bookkeep(self, positions: Any) -> float:
+        """After the physics: the clock, distance and goals from the robots' new positions
+        ((n, 2) [m], an array or a sequence of (x, y)), odometry from the encoders. Returns
+        the time now [s]."""
+        now = self.tick_clock()
         self._built.fleet.advance(positions, now)
         for drive, odometry in self._odometry:
             odometry.update(drive.take_travel())
         return now
 
-    def _advance_clock(self) -> float:
+    def tick_clock(self) -> float:
         """One tick more; returns the time now [s]."""
         self.steps += 1
         now = self.world.time = self.steps * self.dt
         return now
+
+    def read(self, now: float) -> None:
+        """After the LiDARs: the other sensors, then maps, localizers, scores and metrics."""
+        for sensor in self._sensors:
+            sensor.update(now)
+        self._after_sensors(now)
+
+    def finish(self, wall_time: float) -> None:
+        """The tick is over: it took this run ``wall_time`` [s]; the observers see it."""
+        self.wall_time += wall_time
+        for observer in self.observers:
+            observer(self)
 
     def _after_sensors(self, now: float) -> None:
         """Maps, localizers, localization scores and metrics, once the sensors have read."""
@@ -318,9 +215,8 @@ class Simulation:
         """Advance ``duration`` simulated seconds (rounded to whole steps)."""
         if not (isinstance(duration, numbers.Real) and math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be a finite number >= 0 (got {duration!r})")
-        step = Simulation.step_together
         for _ in range(round(duration / self.dt)):  # read anew each tick: an observer may reset
-            step(self._own_plan(), self._built.propulsion)
+            self._own_batch().step()
 
     def attach(self, observer: Any) -> None:
         """Add ``observer`` (called after every step) once: if it has ``on_reset(sim)``, that
@@ -377,16 +273,12 @@ class Simulation:
                 robot = robots[i]
                 robot.follow(robot.controller.compute(observation))
 
-    def _due_lidars(self, now: float) -> list[Any]:
+    def due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
         schedule = self._lidar_schedule
         if now + TIME_TOLERANCE < schedule.earliest:  # most ticks (and no LiDAR: never due)
             return []
         return [self._lidars[k] for k in schedule.due(now)]
-
-    def _read_other_sensors(self, now: float) -> None:
-        for sensor in self._sensors:
-            sensor.update(now)
 
     def _score(self, now: float) -> None:
         for name, score in self._scores.items():

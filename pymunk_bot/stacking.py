@@ -89,7 +89,7 @@ class Stack:
         return cls(sims)
 
     def bookkeep(self, positions: np.ndarray, nows: list[float]) -> None:
-        """What each copy's ``Simulation._bookkeep`` does after the physics, for all copies:
+        """What each copy's ``Simulation.bookkeep`` does after the physics, for all copies:
         distance and goals from the robots' positions (n, 2) [m] at each copy's time ``nows``
         [s], and odometry from the encoders."""
         times = np.repeat(nows, self.per_copy)  # each robot its copy's time
