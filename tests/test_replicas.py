@@ -7,9 +7,9 @@ import pytest
 
 from pymunk_bot.config import load_scenario, parse_scenario
 from pymunk_bot.config.substeps import required_substeps
-from pymunk_bot.physics import MAX_REPLICAS
-from pymunk_bot.replicas import Replicas
-from pymunk_bot.sim import Simulation
+from pymunk_bot.physics.settings import MAX_REPLICAS
+from pymunk_bot.engine.replicas import Replicas
+from pymunk_bot.engine.simulation import Simulation
 
 
 def _named(data: dict, name: str):

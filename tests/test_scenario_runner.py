@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from pymunk_bot.cli import main
-from pymunk_bot.scenario_tests import discover
+from pymunk_bot.cli.scenario_tests import discover
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = sorted((ROOT / "scenarios").glob("*.yaml"))

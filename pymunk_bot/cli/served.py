@@ -25,7 +25,7 @@ class ServedOutputs:
         if self.server is None:
             sim.run(duration)
             return
-        from ..foxglove.live import run_paced
+        from pymunk_bot.foxglove.live import run_paced
 
         run_paced(sim, duration, self.speed)
 

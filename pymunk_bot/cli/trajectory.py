@@ -11,9 +11,9 @@ import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import ScenarioError
-from ..localization.tum import KINDS, TrajectoryRecorder
-from ..results import writable_problem
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.localization.tum import KINDS, TrajectoryRecorder
+from pymunk_bot.outcomes.results import writable_problem
 
 OPTION = "--trajectory-out"
 

@@ -15,9 +15,9 @@ from pathlib import Path
 import foxglove
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
-from ..results import temp_beside
-from .frames import METADATA_NAME
-from .publisher import Publisher, SimPublisher
+from pymunk_bot.outcomes.results import temp_beside
+from pymunk_bot.foxglove.frames import METADATA_NAME
+from pymunk_bot.foxglove.publisher import Publisher, SimPublisher
 
 PROFILE = ""  # Foxglove's own schemas: no ROS profile
 CHUNK_SIZE = 4 * 1024 * 1024  # [bytes] uncompressed per chunk; big chunks compress better

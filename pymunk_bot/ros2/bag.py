@@ -13,10 +13,10 @@ import weakref
 from pathlib import Path
 from typing import Any
 
-from ..foxglove.snapshot import geometry_of_log, snapshots_of_log
-from ..results import temp_beside
-from .messages import LiveMessages, Outgoing, RosMessages, typestore
-from .names import latched, qos_yaml
+from pymunk_bot.foxglove.snapshot import geometry_of_log, snapshots_of_log
+from pymunk_bot.outcomes.results import temp_beside
+from pymunk_bot.ros2.messages import LiveMessages, Outgoing, RosMessages, typestore
+from pymunk_bot.ros2.names import latched, qos_yaml
 
 PROFILE = "ros2"
 CHUNK_SIZE = 4 * 1024 * 1024  # [bytes] uncompressed per chunk
@@ -115,11 +115,11 @@ class Ros2BagLogger:
 
 
 def write_bag(log, path: str | Path) -> int:
-    """Write a :class:`~pymunk_bot.runlog.RunLog` as a ROS 2 bag, atomically; returns the
+    """Write a :class:`~pymunk_bot.outcomes.runlog.RunLog` as a ROS 2 bag, atomically; returns the
     number of messages. ``/map`` is rasterised from the fixed shapes the log keeps. A log holds
     no plans, localizer estimates or IMU readings: those topics are absent, and ``map`` ->
     ``odom`` is the identity (odometry is the estimate)."""
-    from .worldmap import geometry_grid
+    from pymunk_bot.ros2.worldmap import geometry_grid
 
     bag = Ros2Bag(path)
     try:

@@ -21,14 +21,14 @@ import time
 import weakref
 from typing import Any, Callable
 
-from ..errors import ScenarioError
-from ..foxglove.frames import DEFAULT_HOST
-from ..foxglove.snapshot import geometry_of_sim
-from .commands import CommandInbox
-from .jsonmsg import dumps, loads, to_plain
-from .messages import LiveMessages, Outgoing, typestore
-from .names import DEFAULT_PORT, latched, robot_names
-from .protocol import BadRequest, Catalog, ClientState, Protocol, status
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.foxglove.frames import DEFAULT_HOST
+from pymunk_bot.foxglove.snapshot import geometry_of_sim
+from pymunk_bot.ros2.commands import CommandInbox
+from pymunk_bot.ros2.jsonmsg import dumps, loads, to_plain
+from pymunk_bot.ros2.messages import LiveMessages, Outgoing, typestore
+from pymunk_bot.ros2.names import DEFAULT_PORT, latched, robot_names
+from pymunk_bot.ros2.protocol import BadRequest, Catalog, ClientState, Protocol, status
 
 CLIENT_QUEUE = 200  # messages waiting for one client; older ones are dropped
 MAX_FRAME = 1 << 20  # [bytes] largest request accepted

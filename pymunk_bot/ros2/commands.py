@@ -16,9 +16,9 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-from ..errors import ScenarioError
-from .jsonmsg import BadMessage, parse_pose_stamped, parse_twist
-from .names import DEFAULT_COMMAND_TIMEOUT, MAP_FRAME
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.ros2.jsonmsg import BadMessage, parse_pose_stamped, parse_twist
+from pymunk_bot.ros2.names import DEFAULT_COMMAND_TIMEOUT, MAP_FRAME
 
 MAX_TIMEOUT = 3600.0  # [s]
 MAX_PENDING = 10_000  # commands waiting for the next step; more are dropped (a flood)

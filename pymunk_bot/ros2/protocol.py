@@ -12,9 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-from .commands import CommandInbox, command_of
-from .jsonmsg import BadMessage, loads
-from .names import (CLOCK_TOPIC, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC, TYPES,
+from pymunk_bot.ros2.commands import CommandInbox, command_of
+from pymunk_bot.ros2.jsonmsg import BadMessage, loads
+from pymunk_bot.ros2.names import (CLOCK_TOPIC, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC, TYPES,
                     command_topics, robot_names)
 
 NODE = "/pymunk_bot"

@@ -11,7 +11,7 @@ import pytest
 from builders import robot, scenario
 
 from pymunk_bot import Simulation
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.foxglove.live import run_paced
 from pymunk_bot.ros2.bridge import serve_sim
 from pymunk_bot.ros2.commands import CommandInbox
