@@ -78,11 +78,30 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
         outputs.run_headless(sim, duration)
     result = sim.result()
     verdict = sim.verdict()
-    outputs.finish(sim)  # the run log, the built map (--map-out)
-    if args.out:
-        write_json(args.out, result)
+    unwritten = None
+    if args.out:  # first: the result survives a disk that the logs below fill
+        try:
+            write_json(args.out, result)
+        except OSError:
+            unwritten = args.out  # again below: a log that filled the disk is then removed
+    failed = outputs.finish(sim)  # the run log, the built map (--map-out), trajectories
+    if unwritten is not None:
+        try:
+            write_json(unwritten, result)
+        except OSError as exc:
+            failed.insert(0, exc)
     _print_summary(result, verdict.lines(), watched)
+    for problem in failed:  # after the verdict, so the last line says what was lost
+        print(f"error: {write_failure(problem)}", file=sys.stderr)
+    if failed:
+        return EXIT_BAD_INPUT  # the run is told, but a file asked for is missing
     return EXIT_OK if verdict.passed else EXIT_EXPECTATION_FAILED
+
+
+def write_failure(exc: OSError) -> str:
+    """``FILE: problem`` for an output that could not be written (a full disk)."""
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"{where}{exc.strerror or exc} (not written)"
 
 
 def _print_summary(result: dict, verdict_lines: list[str], watched: float | None = None) -> None:

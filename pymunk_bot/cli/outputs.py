@@ -105,22 +105,35 @@ class RunOutputs:
         print(f"wrote {self.record} ({frames} frames in {spent:.1f} s: {frames / spent:.0f} "
               f"frames/s, {duration / spent:.2f}x real time)")
 
-    def finish(self, sim=None) -> None:
-        """Write the run log and the built map (--map-out), if asked for."""
+    def finish(self, sim=None) -> list[OSError]:
+        """Write the run log, the built map (--map-out) and the trajectories, if asked for.
+        Each is tried, whatever happened to the others: returns the writes that failed (a
+        full disk: an OSError naming the file), after keeping what was complete."""
+        failed: list[OSError] = []
+        steps: list = []
         if self.map_out is not None and sim is not None:
-            self.map_out.save(sim)
+            steps.append(lambda: self.map_out.save(sim))
         if self.trajectory is not None and sim is not None:
-            self.trajectory.save(sim)
+            steps.append(lambda: self.trajectory.save(sim))
         if self.logger is not None:
-            if self.log_path is None:
-                raise RuntimeError("a run logger needs its log path (--log)")
-            self.logger.save(self.log_path)
-            steps = len(self.logger.log().time) - 1
-            print(f"wrote {self.log_path} ({steps} steps)")
+            steps.append(self._save_log)
         if self.foxglove is not None:
-            self.foxglove.finish()
+            steps.append(self.foxglove.finish)
         if self.ros2 is not None:
-            self.ros2.finish()
+            steps.append(self.ros2.finish)
+        for step in steps:
+            try:
+                step()
+            except OSError as exc:
+                failed.append(exc)
+        return failed
+
+    def _save_log(self) -> None:
+        if self.logger is None or self.log_path is None:
+            raise RuntimeError("a run logger needs its log path (--log)")
+        self.logger.save(self.log_path)
+        steps = len(self.logger.log().time) - 1
+        print(f"wrote {self.log_path} ({steps} steps)")
 
 
 def prepare_outputs(args, sim) -> RunOutputs:
