@@ -16,7 +16,8 @@ import sys
 import warnings
 from pathlib import Path
 
-# The public API (/work/shared/CONTRACT.md and the docs' examples), in the order of the index.
+# The public API (the Python API the README and docs/tutorial.md show, and what the docs'
+# examples import), in the order of the index.
 PUBLIC_MODULES = [
     "pymunk_bot", "pymunk_bot.engine.simulation", "pymunk_bot.robots.robot", "pymunk_bot.engine.replicas",
     "pymunk_bot.robots.command", "pymunk_bot.config.errors", "pymunk_bot.config", "pymunk_bot.plugins",

@@ -6,8 +6,7 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
-
+from pymunk_bot.config.yaml_source import parse_yaml, read_text
 from pymunk_bot.config.errors import ScenarioError
 
 
@@ -27,14 +26,14 @@ def controller_choice(spec: str) -> ControllerChoice:
     plugins.load()
     path = Path(spec)
     if path.suffix.lower() in (".yaml", ".yml", ".json") or path.is_file():
-        try:
-            text = path.read_text(encoding="utf-8")
-            data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-        except OSError as exc:
-            raise ScenarioError(spec, "", f"cannot read: {exc.strerror or exc}") from None
-        except (ValueError, yaml.YAMLError) as exc:
-            raise ScenarioError(spec, "", f"not valid YAML/JSON: {exc}".replace("\n", " ")
-                                ) from None
+        text = read_text(path, spec)  # as scenario files are read: bounded, no pipes
+        if path.suffix.lower() == ".json":
+            try:
+                data = json.loads(text)
+            except (ValueError, RecursionError) as exc:  # RecursionError: nested too deeply
+                raise ScenarioError(spec, "", f"not valid JSON: {exc}") from None
+        else:
+            data, _ = parse_yaml(text, spec)
         block = data.get("controller") if isinstance(data, dict) else None
         if not isinstance(block, dict) or "type" not in block:
             raise ScenarioError(spec, "controller", "the file must hold one 'controller:' "

@@ -90,12 +90,15 @@ def run_chunk(base: dict, source: str, chunk: list[tuple[int, int, int, int]],
 
 def episodes(entries: list[Entry], choices: list[ControllerChoice], seeds: list[int]
              ) -> list[tuple[int, int, int, int]]:
-    """Every (row index, entry, controller, seed), in row order."""
+    """Every (row index, entry, controller, seed), in row order; ValueError naming the
+    product when there would be more than MAX_EPISODES (counted before any is listed)."""
+    count = len(entries) * len(choices) * len(seeds)
+    if count > MAX_EPISODES:
+        raise ValueError(f"--seeds: {len(entries)} scenarios x {len(choices)} controllers x "
+                         f"{len(seeds)} seeds = {count} episodes; at most {MAX_EPISODES} per "
+                         "benchmark")
     every = [(e, c, s) for e in range(len(entries)) for c in range(len(choices)) for s in seeds]
-    out = [(i, e, c, s) for i, (e, c, s) in enumerate(every)]
-    if len(out) > MAX_EPISODES:
-        raise ValueError(f"{len(out)} episodes: at most {MAX_EPISODES} per benchmark")
-    return out
+    return [(i, e, c, s) for i, (e, c, s) in enumerate(every)]
 
 
 def check_episodes(entries: list[Entry], choices: list[ControllerChoice], seed: int,
@@ -115,15 +118,15 @@ def run_benchmark(entries: list[Entry], choices: list[ControllerChoice], seeds: 
     """Every episode's row, in order (``run``: suite scenario, controller, seed); with ``out`` (.csv
     or .parquet) the table is also written atomically. Bad input raises ScenarioError or
     ValueError before anything runs."""
-    from tqdm import tqdm
-
-    from pymunk_bot.sweep.backends import default_workers, run_chunks
+    from pymunk_bot.sweep.backends import check_workers, default_workers, run_chunks
     from pymunk_bot.sweep.output import check_output, write_table
+    from pymunk_bot.sweep.progress import Progress
 
     thresholds = thresholds or Thresholds()
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("--seeds: no seeds")
+    check_workers(workers)
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be > 0 (got {duration})")
     if out is not None:
@@ -136,15 +139,11 @@ def run_benchmark(entries: list[Entry], choices: list[ControllerChoice], seeds: 
     base = {"entries": [asdict(e) for e in entries],
             "controllers": [asdict(c) for c in choices], "thresholds": asdict(thresholds)}
     rows: list[dict[str, Any]] = []
-    bar = tqdm(total=len(todo), unit="episode", desc="benchmark",
-               disable=None if progress else True, leave=False)
-    try:
+    with Progress(len(todo), "benchmark", "episodes", enabled=progress) as shown:
         for done in run_chunks(backend, base, "benchmark", chunks, duration, workers, address,
                                None, task=run_chunk):
             rows.extend(done)
-            bar.update(len(done))
-    finally:
-        bar.close()
+            shown.update(len(done))
     rows.sort(key=lambda r: r["run"])
     if out is not None:
         write_table(Path(out), rows)

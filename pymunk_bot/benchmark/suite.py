@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
-import yaml
 from pydantic import Field, ValidationError
 
 from pymunk_bot.config.loader import shipped_scenario_dirs
 from pymunk_bot.config.types import Duration, Name, PositiveFloat, PositiveInt, Section, Vec2
+from pymunk_bot.config.yaml_source import parse_yaml, read_text
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.benchmark.layouts import LAYOUTS, LayoutError, draw_layout
 
@@ -73,12 +73,10 @@ def shipped_suites() -> dict[str, Path]:
 
 
 def _read(path: Path) -> Any:
-    try:
-        return yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ScenarioError(str(path), "", f"cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise ScenarioError(str(path), "", f"not valid YAML: {exc}".replace("\n", " ")) from None
+    """The file's data, read as scenario files are: a regular file of bounded size (never a
+    pipe or a device), UTF-8, bounded YAML."""
+    data, _ = parse_yaml(read_text(path, str(path)), str(path))
+    return data
 
 
 def _spec(path: Path, data: dict) -> GeneratorSpec:

@@ -16,7 +16,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     bench = subparsers.add_parser(
         "benchmark", help="score navigation controllers on a suite of scenarios (metrics)",
         description="Run every --controller on every scenario of every SUITE for every seed; "
-                    "one row of navigation metrics per episode in --out, the mean and 95 %% "
+                    "one row of navigation metrics per episode in --out, the mean and 95 % "
                     "confidence interval per controller on stdout (and in --summary). "
                     "See docs/benchmark.md.")
     bench.add_argument("suites", nargs="*", metavar="SUITE",
@@ -33,7 +33,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     bench.add_argument("--backend", choices=BACKENDS, default="process",
                        help="where episodes run (default: process)")
     bench.add_argument("--address", help="scheduler of a running Dask or Ray cluster")
-    bench.add_argument("--workers", type=int, help="local workers (default: the CPU count)")
+    bench.add_argument("--workers", type=int, help="local workers, 1 to 1024 (default: the CPU count)")
     bench.add_argument("--duration", type=float,
                        help="simulated seconds per episode (default: each scenario's)")
     bench.add_argument("--out", type=Path, help="episode rows (.csv or .parquet)")
@@ -43,7 +43,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     bench.add_argument("--personal-space", type=float, default=None, metavar="M",
                        help="clearance [m] that counts as a personal-space intrusion "
                             "(default 0.5)")
-    bench.add_argument("--no-progress", action="store_true", help="no progress bar")
+    bench.add_argument("--no-progress", action="store_true", help="no progress on stderr (otherwise a bar on a terminal, "
+                            "and at most 20 lines with the time left elsewhere)")
     bench.set_defaults(func=cmd_benchmark)
     return bench
 

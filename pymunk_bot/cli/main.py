@@ -37,12 +37,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.out is not None and (problem := writable_problem(args.out)) is not None:
         raise ScenarioError("--out", "", problem)  # before anything runs
-    from pymunk_bot.cli.sweep import parse_settings, scenario_with_settings
+    from pymunk_bot.cli.sweep import parse_settings, scenario_with_settings, settings_echo
 
     settings = parse_settings(args.assignments, one_value=True)  # before loading anything
     config = load_scenario(args.scenario)
     if settings:
-        config = scenario_with_settings(config, args.scenario, settings)
+        loaded, config = config, scenario_with_settings(config, args.scenario, settings)
+        for line in settings_echo(loaded, config, settings):  # stderr: stdout is the report
+            print(line, file=sys.stderr)
     sim = Simulation(config, seed=args.seed, source=args.scenario)
     sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops the run
     duration = args.duration if args.duration is not None else config.world.duration
@@ -106,12 +108,15 @@ def write_failure(exc: OSError) -> str:
 
 def _print_summary(result: dict, verdict_lines: list[str], watched: float | None = None) -> None:
     """The run's result; ``watched`` [s]: how long the window was open, if there was one."""
+    from pymunk_bot.geometry.plane import wrap_angle
+
     print(summary_line(result, watched))
     for name, r in result["robots"].items():
         goal = ""
         if r["goal_reached"]:
             goal = f", goal reached at {r['time_to_goal']:.2f} s"
-        x, y, theta = r["pose"]
+        x, y, turned = r["pose"]
+        theta = wrap_angle(turned)  # where it points; the JSON keeps the turns (unwrapped)
         status = r.get("controller_status")
         controller = f", controller {status}" if status not in (None, "failed") else ""
         if status == "failed" and not any(f"{name}: controller failed" in line

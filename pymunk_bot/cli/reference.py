@@ -49,11 +49,18 @@ def _names(action: argparse.Action) -> str:
     return ", ".join(f"`{o} {value}`" for o in action.option_strings)
 
 
-def _help(action: argparse.Action) -> str:
-    text = (action.help or "").replace("%(default)s", str(action.default))
+def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
+    # argparse's own expansion (%(default)s, %(type)s, '%%' -> '%'), as --help prints it
+    text = parser._get_formatter()._expand_help(action) if action.help else ""
     if action.required and action.option_strings:
         text += " (required)"
     return text.replace("|", "\\|")
+
+
+def _description(parser: argparse.ArgumentParser) -> str:
+    """The description as --help prints it: argparse %-formats it only when it has %(prog)."""
+    text = parser.description or ""
+    return text % {"prog": parser.prog} if "%(prog)" in text else text
 
 
 def render(parser: argparse.ArgumentParser | None = None) -> str:
@@ -68,14 +75,14 @@ def render(parser: argparse.ArgumentParser | None = None) -> str:
     for name, sub in commands.items():
         lines += ["", f"### pymunk-bot {name}", "", helps.get(name, "") + ".", ""]
         if sub.description:
-            lines += [sub.description, ""]
+            lines += [_description(sub), ""]
         actions = [a for a in sub._actions if not isinstance(a, argparse._HelpAction)
                    and a.help != argparse.SUPPRESS]
         if not actions:
             lines.append("No arguments.")
             continue
         lines += ["| argument | meaning |", "|---|---|"]
-        lines += [f"| {_names(a).replace('|', chr(92) + '|')} | {_help(a)} |" for a in actions]
+        lines += [f"| {_names(a).replace('|', chr(92) + '|')} | {_help(sub, a)} |" for a in actions]
     lines += ["", END]
     return "\n".join(lines)
 

@@ -34,7 +34,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                             "processes), dask or ray (a cluster; extras) (default: process)")
     sweep.add_argument("--address", help="scheduler of a running cluster, e.g. "
                                          "tcp://HOST:8786 (dask) or HOST:6379 (ray)")
-    sweep.add_argument("--workers", type=int, help="local workers (default: the CPU count)")
+    sweep.add_argument("--workers", type=int, help="local workers, 1 to 1024 (default: the CPU count)")
     sweep.add_argument("--duration", type=float, help="simulated seconds per run "
                                                       "(default: the scenario's world.duration)")
     sweep.add_argument("--chunk-size", type=int, help="runs per task (default: automatic)")
@@ -43,7 +43,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     sweep.add_argument("--out", type=Path, required=True, help="results table (.csv or .parquet)")
     sweep.add_argument("--plot", type=Path, nargs="?", const=True, default=None,
                        metavar="IMAGE", help="plot the summary (default: next to --out, .png)")
-    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress on stderr (otherwise a bar on a terminal, "
+                            "and at most 20 lines with the time left elsewhere)")
     sweep.set_defaults(func=cmd_sweep)
     return sweep
 
@@ -90,6 +91,25 @@ def scenario_with_settings(config: ScenarioConfig, spec: str | None,
         return parse_scenario(data, source, base_dir=path.resolve().parent)
     except ScenarioError as exc:
         raise ScenarioError(source, exc.path, f"{exc.problem} (with --set {told})") from None
+
+
+def settings_echo(before: ScenarioConfig, after: ScenarioConfig,
+                  settings: dict[str, list[Any]]) -> list[str]:
+    """One line per ``--set`` key: the value the run uses (as validated: ``1`` for a float key
+    reads ``1.0``) and the one it replaces, e.g. ``set robots[0].max_wheel_speed = 0.8
+    (was 1.0)``."""
+    import json
+
+    from pymunk_bot.config import scenario_data
+    from pymunk_bot.sweep.grid import value_at
+
+    def shown(value: Any) -> str:  # a whole section stays one readable line
+        text = json.dumps(value)
+        return text if len(text) <= 100 else text[:97] + "..."
+
+    old, new = scenario_data(before), scenario_data(after)
+    return [f"set {key} = {shown(value_at(new, key))} (was {shown(value_at(old, key))})"
+            for key in settings]
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:

@@ -115,10 +115,22 @@ def _more_problems(errors: list[dict], first: dict) -> str:
     return f"; {len(others)} more problem{'s' if len(others) > 1 else ''} in the file"
 
 
+def _shipped_hint(path: Path) -> str:
+    """`` (did you mean the shipped scenario 'push_crate'?)`` when a missing file's name is
+    (nearly) a shipped scenario's: ``scenarios/push_crate.yaml`` outside the checkout."""
+    import difflib
+
+    names = [name for name in shipped_scenarios() if name != "default"]
+    match = difflib.get_close_matches(path.stem, names, n=1, cutoff=0.8)
+    return f" (did you mean the shipped scenario '{match[0]}'?)" if match else ""
+
+
 def load_scenario(spec: str | Path | None = None) -> ScenarioConfig:
     """Read and validate a scenario file (path or shipped name; None = built-in default)."""
     path = resolve(spec)
     source = str(spec) if spec is not None and Path(str(spec)).exists() else str(path)
+    if not path.exists():
+        raise ScenarioError(source, "", f"file not found{_shipped_hint(path)}")
     text = read_text(path, source)
     data, node = parse_yaml(text, source)
     return parse_scenario(data, source, node, base_dir=path.resolve().parent)

@@ -14,9 +14,11 @@ from typing import Any, Iterable, Mapping
 
 from pymunk_bot.config import ScenarioConfig, load_scenario, parse_scenario, resolve, scenario_data
 from pymunk_bot.config.errors import ScenarioError
-from pymunk_bot.sweep.backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
+from pymunk_bot.sweep.backends import BACKENDS, BackendUnavailable, check_workers, default_workers, \
+    run_chunks
 from pymunk_bot.sweep.grid import Run, build_grid, parse_assignment, parse_seeds
 from pymunk_bot.sweep.output import Journal, check_output, journal_path, read_journal, read_table, write_table
+from pymunk_bot.sweep.progress import Progress
 from pymunk_bot.sweep.summary import Group, format_table, summarize
 from pymunk_bot.sweep.summary_plot import plot_summary
 
@@ -92,8 +94,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
         raise ValueError(f"unknown backend '{backend}' (choose from {', '.join(BACKENDS)})")
     if address is not None and backend not in ("dask", "ray"):
         raise ValueError(f"--address is for the dask and ray backends, not '{backend}'")
-    if workers is not None and not 1 <= workers <= 1024:
-        raise ValueError(f"--workers must be in [1, 1024] (got {workers})")
+    check_workers(workers)
     if chunk_size is not None and chunk_size < 1:
         raise ValueError(f"--chunk-size must be >= 1 (got {chunk_size})")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
@@ -114,10 +115,7 @@ def run_sweep(scenario: str | Path | dict | ScenarioConfig | None,
     chunks = chunk_runs(todo, n_workers, chunk_size)
     base = scenario_data(config)
     journal = Journal(journal_path(out)) if out is not None and todo else None
-    from tqdm import tqdm
-
-    bar = tqdm(total=len(runs), initial=len(done), unit="run", desc="sweep",
-               disable=None if progress else True, leave=False)
+    bar = Progress(len(runs), "sweep", "runs", enabled=progress, initial=len(done))
     try:
         for rows in run_chunks(backend, base, source, chunks, duration, workers, address,
                                folder):

@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import logging
 import os
+import socket
 from typing import Any, Callable, Iterator, Sequence
 
 from pymunk_bot.sweep.runner import run_chunk
 
 BACKENDS = ("serial", "process", "dask", "ray")
 CONNECT_TIMEOUT = 10.0  # [s] to reach a cluster's scheduler
+MAX_WORKERS = 1024  # local worker processes at most
+DASK_PORT, RAY_PORT = 8786, 6379  # where a scheduler listens when an address names no port
 Rows = list[dict]
 
 
@@ -24,6 +27,41 @@ class BackendUnavailable(RuntimeError):
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                else (os.cpu_count() or 1))
+
+
+def check_workers(workers: int | None) -> None:
+    """ValueError naming ``--workers`` unless it is None (one per CPU) or in [1, MAX_WORKERS];
+    0 is refused, not read as "every core", so no value of it is silently replaced."""
+    if workers is not None and not 1 <= workers <= MAX_WORKERS:
+        raise ValueError(f"--workers must be in [1, {MAX_WORKERS}] (got {workers}); leave it "
+                         "out for one per CPU")
+
+
+def reach_scheduler(address: str, what: str, default_port: int) -> None:
+    """Open (and close) a TCP connection to ``address`` within CONNECT_TIMEOUT, so that a
+    dead or mistyped cluster address is one BackendUnavailable line at once, whatever the
+    cluster library would do (Ray retries a dead head for minutes). ``what`` names the
+    server in the message ("the Dask scheduler"); ``tcp://``, ``tls://`` and ``ray://`` are
+    reached over TCP, other transports are left to their library."""
+    scheme, _, rest = address.rpartition("://")
+    if scheme not in ("", "tcp", "tls", "ray"):
+        return  # another transport (ucx, inproc): its library bounds its own connect
+    host, colon, port_text = rest.rstrip("/").rpartition(":")
+    if not colon:
+        host, port_text = rest.rstrip("/"), str(default_port)
+    host = host.strip("[]")  # an IPv6 literal: [::1]:8786
+    if not host:
+        raise BackendUnavailable(f"cannot reach {what} at {address}: no host in the address")
+    if not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        raise BackendUnavailable(f"cannot reach {what} at {address}: the port must be a "
+                                 f"number in [1, 65535]")
+    try:
+        with socket.create_connection((host, int(port_text)), timeout=CONNECT_TIMEOUT):
+            pass
+    except OSError as exc:  # refused, unreachable, unknown host, or no answer in time
+        reason = f"no answer within {CONNECT_TIMEOUT:g} s" if isinstance(exc, TimeoutError) \
+            else exc.strerror or str(exc)
+        raise BackendUnavailable(f"cannot reach {what} at {address}: {reason}") from None
 
 
 def run_chunks(backend: str, base: dict, source: str, chunks: Sequence[Sequence[Any]],
@@ -83,6 +121,7 @@ def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> I
                                    silence_logs=logging.CRITICAL)  # no shutdown chatter
             client = Client(cluster)
         else:
+            reach_scheduler(address, "the Dask scheduler", DASK_PORT)
             client = Client(address, timeout=f"{CONNECT_TIMEOUT}s")
     except (OSError, TimeoutError) as exc:
         if cluster is not None:
@@ -117,6 +156,8 @@ def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> It
             ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
                      _node_ip_address="127.0.0.1", log_to_driver=False)
         else:
+            if address != "auto":  # "auto": a cluster on this machine, found by its files
+                reach_scheduler(address, "the Ray head", RAY_PORT)
             ray.init(address=address, log_to_driver=False)
         started = True
     try:

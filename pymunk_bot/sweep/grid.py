@@ -77,19 +77,20 @@ def parse_assignment(text: str) -> tuple[str, list[Any]]:
 
 def parse_seeds(text: str) -> list[int]:
     """``0:20`` (start:stop, stop excluded), ``3,5,9`` or ``7`` -> seeds."""
-    seeds: list[int] = []
     try:
-        for part in text.split(","):
-            if ":" in part:
-                start, stop = (int(v) for v in part.split(":", 1))
-                if stop <= start:
-                    raise ValueError
-                seeds.extend(range(start, min(stop, start + MAX_RUNS + 1)))
-            else:
-                seeds.append(int(part))
+        ranges = [[int(v) for v in part.split(":", 1)] for part in text.split(",")]
     except ValueError:
         raise ValueError(f"seeds '{text}': expected START:STOP (STOP > START), "
                          "a list like 1,2,3 or one seed") from None
+    if any(len(r) == 2 and r[1] <= r[0] for r in ranges):
+        raise ValueError(f"seeds '{text}': expected START:STOP (STOP > START), "
+                         "a list like 1,2,3 or one seed")
+    count = sum(r[1] - r[0] if len(r) == 2 else 1 for r in ranges)
+    if count > MAX_RUNS:  # counted before any list is made: 0:10**13 costs nothing
+        raise ValueError(f"seeds '{text}': {count} seeds; at most {MAX_RUNS}")
+    seeds: list[int] = []
+    for r in ranges:
+        seeds.extend(range(r[0], r[1]) if len(r) == 2 else r)
     if not seeds or min(seeds) < 0 or max(seeds) > MAX_SEED:
         raise ValueError(f"seeds '{text}': each seed must be in [0, {MAX_SEED}]")
     if len(set(seeds)) != len(seeds):
@@ -126,6 +127,20 @@ def apply_override(data: dict, path: str, value: Any) -> None:
             if node.get(token) is None:
                 node[token] = {} if isinstance(tokens[depth + 1], str) else []
             node = node[token]
+
+
+def value_at(data: Any, path: str) -> Any:
+    """The value at ``path`` in a scenario mapping, or None where the path leads nowhere (a
+    section that is off, a key the scenario does not have)."""
+    node = data
+    for token in parse_key_path(path):
+        if isinstance(token, int):
+            node = node[token] if isinstance(node, list) and token < len(node) else None
+        else:
+            node = node.get(token) if isinstance(node, dict) else None
+        if node is None:
+            return None
+    return node
 
 
 def _format(tokens: Sequence[str | int]) -> str:

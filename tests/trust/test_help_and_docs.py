@@ -80,3 +80,36 @@ def test_the_video_defaults_the_help_states_are_the_recorders():
 def test_sweep_defaults_to_local_processes():
     backend = next(a for a in COMMANDS["sweep"]._actions if "--backend" in a.option_strings)
     assert backend.default == "process" and "(default: process)" in backend.help
+
+
+def test_the_reference_writes_percent_signs_as_the_help_prints_them():
+    """argparse %-formats an argument's help ('%%' prints '%') but not a description."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="pymunk-bot")
+    demo = parser.add_subparsers().add_parser("demo", help="a demo",
+                                              description="the mean and 95 % interval")
+    demo.add_argument("--level", type=int, default=95,
+                      help="confidence in %% (default %(default)s, type %(type)s)")
+    text = render(parser)
+    assert "confidence in % (default 95, type int)" in text
+    assert "the mean and 95 % interval" in text and "%%" not in text
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_no_argparse_escape_shows_in_help_or_docs(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    assert "%%" not in capsys.readouterr().out
+    assert "%%" not in CLI_DOC.read_text(encoding="utf-8")
+
+
+def test_no_doc_or_source_cites_a_path_of_the_authors_machine():
+    """A reader has the repository, not the machine it was written on: every path a doc or a
+    module cites must be one they can open."""
+    files = [*DOCS, *(REPO / "docs").glob("*.py"), *(REPO / "pymunk_bot").rglob("*.py"),
+             *(REPO / "examples").rglob("*.py")]
+    cited = [f"{path.relative_to(REPO)}: {match.group(0)}" for path in files
+             for match in re.finditer(r"(?<![\w.])/(?:work|home|Users)/[\w./-]+",
+                                      path.read_text(encoding="utf-8"))]
+    assert not cited, cited

@@ -90,3 +90,22 @@ def test_a_fitted_lidar_is_there_by_either_name():
                                                "lidar": {"beams": 8}}]})
     r = sim.robots["r1"]
     assert r.lidar is r.sensor("lidar") and len(r.lidar.scan()) == 8
+
+
+def test_a_missing_file_from_python_names_the_shipped_scenario(tmp_path, monkeypatch):
+    """The README's `from_file` outside the checkout: one line that says what to write."""
+    from pymunk_bot.config.errors import ScenarioError
+
+    monkeypatch.chdir(tmp_path)  # no scenarios/ folder here
+    assert pb.Simulation.from_file("push_crate").robots  # the shipped name works anywhere
+    with pytest.raises(ScenarioError) as error:
+        pb.Simulation.from_file("scenarios/push_crate.yaml")
+    assert str(error.value) == ("scenarios/push_crate.yaml: file not found (did you mean the "
+                                "shipped scenario 'push_crate'?)")
+    assert error.value.__cause__ is None and error.value.__context__ is None  # nothing chained
+    with pytest.raises(ScenarioError) as error:
+        pb.Simulation.from_file("scenarios/push_crates.yaml")  # a near miss suggests it too
+    assert "did you mean the shipped scenario 'push_crate'?" in str(error.value)
+    with pytest.raises(ScenarioError) as error:
+        pb.Simulation.from_file("mine/nothing_like_it.yaml")
+    assert str(error.value) == "mine/nothing_like_it.yaml: file not found"

@@ -56,3 +56,22 @@ def test_a_negative_value_reaches_its_options_check(capsys, tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     one_line_exit_2(capsys, argv, fragment)
     assert "expected one argument" not in capsys.readouterr().err
+
+
+def test_run_set_echoes_each_effective_value_on_stderr(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["run", "--headless", "--duration", "0.2", "--out", str(out),
+                 "--set", "robots[0].max_wheel_speed=0.8", "--set", "world.dt=0.01",
+                 "--set", "robots[0].lidar.beams=90"]) in (0, 1)
+    captured = capsys.readouterr()
+    echoed = [line for line in captured.err.splitlines() if line.startswith("set ")]
+    assert echoed == ["set robots[0].max_wheel_speed = 0.8 (was 1.0)",
+                      "set world.dt = 0.01 (was 0.016666666666666666)",
+                      "set robots[0].lidar.beams = 90 (was 360)"], captured.err
+    assert "set " not in captured.out  # stdout keeps only the run's own report
+    assert json.loads(out.read_text())["robots"]["r1"]["pose"]  # --out is untouched JSON
+
+
+def test_run_without_set_echoes_nothing(capsys):
+    main(["run", "--headless", "--duration", "0.1"])
+    assert "set " not in capsys.readouterr().err

@@ -114,3 +114,19 @@ def test_a_controller_failure_the_scenario_expects_is_not_a_failure(capsys):
     # unreachable.yaml expects goal_reached: false, i.e. that navigate gives up cleanly.
     assert main(["run", str(REPO / "scenarios" / "unreachable.yaml"), "--headless"]) == 0
     assert "PASSED" in capsys.readouterr().out
+
+
+def test_the_printed_heading_is_wrapped_and_the_json_keeps_the_turns(tmp_path, capsys):
+    """A robot that spun one and a half turns reads 9.7 rad in the JSON (unwrapped, as
+    documented), but the summary a person reads says where it points: within [-pi, pi)."""
+    spin = {"name": "spin", "world": {"size": [4.0, 4.0], "duration": 3.0},
+            "robots": [{"name": "r1", "pose": [2.0, 2.0, 0.0],
+                        "controller": {"type": "wheels", "left": -0.5, "right": 0.5}}]}
+    out_json = tmp_path / "r.json"
+    main(["run", write(tmp_path, spin), "--headless", "--out", str(out_json)])
+    theta = json.loads(out_json.read_text())["robots"]["r1"]["pose"][2]
+    assert theta > 2 * math.pi  # the run really turned more than once
+    line = next(line for line in capsys.readouterr().out.splitlines() if "r1: pose (" in line)
+    printed = float(line.split("pose (")[1].split(")")[0].split(", ")[2])
+    assert -math.pi <= printed < math.pi
+    assert printed == pytest.approx(math.remainder(theta, 2 * math.pi), abs=1e-3)
