@@ -4,7 +4,8 @@ contacts and time to goal, with 95 % confidence intervals.
 Each episode is the scenario in ``pymunk_bot/Navigation-v0`` (the policy drives its first
 robot, or ``--robot``) reset with seed ``--seed + k``; ``--random-goal``, ``--random-start``
 and ``--generate KIND`` (of ``--size``, seeds from ``--world-seeds``) draw a new goal, start
-pose or generated world per episode (:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input.
+pose or generated world per episode (:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input
+(a policy file that cannot be read, does not fit the robot, or returns a NaN action).
 """
 from __future__ import annotations
 
@@ -80,7 +81,7 @@ def command(args: argparse.Namespace) -> int:
         print(f"error: evaluate: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
-    from pymunk_bot.policy.files import PolicyFileError, load_policy
+    from pymunk_bot.policy.files import PolicyFileError, check_runs_on, load_policy
 
     if args.out is not None:
         check_output("--out", args.out, (".csv",))
@@ -103,7 +104,12 @@ def command(args: argparse.Namespace) -> int:
               f"and takes {outputs} (was it trained with another LiDAR or drive?)",
               file=sys.stderr)
         return EXIT_BAD_INPUT
-    outcomes = evaluate_policy(args.policy, kwargs, args.episodes, args.seed, args.workers)
+    try:
+        check_runs_on(policy, inputs, outputs)
+        outcomes = evaluate_policy(args.policy, kwargs, args.episodes, args.seed, args.workers)
+    except PolicyFileError as exc:
+        print(f"error: {args.policy}: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     summary = summarize(outcomes)
     print(json.dumps(summary, indent=2) if args.json else format_summary(summary))
     if args.out is not None:

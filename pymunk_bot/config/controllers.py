@@ -247,7 +247,7 @@ class PolicyControllerConfig(Section):
     def misfit(self, robot) -> str | None:
         """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
         and a goal, takes the observation of the robot's beams and gives its action."""
-        from pymunk_bot.policy.files import PolicyFileError, load_policy
+        from pymunk_bot.policy.files import PolicyFileError, check_runs_on, load_policy
         from pymunk_bot.policy.io import action_size, observation_size
 
         if robot.lidar is None:
@@ -267,4 +267,8 @@ class PolicyControllerConfig(Section):
                     f"{inputs - robot.lidar.beams}): was it trained with another LiDAR?")
         if policy.outputs is not None and policy.outputs != outputs:
             return f"'{self.path}' gives {policy.outputs} outputs; a {robot.drive} drive takes {outputs}"
+        try:
+            check_runs_on(policy, inputs, outputs)
+        except PolicyFileError as exc:
+            return f"'{self.path}', for a robot with {robot.lidar.beams} LiDAR beams: {exc}"
         return None

@@ -58,7 +58,10 @@ class PolicyController(Controller):
             return self._fail(f"the scan has {obs.scan.ranges.size} beams, the policy was "
                               f"built for {self._builder.beams}")
         self._builder.fill(self._obs, obs.scan.ranges[None], [features], self.previous)
-        action = self.policy.act(self._obs)[0]
+        try:
+            action = self.policy.act(self._obs)[0]
+        except PolicyFileError as exc:  # checked with the scenario; a model can still refuse
+            return self._fail(f"policy '{self.path}': {exc}")
         try:
             clipped = self.scale.clipped(action)
         except ValueError:

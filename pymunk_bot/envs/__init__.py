@@ -3,6 +3,9 @@
     import gymnasium as gym
     import pymunk_bot.envs                       # registers pymunk_bot/Navigation-v0
     env = gym.make("pymunk_bot/Navigation-v0")   # the built-in default scenario
+    # the same with nothing imported (Gymnasium 1.x loads no plugin entry points; a regular
+    # install's start-up hook registers the id, see docs/learning.md), in every install:
+    env = gym.make("pymunk_bot.envs:pymunk_bot/Navigation-v0")
     envs = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=16,
                         vectorization_mode="vector_entry_point")
     from pymunk_bot.envs import MultiRobotEnv     # PettingZoo ParallelEnv
@@ -16,19 +19,17 @@ try:
 except ImportError:  # pragma: no cover - depends on the install
     raise ImportError("pymunk_bot.envs needs gymnasium: pip install 'pymunk-bot[rl]'") from None
 
+from _pymunk_bot_gymnasium import NAVIGATION_ID, register
+
 from pymunk_bot.envs.navigation import NavigationEnv
 from pymunk_bot.envs.task import RewardWeights
 from pymunk_bot.envs.vector import NavigationVectorEnv
 
-NAVIGATION_ID = "pymunk_bot/Navigation-v0"
-
 
 def register_envs() -> None:
-    """Register the environment ids with Gymnasium (idempotent; also the entry point)."""
-    if NAVIGATION_ID not in gymnasium.registry:
-        gymnasium.register(id=NAVIGATION_ID, entry_point="pymunk_bot.envs.navigation:NavigationEnv",
-                           vector_entry_point="pymunk_bot.envs.vector:NavigationVectorEnv",
-                           disable_env_checker=False)
+    """Register the environment ids with Gymnasium (idempotent; importing this module does, and
+    so does importing Gymnasium where pymunk-bot was installed with its start-up hook)."""
+    register(gymnasium)
 
 
 register_envs()

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from pymunk_bot.policy.files import Policy, load_policy
+from pymunk_bot.policy.files import Policy, PolicyFileError, load_policy
 
 MAX_EPISODES = 100_000
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -38,7 +38,8 @@ class EpisodeOutcome:
 def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
                  seeds: list[int], env: Any = None) -> list[EpisodeOutcome]:
     """Play the policy (or the policy file) for one episode per seed, in ``env`` if given
-    (kept open: a trainer reuses it, and its generated worlds) or a new env of ``env_kwargs``."""
+    (kept open: a trainer reuses it, and its generated worlds) or a new env of ``env_kwargs``;
+    PolicyFileError if the policy returns a NaN or infinite action or fails to run."""
     from pymunk_bot.envs.navigation import NavigationEnv
 
     agent = load_policy(policy) if isinstance(policy, (str, Path)) else policy
@@ -51,7 +52,11 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
         total, done = 0.0, False
         info: dict[str, Any] = {}
         while not done:
-            obs, reward, terminated, truncated, info = env.step(agent.act(obs[None])[0])
+            action = agent.act(obs[None])[0]
+            if not np.isfinite(action).all():
+                raise PolicyFileError(f"returned the action {np.array2string(action)} in the "
+                                      f"episode of seed {seed}: not finite numbers")
+            obs, reward, terminated, truncated, info = env.step(action)
             total += reward
             done = terminated or truncated
         reached = bool(info["goal_reached"])

@@ -6,21 +6,28 @@ shape (outputs,): ``x = tanh(x @ W_i + b_i)`` for every layer but the last,
 and PyTorch export) takes a float32 batch of observations (its first input) and returns
 actions (its first output), clipped to [-1, 1]; it runs on onnxruntime (the ``onnx`` extra).
 The observation and the action are :mod:`pymunk_bot.policy.io`'s.
+
+Policy files are untrusted input: an ``.npz`` is bounded from its zip directory and array
+headers before any array is read (:mod:`pymunk_bot.policy.npz_bounded`), an ONNX model's inputs and
+outputs are checked when it loads, and :func:`check_runs_on` tries a policy on one zero
+observation of a robot's size before a run or an evaluation starts.
 """
 from __future__ import annotations
 
 import io
 import re
-import zipfile
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
+from pymunk_bot.policy.npz_bounded import NpzError, first_line, read_npz
 from pymunk_bot.outcomes.results import write_atomic
 
-MAX_POLICY_BYTES = 256 * 2**20  # a policy file larger than this is a mistake
+MAX_POLICY_BYTES = 256 * 2**20  # an ONNX file larger than this is a mistake
+MAX_NPZ_BYTES = 64 * 2**20  # an .npz larger than this, on disk or inflated, is a mistake
 MAX_LAYERS = 64
+ONNX_FLOAT_TYPES = ("tensor(float)", "tensor(double)", "tensor(float16)")  # action outputs
 _NAME = re.compile(r"^([Wb])(\d+)$")
 ONNX_INSTALL = "pip install 'pymunk-bot[onnx]'"
 
@@ -65,18 +72,15 @@ class MlpPolicy:
     def load(cls, path: str | Path) -> "MlpPolicy":
         """Read an ``.npz`` MLP; PolicyFileError says what is wrong with it."""
         try:
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {name: data[name] for name in data.files}
-        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-            raise PolicyFileError(f"not a readable .npz file ({exc})") from None
+            arrays = read_npz(path, 2 * MAX_LAYERS, MAX_NPZ_BYTES)
+        except NpzError as exc:
+            raise PolicyFileError(f"not a readable .npz file: {exc}") from None
         numbered: dict[str, dict[int, np.ndarray]] = {"W": {}, "b": {}}
         for name, array in arrays.items():
             match = _NAME.match(name)
             if match is None:
                 raise PolicyFileError(f"unexpected array '{name}' (an MLP holds W0, b0, W1, "
                                       "b1, ...)")
-            if not np.issubdtype(array.dtype, np.number):
-                raise PolicyFileError(f"{name} is not numeric (dtype {array.dtype})")
             numbered[match.group(1)][int(match.group(2))] = array
         count = len(numbered["W"])
         for kind in ("W", "b"):
@@ -113,23 +117,46 @@ class OnnxPolicy:
             raise PolicyFileError(f"ONNX policies need onnxruntime: {ONNX_INSTALL}") from None
         options = onnxruntime.SessionOptions()
         options.intra_op_num_threads = 1  # one robot's small net: threads cost more than they give
-        options.log_severity_level = 3
+        options.log_severity_level = 4  # fatal only: a refusal is reported in one line, by us
         try:
             self.session = onnxruntime.InferenceSession(str(path), options,
                                                         providers=["CPUExecutionProvider"])
         except Exception as exc:  # onnxruntime raises its own exception types
-            raise PolicyFileError(f"not a usable ONNX model ({str(exc).splitlines()[0][:200]})") \
-                from None
-        first = self.session.get_inputs()[0]
+            raise PolicyFileError(f"not a usable ONNX model ({first_line(exc)})") from None
+        inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
+        if len(inputs) != 1:
+            raise PolicyFileError(f"the model takes {len(inputs)} inputs "
+                                  f"({', '.join(i.name for i in inputs)}); a policy takes one, "
+                                  "the observation batch")
+        first = inputs[0]
+        if first.type != "tensor(float)":
+            raise PolicyFileError(f"the model's input '{first.name}' is {first.type}; a policy "
+                                  "takes float32 observations (tensor(float))")
+        if len(first.shape) != 2:
+            raise PolicyFileError(f"the model's input '{first.name}' has shape {first.shape} "
+                                  f"(rank {len(first.shape)}); a policy takes (batch, "
+                                  "observation), rank 2")
+        if isinstance(first.shape[0], int) and first.shape[0] != 1:
+            raise PolicyFileError(f"the model's input '{first.name}' has a fixed batch of "
+                                  f"{first.shape[0]}; a policy sees one observation at a time "
+                                  "(export the batch axis as dynamic or 1)")
+        if not outputs or outputs[0].type not in ONNX_FLOAT_TYPES:
+            raise PolicyFileError("the model's first output must be float actions (got "
+                                  f"{outputs[0].type if outputs else 'no output'})")
         self.input_name = first.name
         self.inputs = _last_dim(first.shape)
-        self.outputs = _last_dim(self.session.get_outputs()[0].shape)
+        self.outputs = _last_dim(outputs[0].shape)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n x outputs, float64, clipped to [-1, 1]) of observations (n x inputs),
-        run as a float32 batch."""
+        run as a float32 batch; PolicyFileError if onnxruntime refuses them."""
         batch = np.asarray(obs, dtype=np.float32).reshape(-1, obs.shape[-1])
-        out = np.asarray(self.session.run(None, {self.input_name: batch})[0], dtype=np.float64)
+        try:
+            out = np.asarray(self.session.run(None, {self.input_name: batch})[0],
+                             dtype=np.float64)
+        except Exception as exc:  # onnxruntime raises its own exception types
+            raise PolicyFileError(f"the model fails on observations of {batch.shape[1]} "
+                                  f"numbers ({first_line(exc)})") from None
         return np.clip(out.reshape(batch.shape[0], -1), -1.0, 1.0)
 
 
@@ -139,6 +166,16 @@ def _last_dim(shape: Any) -> int | None:
     return last if isinstance(last, int) and last > 0 else None
 
 
+def check_runs_on(policy: Policy, inputs: int, outputs: int) -> None:
+    """PolicyFileError unless the policy maps one observation of ``inputs`` numbers (all zero)
+    to an action of ``outputs`` numbers: what a model whose sizes are dynamic does is known
+    only by running it (a NaN action is not refused here: a run reports it as it happens)."""
+    action = policy.act(np.zeros((1, inputs), dtype=np.float32))
+    if action.shape != (1, outputs):
+        raise PolicyFileError(f"gives {action.size} numbers for an observation of {inputs}; "
+                              f"the robot takes {outputs}")
+
+
 def load_policy(path: str | Path) -> MlpPolicy | OnnxPolicy:
     """The policy in ``path`` (``.npz`` or ``.onnx``); PolicyFileError if it cannot be used."""
     file = Path(path)
@@ -146,6 +183,7 @@ def load_policy(path: str | Path) -> MlpPolicy | OnnxPolicy:
         raise PolicyFileError(f"a policy file is .npz or .onnx (got '{file.name}')")
     if not file.is_file():
         raise PolicyFileError(f"no such file '{file}'")
-    if file.stat().st_size > MAX_POLICY_BYTES:
-        raise PolicyFileError(f"'{file}' is larger than {MAX_POLICY_BYTES // 2**20} MB")
+    limit = MAX_NPZ_BYTES if file.suffix == ".npz" else MAX_POLICY_BYTES
+    if file.stat().st_size > limit:
+        raise PolicyFileError(f"'{file}' is larger than {limit // 2**20} MB")
     return MlpPolicy.load(file) if file.suffix == ".npz" else OnnxPolicy(file)

@@ -36,6 +36,10 @@ from pymunk_bot.robots.readings import RobotSpec
 PROXIMITY_SCALE = 0.5  # [m] range at which a beam's proximity falls to about half
 GOAL_SCALE = 1.0  # [m] goal distance at which its feature is 0.5
 EXTRA_FEATURES = 6  # nearest proximity, its direction (2), goal distance, goal bearing (2)
+# Where each feature after the B beam proximities sits: observation[B + GOAL_SIN] is the sine
+# of the goal bearing (steer by it); the previous action starts at B + EXTRA_FEATURES.
+NEAREST_PROXIMITY, NEAREST_COS, NEAREST_SIN, GOAL_DISTANCE, GOAL_COS, GOAL_SIN = \
+    range(EXTRA_FEATURES)
 MAX_BEAMS = 4096  # an observation larger than this is a mistake, not a sensor
 
 
@@ -91,7 +95,7 @@ def observation_bounds(beams: int, holonomic: bool) -> tuple[np.ndarray, np.ndar
     low = np.full(size, -1.0, dtype=np.float32)
     high = np.ones(size, dtype=np.float32)
     low[: beams + 1] = 0.0  # proximities
-    low[beams + 3] = 0.0  # goal distance
+    low[beams + GOAL_DISTANCE] = 0.0
     return low, high
 
 
