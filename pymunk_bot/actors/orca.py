@@ -85,13 +85,17 @@ class Orca:
     def velocities(self, pos: np.ndarray, vel: np.ndarray, radius: np.ndarray,
                    others: tuple[np.ndarray, np.ndarray, np.ndarray], walkers: int,
                    visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray, dt: float,
-                   walls: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+                   walls: tuple[np.ndarray, np.ndarray],
+                   nudge: np.ndarray | None = None) -> np.ndarray:
         """New velocities (k, 2) [m/s] of the agents, at ``pos``, ``vel``, ``radius`` (k, ...),
         wishing ``pref`` (k, 2) within ``vmax`` (k,). ``others``: positions, velocities and
         radii of everything avoided (the first ``walkers`` are walkers, the rest robots);
         ``visible`` (k, m): who each agent takes into account (not itself); ``walls``: per
         agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
-        nearest first, (k, MAX_WALL_LINES, 3), and how many (k,)."""
+        nearest first, (k, MAX_WALL_LINES, 3), and how many (k,). ``nudge`` (k, 2) [m/s]: added
+        to each agent's answer where the nudged velocity still keeps to every half-plane (an
+        answer on a corner of them, the same for every agent of a symmetric crowd, does not
+        move when the wish does; a nudge outside them could bring a walker into contact)."""
         from pymunk_bot.actors.orca_lp import solve_all
 
         c, s = np.cos(KEEP_RIGHT_ANGLE), np.sin(KEEP_RIGHT_ANGLE)
@@ -118,8 +122,15 @@ class Orca:
         first = np.argsort(~ok, axis=1, kind="stable")  # valid half-planes first, walls first
         q = np.ascontiguousarray(np.take_along_axis(q, first[..., None], axis=1))
         n = np.ascontiguousarray(np.take_along_axis(n, first[..., None], axis=1))
-        return solve_all(q, n, ok.sum(axis=1).astype(np.int64),
-                         wall_valid.sum(axis=1).astype(np.int64),
-                         np.ascontiguousarray(vmax, dtype=float),
-                         np.ascontiguousarray(pref, dtype=float))
+        chosen = solve_all(q, n, ok.sum(axis=1).astype(np.int64),
+                           wall_valid.sum(axis=1).astype(np.int64),
+                           np.ascontiguousarray(vmax, dtype=float),
+                           np.ascontiguousarray(pref, dtype=float))
+        if nudge is not None:
+            ok_sorted = np.take_along_axis(ok, first, axis=1)
+            nudged = chosen + nudge
+            kept = (((nudged[:, None, :] - q) * n).sum(axis=-1) >= 0.0) | ~ok_sorted
+            fits = kept.all(axis=1) & ((nudged ** 2).sum(axis=1) <= vmax ** 2)
+            chosen[fits] = nudged[fits]
+        return chosen
 

@@ -13,6 +13,12 @@ Per unit mass, walker a feels
   repulsion U0 / R exp(-d / R) away from its nearest surface (d from the centre, less the
   walker's size beyond NOMINAL_RADIUS);
 - optionally a random fluctuation, from the run's seeded generator;
+- always a tiny perturbation, at most PERTURBATION in a random direction, drawn afresh each
+  tick from a generator spawned from the crowd's (runs stay deterministic): of the wished
+  velocity in the driving term, and of the velocity ORCA chooses (where it keeps to ORCA's
+  half-planes). It breaks exact symmetries
+  (walkers swapping places across a circle) that otherwise hold every ORCA walker still in the
+  middle for ever, as RVO2's own examples perturb theirs;
 - a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
   walker back is turned to its right, so head-on encounters resolve the way people do.
 A walker with ``policy: orca`` takes its velocity from ORCA instead (:mod:`.orca`), toward the
@@ -48,6 +54,12 @@ WALKER_CATEGORY = 1 << physics.MAX_REPLICAS
 WALKER_CATEGORIES = ((1 << physics.MAX_REPLICAS) - 1) << physics.MAX_REPLICAS
 GROUP_SPACING = 0.8  # [m] a companion's share of the group's spread (two walk ~0.8 m apart)
 GROUP_PULL = 1.0  # [1/s] wished speed toward the group's centre per metre strayed beyond it
+# [m/s] the largest perturbation of a walker's velocity, drawn afresh every tick. RVO2's examples
+# nudge the preferred velocity by up to 1e-4 m/s; here ORCA's answer usually sits on a corner of
+# its constraints, which a nudged wish does not move, so the chosen velocity is nudged, and
+# 1e-4 m/s left six walkers crossing a 2.5 m circle still jammed after 30 s, 1e-3 m/s did not.
+# A thousandth of walking speed: no metric or view shows it.
+PERTURBATION = 1e-3
 
 
 def walker_filter(given: pymunk.ShapeFilter) -> pymunk.ShapeFilter:
@@ -91,6 +103,7 @@ class Crowd:
         self.robots = list(robots)
         self.space = space
         self.rng = rng
+        (self._perturbation_rng,) = rng.spawn(1)  # its own stream: the others' stay as they were
         cfg: list[Any] = [w.config for w in self.walkers]
         n = len(cfg)
         self.radius = np.array([c.radius for c in cfg])  # [m]
@@ -187,11 +200,21 @@ class Crowd:
         wall_forces(self.moving, poses, None, pos, self._walls, self.reacts, force)
         if self._fluctuates:
             force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
-        new = vel + force * dt
+        nudge = self._perturbation(n)
+        new = vel + (force + nudge / self.tau[:, None]) * dt  # the driving term's wish nudged
         if self.orca is not None:
-            new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt)
+            # ORCA's answer often sits on a corner of its constraints, which a nudged wish
+            # does not move: the velocity it chooses is nudged instead, within them.
+            new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt, nudge)
         cap_speeds(new, self._cap)
         self._states.set_velocities(new)
+
+    def _perturbation(self, n: int) -> np.ndarray:
+        """Each walker's nudge [m/s], (n, 2): uniform over the disc of radius PERTURBATION."""
+        draws = self._perturbation_rng.random((n, 2))
+        size = PERTURBATION * np.sqrt(draws[:, 0])
+        angle = 2.0 * np.pi * draws[:, 1]
+        return np.column_stack([size * np.cos(angle), size * np.sin(angle)])
 
     def _cohesion(self, pos: np.ndarray) -> np.ndarray:
         """Wished velocity [m/s] back toward each walker's group centre, beyond its spread."""
@@ -204,7 +227,7 @@ class Crowd:
         return pull
 
     def _orca(self, pos: np.ndarray, vel: np.ndarray, pref: np.ndarray, state: np.ndarray,
-              poses: np.ndarray, dt: float) -> np.ndarray:
+              poses: np.ndarray, dt: float, nudge: np.ndarray) -> np.ndarray:
         """Velocities of the ORCA walkers (robots are neighbours or ignored, never walls);
         ``state``: every walker's and robot's (BodyStates)."""
         assert self.orca is not None
@@ -220,7 +243,8 @@ class Crowd:
                       count)
         nearest_walls(self.moving, poses, None, at, self._orca_reach, hits, count)
         return self.orca.velocities(at, vel[agents], self.radius[agents], others, n, visible,
-                                    pref[agents], self._cap[agents], dt, (hits, count))
+                                    pref[agents], self._cap[agents], dt, (hits, count),
+                                    nudge[agents])
 
     def _advance_goals(self, pos: np.ndarray) -> None:
         # most ticks: nobody

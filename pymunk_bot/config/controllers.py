@@ -80,6 +80,7 @@ class WaypointsControllerConfig(_DrivingConfig):
     points: list[Vec2] = Field(min_length=1, max_length=MAX_WAYPOINTS)  # [m]
     loop: bool = False
     pursuit: PursuitConfig = PursuitConfig()
+    give_up_after: Duration = 20.0  # [s] without progress along the points: fail
 
 
 class DwaConfig(Section):
@@ -103,6 +104,7 @@ class AvoidControllerConfig(_GoalConfig):
 
     type: Literal["avoid"]
     dwa: DwaConfig = DwaConfig()
+    give_up_after: Duration = 30.0  # [s] without getting closer to the goal: fail
 
 
 class HybridConfig(Section):
@@ -128,7 +130,8 @@ class NavigateControllerConfig(_GoalConfig):
     map_movable: bool = False  # plan around movable obstacles at their starting places
     lookahead: PositiveShort = 0.6  # [m] steering point ahead on the path
     stuck_time: Duration = 3.0  # [s] without progress along the path before a replan
-    give_up_after: Duration = 10.0  # [s] of failed replans (blocked by unmapped things)
+    # [s] of failed replans (blocked by unmapped things), or without progress along any path
+    give_up_after: Duration = 10.0
     # Final heading [rad] a car must arrive with (parking); None: any. Ackermann only.
     heading: Float | None = None
     heading_tolerance: Annotated[PositiveFloat, Field(le=3.1416)] = 0.2  # [rad]
@@ -226,6 +229,7 @@ class PolicyControllerConfig(Section):
     rate: Rate = 10.0  # [Hz]; the env's control period is 1 / rate (0.1 s by default)
     goal: Vec2 | None = None  # [m]; None = the robot's goal
     tolerance: Distance | None = None  # [m] stop radius; None = the goal's tolerance
+    give_up_after: Duration = 20.0  # [s] without getting closer to the goal: fail
     _base_dir: str | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")

@@ -13,6 +13,7 @@ from pymunk_bot.robots.drives.diff import wheel_speeds
 from pymunk_bot.plugins import controllers
 from pymunk_bot.robots.readings import LaserScan, Observation, RobotSpec
 from pymunk_bot.controllers.localizing import LOCALIZING, localizing_command
+from pymunk_bot.controllers.progress import ProgressWatch, no_progress_message
 
 __all__ = ["STOP", "Command", "Controller", "LaserScan", "Observation", "RobotSpec", "controllers",
            "wheel_speeds"]
@@ -28,12 +29,15 @@ class Controller:
     rate: float = 10.0  # [Hz]
     needs_map: bool = False  # True: the simulation calls set_map() before the first compute()
     _localizing_since: float | None = None  # [s] when the estimate last became untrustworthy
+    _watched_goal: tuple[float, float] | None = None  # the goal the progress watch is for
+    _given_up = False  # the watch ran out for this goal
 
     def __init__(self, config=None, robot: RobotSpec | None = None) -> None:
         """Built-in controllers pass their config and robot: that sets ``config``, ``rate`` and
         ``max_speed`` (the config's, capped by the robot's max wheel speed)."""
         self.status = "running"
         self.message = ""
+        self.watch = ProgressWatch()  # progress toward the goal (controllers/progress.py)
         if config is not None:
             self.config = config
             self.rate = getattr(config, "rate", None) or self.rate
@@ -59,8 +63,27 @@ class Controller:
             return None
         if self._localizing_since is None:
             self._localizing_since = obs.time
+        self.watch.restart()  # localizing is not standing still
         self.message = LOCALIZING
         return localizing_command(obs, obs.time - self._localizing_since)
+
+    def gave_up(self, obs: Observation, measure: float) -> bool:
+        """Feed ``measure`` [m] of progress (larger is better) to the progress watch; once
+        ``give_up_after`` [s] of the config pass without progress, set status "failed" with a
+        message saying where and for how long, and return True from then on, until the
+        goal changes (a new goal is a new task: the watch starts again)."""
+        goal = None if obs.goal is None else (float(obs.goal[0]), float(obs.goal[1]))
+        if goal != self._watched_goal:
+            self._watched_goal, self._given_up = goal, False
+            self.watch.restart()
+        if self._given_up:
+            return True
+        stalled = self.watch.update(obs.time, measure)
+        if stalled <= self.config.give_up_after:
+            return False
+        self.status, self.message = "failed", no_progress_message(stalled, obs.pose)
+        self._given_up = True
+        return True
 
     def set_map(self, world_map) -> None:
         """Receive the scenario's map (a :class:`pymunk_bot.planning.MapInfo`) if ``needs_map``."""

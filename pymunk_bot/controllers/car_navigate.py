@@ -90,6 +90,7 @@ class CarNavigateController(Controller):
         goal = (float(goal[0]), float(goal[1]))
         if goal != self._goal:
             self._goal, self.segments, self._failed = goal, [], False
+            self.watch.restart()
         if self._failed:
             return STOP
         if obs.scan is not None:
@@ -114,10 +115,13 @@ class CarNavigateController(Controller):
             tracker.update(x, y, window=1.0)
         if tracker.s > self._progress[0] + 0.05:
             self._progress = (tracker.s, obs.time)
+        if self.gave_up(obs, tracker.s):  # along any segment: replans do not reset it
+            return self._fail(f"{self.message} after {self.replans} plans")
         end = tracker.points[-1]
         if tracker.remaining() < SEGMENT_END or math.dist(end, (x, y)) < SEGMENT_END:
             self.segments.pop(0)
             self._progress = (0.0, obs.time)
+            self.watch.mark(obs.time, 0.0)  # a segment's end is progress; the next from 0
             if not self.segments:
                 return STOP
             return STOP  # stop for a tick before driving the other way
@@ -184,6 +188,7 @@ class CarNavigateController(Controller):
                          for d, poses in self.plan.segments() if len(poses) >= 2]
         self._segment_poses = [poses for _, poses in self.plan.segments() if len(poses) >= 2]
         self._progress = (0.0, now)
+        self.watch.rebase(0.0)  # progress along the new plan counts; the clock runs on
         self.message = (f"following a {len(self.segments)}-segment drivable path "
                         f"(plan {self.replans}, {self.plan.expansions} expansions)")
         return bool(self.segments)

@@ -6,9 +6,13 @@
    (the nearest arc on which the robot can still stop before anything it sees).
 3. Watch: scan returns the map does not explain are remembered (and forgotten once a beam
    passes through them). When they block the path ahead, or the robot makes no progress along
-   the path for ``stuck_time``, it replans around them.
+   the path for ``stuck_time``, it replans around them; a replan that leaves it blocked by
+   what it sees (its LiDAR vetoes every arc the path asks for) backs it off into free space
+   first (:class:`~pymunk_bot.controllers.escape.Escape`).
 4. Fail clearly: no path on the map itself is a permanent failure at once; no path only because
-   of unmapped obstacles is retried until ``give_up_after`` seconds have passed.
+   of unmapped obstacles is retried until ``give_up_after`` seconds have passed, and so is no
+   progress along any path (:class:`~pymunk_bot.controllers.progress.ProgressWatch`: replans
+   do not reset its clock).
 """
 from __future__ import annotations
 
@@ -24,14 +28,15 @@ from pymunk_bot.planning.grid import ClearanceGrid
 from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.planning.paths import shortcut
 from pymunk_bot.planning.tracking import MovingObstacleTracker, PassingSide
-from pymunk_bot.controllers.avoid import dwa_params, to_robot_frame
+from pymunk_bot.controllers.avoid import dwa_params
 from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.controllers.escape import Escape, to_robot_frame
+from pymunk_bot.controllers.progress import PROGRESS_STEP
 from pymunk_bot.controllers.waypoints import PathFollower, pursuit_gains
 
 LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
 OFF_PATH = 1.0  # [m] farther than this from the path: replan from here
 RETRY_PERIOD = 1.0  # [s] between replans while unmapped obstacles block every route
-PROGRESS_STEP = 0.1  # [m] along the path that counts as progress
 PATH_CORNER_RADIUS = 0.25  # [m] fillets on planned paths (small: they cut toward obstacles)
 
 
@@ -59,10 +64,11 @@ class NavigateController(Controller):
         self._blocked_since: float | None = None  # first failed replan in a row [s]
         self._next_retry = 0.0
         self._permanent = False
-        self._progress = (0.0, 0.0)  # (path progress [m], when [s])
+        self._progress = (0.0, 0.0)  # (path progress [m], when [s]): replans when stale
         self.command = (0.0, 0.0)  # last (v, omega)
         self.tracker = MovingObstacleTracker()  # other robots, from successive scans
         self.passing = PassingSide()
+        self.escape = Escape()  # out of stalls where the LiDAR vetoes every arc the path asks
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -112,17 +118,25 @@ class NavigateController(Controller):
         follower = self.follower
         if follower is None:  # a successful _plan always makes one
             raise RuntimeError("navigate: a plan succeeded without a path to follow")
+        if self.gave_up(obs, follower.tracker.s):  # along any path: replans do not reset it
+            return self._fail(f"{self.message} after {self.replans} plans", permanent=True)
         self.status = "running"
         if self.window is None:
             command, _ = follower.drive(obs.pose)
             return command
         v, omega, _ = follower.command(obs.pose)
+        wanted = v  # [m/s] what the path asks for
         if scan is not None and points is not None:
             # Other robots move: predict them, and keep right when one comes at us head-on.
             velocities, oncoming = self.tracker.update(
                 scan.time, obs.pose, points, float(self.command[0]),
                 self.robot.radius + self.window.params.safety)
-            if oncoming is not None:
+            escape = self.escape.target(obs.pose, obs.time, points,
+                                        self.robot.radius + self.window.params.safety,
+                                        to_robot_frame(obs.pose, follower.carrot(obs.pose)[0]))
+            if escape is not None:  # pressed against something: back off into free space
+                v, omega = self.window.choose(*self.command, points, escape, wanted, velocities)
+            elif oncoming is not None:
                 carrot, speed, _ = follower.carrot(obs.pose)
                 ahead = to_robot_frame(obs.pose, carrot)
                 target = self.passing.target(obs.time, oncoming, ahead, self.robot.radius)
@@ -131,6 +145,7 @@ class NavigateController(Controller):
                 self.passing.target(obs.time, None, np.zeros(2), self.robot.radius)
                 # The LiDAR vetoes arcs that would hit something the map did not show.
                 v, omega = self.window.track(*self.command, points, v, omega, velocities)
+            self.escape.note(obs.time, v, wanted)
         self.command = (v, omega)
         return Command(v, omega)
 
@@ -141,6 +156,7 @@ class NavigateController(Controller):
         self._blocked_since = None
         self._permanent = False
         self._next_retry = 0.0
+        self.watch.restart()
         self.status, self.message = "running", ""
 
     def _plan(self, obs: Observation, goal, tolerance: float) -> bool:
@@ -159,6 +175,7 @@ class NavigateController(Controller):
             self.follower = PathFollower(self.path, False, self.gains, PATH_CORNER_RADIUS,
                                          1.0 / self.config.rate)
             self._progress = (0.0, obs.time)
+            self.watch.rebase(0.0)  # progress along the new path counts; the clock runs on
             self._blocked_since = None
             self.message = f"following a {len(self.path)}-point path (plan {self.replans})"
             return True

@@ -7,8 +7,9 @@ scales it. Give the robot ``localization: ground_truth`` to see the pose the env
 default (``pose_source="ground_truth"``); with the default odometry it sees what the env shows
 with ``pose_source="odometry"``. Within the stop radius of the goal it stops ("arrived").
 
-A policy that returns a NaN or infinite action fails the run (status "failed", the reason in
-the result's ``controller_message``); a file that cannot drive the robot (missing, malformed,
+A policy that returns a NaN or infinite action, or gets no closer to the goal for
+``give_up_after`` seconds, fails the run (status "failed", the reason in the result's
+``controller_message``); a file that cannot drive the robot (missing, malformed,
 the wrong input size for the robot's LiDAR) is refused when the scenario is checked.
 """
 from __future__ import annotations
@@ -48,6 +49,8 @@ class PolicyController(Controller):
         tolerance = obs.goal_tolerance if self.tolerance is None else self.tolerance
         if features[0] <= tolerance:
             self.status, self.message = "arrived", ""
+            return STOP
+        if self.gave_up(obs, -float(features[0])):
             return STOP
         self.status = "running"
         if self._builder is None or self._obs is None:

@@ -132,11 +132,14 @@ class WaypointsController(Controller):
                 follower = self.lead_in
             else:
                 self.lead_in = None
+                self.watch.mark(obs.time, 0.0)  # joined the loop: progress counts along it
         command, left = follower.drive(obs.pose)
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         if follower is self.follower and not self.config.loop and (
                 left <= 0.5 * tolerance or (left <= tolerance and follower.tracker.remaining() < 1e-6)):
             self.status, self.message = "arrived", "reached the last waypoint"
+            return STOP
+        if self.gave_up(obs, follower.tracker.s):  # along the points (laps count on a loop)
             return STOP
         self.status = "running"
         if self.config.loop and self.lead_in is None:

@@ -29,12 +29,17 @@ from pymunk_bot.envs.task import RewardWeights, end_info, load_config, prepare_s
 if TYPE_CHECKING:
     from pymunk_bot.envs.render import FrameRenderer
 
+# With no scenario: four robots swapping places across a room, their routes crossing in the
+# middle (the built-in default scenario has one robot, not a multi-robot task).
+DEFAULT_SCENARIO = "crossing"
+
 
 class MultiRobotEnv(ParallelEnv):
     """Every robot of ``scenario`` is an agent (named as the robot) driving to its own goal.
 
     Keyword arguments as :class:`~pymunk_bot.envs.NavigationEnv` (``lidar`` overrides apply
-    to every robot), except that there is no ``robot`` and no ``random_goal``.
+    to every robot), except that there is no ``robot`` and no ``random_goal``; with no
+    ``scenario``, the shipped ``crossing`` (four robots, DEFAULT_SCENARIO).
     """
 
     metadata = {"name": "pymunk_bot_multi_robot_v0", "render_modes": list(RENDER_MODES),
@@ -50,7 +55,7 @@ class MultiRobotEnv(ParallelEnv):
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
-        config, self.source = load_config(scenario)
+        config, self.source = load_config(DEFAULT_SCENARIO if scenario is None else scenario)
         # control period and time limit [s]
         self.steps_per_action, self.control_period, self.time_limit = episode_timing(
             config, control_period, max_episode_time)

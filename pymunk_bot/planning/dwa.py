@@ -137,7 +137,10 @@ class DynamicWindow:
             now = float(np.sqrt(pts[:, 0] ** 2 + pts[:, 1] ** 2).min()) - self.robot.radius
             # Already inside the safety band: arcs may get a little closer (never below a
             # quarter of it), or every arc would count as a collision and the robot would freeze.
-            hit = clear_t < min(p.safety, max(now - 0.2 * p.safety, 0.25 * p.safety))
+            # Already below that quarter (pressed against something, e.g. after a manual
+            # override): arcs may not get closer than it is now, so it can still leave.
+            floor = 0.25 * p.safety if now >= 0.25 * p.safety else now
+            hit = clear_t < min(p.safety, max(now - 0.2 * p.safety, floor))
             first = np.where(hit.any(axis=1), hit.argmax(axis=1), p.time_samples)
             free_run = np.abs(v) * first * (p.horizon / p.time_samples)  # [m] to the last safe sample
             clearance = clear_t.min(axis=1)

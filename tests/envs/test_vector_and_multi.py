@@ -154,6 +154,21 @@ def test_multi_robot_env_passes_the_parallel_api_test():
     parallel_api_test(MultiRobotEnv("head_on_swap", lidar={"beams": 36}), num_cycles=100)
 
 
+def test_multi_robot_env_with_no_scenario_has_several_agents_that_step():
+    pytest.importorskip("pettingzoo")
+    from pymunk_bot.envs import MultiRobotEnv
+
+    env = MultiRobotEnv()  # the contract: a shipped scenario with at least two robots
+    assert len(env.possible_agents) >= 2
+    observations, _ = env.reset(seed=0)
+    assert set(observations) == set(env.possible_agents)
+    start = env.state().copy()
+    for _ in range(5):
+        observations, rewards, *_ = env.step({a: np.array([1.0, 0.0]) for a in env.agents})
+    assert set(rewards) == set(env.possible_agents)
+    assert np.abs(env.state() - start).max() > 0.05  # every agent's robot is driven
+
+
 def two_robots() -> dict:
     return {"name": "pair", "world": {"size": [6.0, 4.0], "duration": 5.0},
             "robots": [{"name": "a", "pose": [1.0, 1.0, 0.0], "lidar": {"beams": 8},

@@ -1,0 +1,65 @@
+"""Walkers swapping places across a circle (exactly symmetric: RVO2's classic case) reach their
+goals: a tiny seeded perturbation breaks the symmetry that held ORCA walkers still in the middle
+for the whole run (issue 33)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import pymunk_bot as pb
+from pymunk_bot.actors.pedestrians import Crowd
+
+OVERLAP = -0.001  # [m] disc clearance below this is an overlap
+
+
+def circle_crossing(n: int, policy: str, radius: float = 2.5) -> dict:
+    """``n`` walkers evenly on a circle about (4, 4), each walking to the opposite point."""
+    walkers = []
+    for k in range(n):
+        a = 2.0 * math.pi * k / n
+        dx, dy = radius * math.cos(a), radius * math.sin(a)
+        walkers.append({"type": "pedestrian", "center": [4.0 + dx, 4.0 + dy],
+                        "goals": [[4.0 - dx, 4.0 - dy]], "mode": "once", "policy": policy})
+    return {"name": "circle_crossing", "world": {"size": [8.0, 8.0], "duration": 40.0},
+            "obstacles": walkers,
+            "robots": [{"name": "r1", "pose": [0.4, 0.4, 0.0], "controller": {"type": "wheels"}}]}
+
+
+def crossing(n: int, policy: str, seconds: float = 40.0) -> tuple[bool, float]:
+    """(every walker reached its goal, the smallest disc clearance between walkers [m])."""
+    sim = pb.Simulation.from_dict(circle_crossing(n, policy))
+    crowd = next(a for a in sim.world.actors if isinstance(a, Crowd))
+    radius = crowd.radius
+    closest = math.inf
+    for _ in range(round(seconds / sim.config.world.dt)):
+        sim.step()
+        p = crowd.positions()
+        gap = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1)) - (
+            radius[:, None] + radius[None, :])
+        np.fill_diagonal(gap, np.inf)
+        closest = min(closest, float(gap.min()))
+    return bool(np.all(crowd.done)), closest  # done: a "once" walker reached its last goal
+
+
+@pytest.mark.parametrize("n", [6, 12, 20])
+def test_orca_walkers_swapping_across_a_circle_reach_their_goals_without_overlap(n):
+    reached, closest = crossing(n, "orca")
+    assert reached, f"{n} ORCA walkers did not all reach their goals"
+    assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
+
+
+@pytest.mark.parametrize("n", [6, 12, 20])
+def test_social_force_walkers_swapping_across_a_circle_reach_their_goals(n):
+    reached, _ = crossing(n, "social_force")
+    assert reached, f"{n} social-force walkers did not all reach their goals"
+
+
+def test_the_perturbation_is_seeded():
+    first = pb.Simulation.from_dict(circle_crossing(6, "orca"))
+    second = pb.Simulation.from_dict(circle_crossing(6, "orca"))
+    first.run(5.0)
+    second.run(5.0)
+    assert [o.body.position for o in first.world.obstacles] == [
+        o.body.position for o in second.world.obstacles]
