@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from bounds import HANG_GUARD
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -15,7 +16,7 @@ def validate(tmp_path: Path, data: dict) -> subprocess.CompletedProcess:
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(data))
     return subprocess.run([sys.executable, "-m", "pymunk_bot", "validate", str(path)],
-                          capture_output=True, text=True, cwd=REPO, timeout=120)
+                          capture_output=True, text=True, cwd=REPO, timeout=HANG_GUARD)
 
 
 def base(robot: dict, obstacles: list | None = None) -> dict:
@@ -59,6 +60,6 @@ def test_diff_only_controllers_on_other_drives_are_bad_input(tmp_path, robot, me
     path.write_text(yaml.safe_dump(base(robot)))
     proc = subprocess.run([sys.executable, "-m", "pymunk_bot", "run", str(path), "--headless",
                            "--duration", "0.1"], capture_output=True, text=True, cwd=REPO,
-                          timeout=120)
+                          timeout=HANG_GUARD)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in proc.stderr and "Traceback" not in proc.stderr
