@@ -206,6 +206,8 @@ print(h.hexdigest())
 """
 
 
+@pytest.mark.slow  # a whole interpreter; tests/test_cli.py and test_vector_and_multi.py check
+# determinism across processes too
 def test_reset_seed_gives_identical_episodes_in_another_process():
     env = {**os.environ, "PYTHONHASHSEED": "123", "PYTHONPATH": str(ROOT)}
     out = subprocess.run([sys.executable, "-c", EPISODE_SCRIPT], cwd=ROOT, env=env,
