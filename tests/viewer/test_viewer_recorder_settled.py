@@ -5,9 +5,10 @@ from __future__ import annotations
 import imageio.v2 as iio2
 import imageio.v3 as iio
 import numpy as np
+import pytest
 
 from pymunk_bot.viewer import palette as pal
-from pymunk_bot.viewer import record_video
+from pymunk_bot.viewer import record_video, recorder
 from pymunk_bot.viewer.settling import SETTLE_TIME
 from test_viewer_recorder import SIZE, robot_pixel
 from viewer_helpers import build, near
@@ -65,3 +66,30 @@ def test_until_settled_false_records_the_whole_duration(tmp_path):
     assert record_video(to_a_near_goal(), path, 6.0, fps=FPS, size=SIZE, progress=False,
                         until_settled=False) == 61
     assert len(iio.imread(path, index=None)) == 61
+
+
+def test_an_encoder_that_fails_midway_stops_the_recording_with_its_error(tmp_path, monkeypatch):
+    class Failing:  # an encoder that gives up at its third frame, as ffmpeg with a full disk
+        def __init__(self, *args) -> None:
+            self.frames = 0
+            self.aborted = False
+
+        def append(self, frame: bytes) -> None:
+            self.frames += 1
+            if self.frames == 3:
+                raise RuntimeError("ffmpeg failed (exit 1): No space left on device")
+
+        def close(self) -> None:
+            raise AssertionError("a failed recording is not closed as if complete")
+
+        def abort(self) -> None:
+            self.aborted = True
+
+    made: list[Failing] = []
+    monkeypatch.setattr(recorder, "_open_writer", lambda *args: made.append(Failing()) or made[-1])
+    sim = build([{"name": "r", "pose": [0.5, 1.5, 0.0], "controller": {"type": "wheels",
+                                                                     "left": 0.3, "right": 0.3}}])
+    with pytest.raises(RuntimeError, match="No space left on device"):
+        record_video(sim, tmp_path / "clip.mp4", 30.0, fps=FPS, size=SIZE, progress=False)
+    assert made[0].aborted and made[0].frames == 3  # nothing was fed after the error
+    assert not list(tmp_path.iterdir())  # no part file left behind
