@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import pty
 import subprocess
 import sys
 from pathlib import Path
@@ -21,12 +22,25 @@ def test_the_first_run_says_it_compiles_and_keeps_it_out_of_the_real_time_factor
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
            "PYTHONPATH": str(REPO)}
 
-    def run(out: Path) -> tuple[dict, str]:
-        done = subprocess.run([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless",
-                               "--duration", "20", "--out", str(out)], cwd=tmp_path, env=env,
-                              capture_output=True, text=True, timeout=HANG_GUARD)
-        assert done.returncode in (0, 1), done.stderr
-        return json.loads(out.read_text()), done.stderr
+    def run(out: Path, terminal: bool = True) -> tuple[dict, str]:
+        """The result, and what stderr said (a terminal, as a user has, unless not ``terminal``)."""
+        reader, writer = pty.openpty() if terminal else os.pipe()
+        proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--headless",
+                                 "--duration", "20", "--out", str(out)], cwd=tmp_path, env=env,
+                                stdout=subprocess.DEVNULL, stderr=writer)
+        os.close(writer)
+        said = b""
+        while True:  # read as it comes: a full terminal buffer would block the run
+            try:
+                chunk = os.read(reader, 4096)
+            except OSError:  # a terminal whose other end has closed
+                chunk = b""
+            if not chunk:
+                break
+            said += chunk
+        os.close(reader)
+        assert proc.wait(timeout=HANG_GUARD) in (0, 1), said
+        return json.loads(out.read_text()), said.decode().replace("\r\n", "\n")
 
     first, said_first = run(tmp_path / "first.json")
     second, said_second = run(tmp_path / "second.json")
@@ -41,3 +55,16 @@ def test_the_first_run_says_it_compiles_and_keeps_it_out_of_the_real_time_factor
     assert first["real_time_factor"] == pytest.approx(first["sim_time"] / first["wall_time"])
     assert {k: v for k, v in first.items() if k not in ("wall_time", "real_time_factor")} == \
         {k: v for k, v in second.items() if k not in ("wall_time", "real_time_factor")}
+
+
+def test_the_note_stays_off_a_stderr_that_is_not_a_terminal(tmp_path, capsys):
+    # A script or a test reading stderr gets exactly what it got before (one line for bad
+    # input, even when numba compiled while the scenario was built).
+    numba = pytest.importorskip("numba")
+    from pymunk_bot.cli.compiling import CompileWatch
+
+    with CompileWatch() as watch:
+        assert numba.njit(lambda x: x + 1)(1) == 2  # a kernel no cache holds: numba compiles
+        watch.report()
+    assert watch.compiles == 1 and watch.seconds > 0
+    assert capsys.readouterr().err == ""

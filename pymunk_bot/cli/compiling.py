@@ -6,7 +6,9 @@ takes tens of seconds, and every later run loads them from the cache in a fracti
 :class:`CompileWatch` listens to numba's own ``numba:compile`` events, which numba raises only
 when it really compiles (not when it loads from its cache), so it needs no list of kernels:
 the first compile prints one line on stderr saying what is happening and about how long it
-takes, and the ticks during which numba compiled are kept out of the run's ``wall_time`` and
+takes (when stderr is a terminal, as the progress bars do: a script or a test reading stderr
+still gets exactly one line for bad input, and numba compiles while the scenario is built,
+before the output options are checked), and the ticks during which numba compiled are kept out of the run's ``wall_time`` and
 ``real_time_factor`` (the whole tick: numba also writes its cache after the compile event; a
 handful of ticks among thousands, so the factor is the steps' speed to well under 1 %).
 """
@@ -27,13 +29,15 @@ class CompileWatch:
 
     ``seconds`` [s] is the wall time of the outermost compiles so far (a kernel that calls
     another compiles it inside its own compile: counted once). Without numba it stays 0.
+    ``stream`` (default stderr) hears of the first compile if it is a terminal.
     """
 
     def __init__(self, stream: TextIO | None = None) -> None:
+        stream = stream or sys.stderr
+        self._stream: TextIO | None = stream if getattr(stream, "isatty", bool)() else None
         self.seconds = 0.0
         self.compiles = 0  # outermost compiles so far
         self._seen: tuple[int, float] = (0, 0.0)  # compiles, the run's wall_time after a tick
-        self._stream = stream
         self._depth = 0
         self._started = 0.0
         self._announced = False
@@ -64,16 +68,17 @@ class CompileWatch:
             event.unregister("numba:compile", self._listener)
             self._listener = None
 
-    @property
-    def compiled(self) -> bool:
-        """Whether anything was compiled (not loaded from the cache) while watching."""
-        return self._announced
+    def report(self) -> None:
+        """After the run: how long compiling took, if it was announced."""
+        if self._announced and self._stream is not None:
+            print(f"note: compiling took {self.seconds:.1f} s", file=self._stream, flush=True)
 
     def _compile_started(self) -> None:
         if self._depth == 0:
             if not self._announced:
                 self._announced = True
-                print(ANNOUNCEMENT, file=self._stream or sys.stderr, flush=True)
+                if self._stream is not None:
+                    print(ANNOUNCEMENT, file=self._stream, flush=True)
             self._started = time.perf_counter()
         self._depth += 1
 

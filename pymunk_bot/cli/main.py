@@ -85,8 +85,7 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs,
         if not args.headless and not _display_available():
             print("note: no display found; running headless (pass --headless to silence this)")
         outputs.run_headless(sim, duration)
-    if compiling.compiled:
-        print(f"note: compiling took {compiling.seconds:.1f} s", file=sys.stderr)
+    compiling.report()  # on a terminal, after a first run: how long numba compiled
     result = sim.result()
     verdict = sim.verdict()
     outputs.finish(sim)  # the run log, the built map (--map-out)
