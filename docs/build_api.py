@@ -18,11 +18,11 @@ from pathlib import Path
 
 # The public API (/work/shared/CONTRACT.md and the docs' examples), in the order of the index.
 PUBLIC_MODULES = [
-    "pymunk_bot", "pymunk_bot.sim", "pymunk_bot.robot", "pymunk_bot.replicas",
-    "pymunk_bot.command", "pymunk_bot.errors", "pymunk_bot.config", "pymunk_bot.plugins",
-    "pymunk_bot.registry", "pymunk_bot.controllers", "pymunk_bot.sensors",
-    "pymunk_bot.localization", "pymunk_bot.envs", "pymunk_bot.runlog", "pymunk_bot.sweep",
-    "pymunk_bot.policy_io", "pymunk_bot.policy_file", "pymunk_bot.navmetrics",
+    "pymunk_bot", "pymunk_bot.engine.simulation", "pymunk_bot.robots.robot", "pymunk_bot.engine.replicas",
+    "pymunk_bot.robots.command", "pymunk_bot.config.errors", "pymunk_bot.config", "pymunk_bot.plugins",
+    "pymunk_bot.config.registry", "pymunk_bot.controllers", "pymunk_bot.sensors",
+    "pymunk_bot.localization", "pymunk_bot.envs", "pymunk_bot.outcomes.runlog", "pymunk_bot.sweep",
+    "pymunk_bot.policy.io", "pymunk_bot.policy.files", "pymunk_bot.outcomes.navigation",
     "pymunk_bot.benchmark",
 ]
 DEFAULT_OUT = Path(__file__).resolve().parent / "api"

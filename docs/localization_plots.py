@@ -23,7 +23,7 @@ def _map(ax, grid) -> None:
 
 def mcl_figure(plt) -> None:
     from pymunk_bot import Simulation
-    from pymunk_bot.benchmarks import localization_worlds as worlds
+    from bench import localization_worlds as worlds
     from pymunk_bot.localization import MclConfig, MclLocalizer
     from pymunk_bot.localization.trial import make_context, run_trial
     from pymunk_bot.maps.rasterize import scenario_grid
@@ -60,7 +60,7 @@ def mcl_figure(plt) -> None:
 
 def global_figure(plt) -> None:
     from pymunk_bot import Simulation
-    from pymunk_bot.benchmarks import localization_worlds as worlds
+    from bench import localization_worlds as worlds
     from pymunk_bot.localization import MclConfig, MclLocalizer
     from pymunk_bot.localization.trial import make_context, run_trial
 
@@ -95,7 +95,7 @@ def slam_ekf_figure(plt) -> None:
     from scipy.stats import chi2
 
     from pymunk_bot import Simulation
-    from pymunk_bot.benchmarks import localization_worlds as worlds
+    from bench import localization_worlds as worlds
     from pymunk_bot.localization import EkfConfig, EkfLocalizer, SlamConfig, SlamLocalizer
     from pymunk_bot.localization.se2 import wrap
     from pymunk_bot.localization.trial import make_context, run_trial

@@ -50,7 +50,7 @@ class GyroOdometry(Localizer):
 
 def main() -> None:
     from pymunk_bot import Simulation
-    from pymunk_bot.benchmarks.localization_worlds import OFFICE_ROUTE, office_scenario
+    from bench.localization_worlds import OFFICE_ROUTE, office_scenario
     from pymunk_bot.localization.metrics import error_block
     from pymunk_bot.localization.trial import make_context, run_trial
 

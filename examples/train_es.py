@@ -53,7 +53,7 @@ def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
 
 def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]]):
     """The MLP whose weights and biases are ``theta`` (layer after layer, W then b)."""
-    from pymunk_bot.policy_file import MlpPolicy
+    from pymunk_bot.policy.files import MlpPolicy
 
     weights, biases, k = [], [], 0
     for n_in, n_out in layer_shapes:
@@ -171,7 +171,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=200, help="held-out evaluation episodes")
     parser.add_argument("--evaluate", type=Path, default=None, help="only evaluate this .npz")
     args = parser.parse_args()
-    from pymunk_bot.policy_file import MlpPolicy
+    from pymunk_bot.policy.files import MlpPolicy
 
     if args.evaluate is not None:
         policy = MlpPolicy.load(args.evaluate)

@@ -14,8 +14,8 @@ training in one process on a shared 2-core machine, 98-100 % from 300,000 steps 
 
 The task is the ES recipe's (examples/train_es.py): every episode a new generated cluttered
 world, a random free start and a random goal; the 32-beam observation of
-:mod:`pymunk_bot.policy_io`. The actor is SB3's default MLP (two layers of 64 tanh units, a
-linear output): exactly the ``.npz`` MLP of :mod:`pymunk_bot.policy_file`, so ``--npz`` saves
+:mod:`pymunk_bot.policy.io`. The actor is SB3's default MLP (two layers of 64 tanh units, a
+linear output): exactly the ``.npz`` MLP of :mod:`pymunk_bot.policy.files`, so ``--npz`` saves
 it for ``controller: {type: policy, path: ppo_navigation.npz}`` without onnxruntime, and
 ``--onnx`` exports the same actor as ONNX. ``--checkpoints N`` saves N models during training
 with their wall time; ``--plot`` then evaluates each on held-out episodes (the learning curve).
@@ -112,7 +112,7 @@ def to_mlp_policy(model):
     import torch
     from stable_baselines3.common.torch_layers import FlattenExtractor
 
-    from pymunk_bot.policy_file import MlpPolicy
+    from pymunk_bot.policy.files import MlpPolicy
 
     policy = model.policy
     hidden = list(policy.mlp_extractor.policy_net)  # Linear, Tanh, Linear, Tanh, ...

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import importlib.metadata
 
-from .registry import Registry
+from pymunk_bot.config.registry import Registry
 
 ENTRY_POINT_GROUP = "pymunk_bot.plugins"
 
@@ -67,23 +67,23 @@ _entry_points_loaded: set[str] = set()
 
 
 def _register_builtins() -> None:
-    from .config import controllers as c
-    from .config import drives as d
-    from .config import motion as m
-    from .config import localization as loc
-    from .config import schema as s
+    from pymunk_bot.config import controllers as c
+    from pymunk_bot.config import drives as d
+    from pymunk_bot.config import motion as m
+    from pymunk_bot.config import localization as loc
+    from pymunk_bot.config import schema as s
 
-    drives.add("diff", "pymunk_bot.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
-    drives.add("ackermann", "pymunk_bot.drives.ackermann:AckermannDriveGroup",
+    drives.add("diff", "pymunk_bot.robots.drives.diff:DiffDriveGroup", s.DiffRobotConfig)
+    drives.add("ackermann", "pymunk_bot.robots.drives.ackermann:AckermannDriveGroup",
                d.AckermannRobotConfig)
-    drives.add("omni", "pymunk_bot.drives.omni:OmniDriveGroup", d.OmniRobotConfig)
+    drives.add("omni", "pymunk_bot.robots.drives.omni:OmniDriveGroup", d.OmniRobotConfig)
     odometry.add("diff", "pymunk_bot.sensors.odometry:of_diff_drive")
     odometry.add("ackermann", "pymunk_bot.sensors.odometry_ackermann:of_ackermann_drive")
     odometry.add("omni", "pymunk_bot.sensors.odometry_omni:of_omni_drive")
     obstacle_models: tuple[tuple[str, type], ...] = (("box", s.BoxObstacle), ("circle", s.CircleObstacle),
                         ("polygon", s.PolygonObstacle), ("wall", s.WallObstacle))
     for name, model in obstacle_models:
-        obstacles.add(name, "pymunk_bot.obstacles:build_obstacle", model)
+        obstacles.add(name, "pymunk_bot.physics.obstacles:build_obstacle", model)
     obstacles.add("pedestrian", "pymunk_bot.actors.pedestrians:build_pedestrian",
                   m.PedestrianObstacle)
     # Registration order fixes each sensor's random stream: keep new sensors after these.
@@ -102,7 +102,7 @@ def _register_builtins() -> None:
             ("policy", "policy:PolicyController", c.PolicyControllerConfig))
     for name, cls, model in builtin_controllers:
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
-    from .localization import config as lc
+    from pymunk_bot.localization import config as lc
 
     builtin_localizers: tuple[tuple[str, str, type], ...] = (
             ("ground_truth", "simple:GroundTruthLocalizer", loc.GroundTruthLocalizerConfig),

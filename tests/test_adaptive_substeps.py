@@ -7,9 +7,9 @@ import pytest
 from builders import robot, scenario, wheels
 
 from pymunk_bot.config import parse_scenario
-from pymunk_bot.errors import ScenarioError
-from pymunk_bot.replicas import Replicas
-from pymunk_bot.sim import Simulation
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.engine.replicas import Replicas
+from pymunk_bot.engine.simulation import Simulation
 
 
 def _sim(robots, obstacles=None, **extra) -> Simulation:
@@ -113,7 +113,7 @@ def test_a_failed_test_grants_no_single_steps_to_the_movers_it_did_not_look_at()
     after passing each other they race to opposite walls. A test that fails stops at the
     first mover that can touch something soon; the other one, nearer its wall, was not looked
     at, and must not take single steps into it (it did: 12.9 mm deep)."""
-    from pymunk_bot.benchmarks import contacts
+    from bench import contacts
     rng = np.random.default_rng(0)  # the bench's trials draw in turn from one generator
     for i in range(443):
         contacts.trial_scenario(contacts.KINDS[i % len(contacts.KINDS)], rng)
@@ -150,7 +150,7 @@ def test_the_substeps_a_speed_needs_come_from_the_scenarios_own_formula():
     scenario's formula gives (robots, a crate and a walker), and the top speed's is the
     scenario's count."""
     from pymunk_bot.config.substeps import required_substeps, substep_need
-    from pymunk_bot.substep_gate import SubstepGate
+    from pymunk_bot.physics.substeps import SubstepGate
     config = parse_scenario(scenario(
         [robot([2, 2, 0]), robot([5, 2, 0], name="s")],
         [{"type": "box", "center": [8, 8], "size": [0.3, 0.3], "movable": True, "mass": 2.0}]),

@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from pymunk_bot.benchmarks import SECTIONS, fleet, irsim, learning_loop, run_all
+from bench import SECTIONS, fleet, irsim, learning_loop, run_all
 from pymunk_bot.config import parse_scenario
 from pymunk_bot.sensors.lidar import beam_angles
-from pymunk_bot.sim import Simulation
+from pymunk_bot.engine.simulation import Simulation
 
 
 @pytest.mark.slow  # end-to-end, several seconds: .ci/run runs it (-m slow)

@@ -1,12 +1,12 @@
 """Contacts hold at every speed, acceleration and dt a scenario allows: no robot passes an
 obstacle, no pushed crate passes a wall, no contact deeper than 1 cm (a seeded subset of the
-bench's 1000 randomized trials: `python -m pymunk_bot.benchmarks.contacts`)."""
+bench's 1000 randomized trials: `python -m bench.contacts`)."""
 from __future__ import annotations
 
 import pytest
 
-from pymunk_bot.benchmarks.contacts import WALL_X, deepest_overlap, run_trials
-from pymunk_bot.sim import Simulation
+from bench.contacts import WALL_X, deepest_overlap, run_trials
+from pymunk_bot.engine.simulation import Simulation
 
 
 @pytest.mark.parametrize("seed", [11, 12])

@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from pymunk_bot.benchmarks.fleet import swarm_scenario
-from pymunk_bot.sim import Simulation
+from bench.fleet import swarm_scenario
+from pymunk_bot.engine.simulation import Simulation
 
 
 def _run(monkeypatch: pytest.MonkeyPatch, small_below: int, seconds: float) -> np.ndarray:

@@ -240,9 +240,9 @@ def test_a_20_mb_file_is_refused_without_reading_it_all(tmp_path):
 
 @pytest.mark.slow
 def test_seeded_mutations_get_no_tracebacks_and_no_hangs():
-    from pymunk_bot.benchmarks.fuzz import fuzz
+    from bench.fuzz import fuzz
 
-    counts = fuzz(files=1000, seed=0, timeout=20.0)
+    counts = fuzz(files=1000, seed=0, timeout=120.0)  # [s] per file: a hang, not load
     for command, counter in counts.items():
         assert counter["traceback"] == 0 and counter["hang"] == 0, (command, counter)
         assert counter["bad-message"] == 0, (command, counter)

@@ -12,8 +12,8 @@ import pytest
 
 from pymunk_bot import plugins
 from pymunk_bot.config import parse_scenario
-from pymunk_bot.errors import ScenarioError
-from pymunk_bot.sim import Simulation
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.engine.simulation import Simulation
 
 # A spiral: forward speed v, yaw rate v / r(t) with a turn radius growing as r0 + growth * t,
 # and a compass sensor reading the heading. Written as a third party would, on the public API.
@@ -182,7 +182,7 @@ import pymunk
 
 from pymunk_bot import plugins
 from pymunk_bot.config.types import Friction, PositiveFloat, Section, Vec2
-from pymunk_bot.obstacles import Obstacle
+from pymunk_bot.physics.obstacles import Obstacle
 
 
 class PostConfig(Section):

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
-from pymunk_bot import geometry as geo
+from pymunk_bot.geometry import plane as geo
 from pymunk_bot.cli import main
 from pymunk_bot.config.schema import BoxObstacle, PolygonObstacle
 from pymunk_bot.config.outlines import distance_to_obstacle, footprint_hits
-from pymunk_bot.footprint import Footprint, polygon_centroid
+from pymunk_bot.geometry.footprint import Footprint, polygon_centroid
 
 # An L: a 2 m x 0.5 m foot and a 0.5 m x 2 m upright, its inner corner at (0.5, 0.5).
 L_SHAPE = np.array([[0, 0], [2, 0], [2, 0.5], [0.5, 0.5], [0.5, 2], [0, 2]], dtype=float)

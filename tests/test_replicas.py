@@ -7,9 +7,9 @@ import pytest
 
 from pymunk_bot.config import load_scenario, parse_scenario
 from pymunk_bot.config.substeps import required_substeps
-from pymunk_bot.physics import MAX_REPLICAS
-from pymunk_bot.replicas import Replicas
-from pymunk_bot.sim import Simulation
+from pymunk_bot.physics.settings import MAX_REPLICAS
+from pymunk_bot.engine.replicas import Replicas
+from pymunk_bot.engine.simulation import Simulation
 
 
 def _named(data: dict, name: str):
@@ -218,3 +218,19 @@ def test_car_and_omni_copies_stay_exact_across_other_copies_resets(scenario):
             assert np.array_equal(a.odometry.covariance, b.odometry.covariance)
             assert a.odometry.covariance.any()  # the noise model ran
     assert [s.result()["robots"] for s in copies.sims] == [s.result()["robots"] for s in alone]
+
+
+def test_a_teleport_in_a_stacked_copy_counts_no_distance():
+    """A kidnapped robot jumps: the jump is no path travelled, in a copy whose bookkeeping is
+    stacked with the others' as in a run of its own."""
+    config = _lidar_default(crate=False)
+    copies = Replicas(config, [1, 2])
+    assert copies.stacked
+    robots = [sim.robots["r1"] for sim in copies.sims]
+    for _ in range(6):
+        copies.step()
+    before = [r.distance for r in robots]
+    robots[1].teleport(1.0, 1.0, 0.0)  # several metres from where it stood
+    copies.step()
+    assert robots[1].distance - before[1] < 0.01
+    assert robots[0].distance - before[0] < 0.01

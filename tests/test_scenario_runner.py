@@ -7,7 +7,7 @@ import pytest
 from bounds import HANG_GUARD
 
 from pymunk_bot.cli import main
-from pymunk_bot.scenario_tests import discover
+from pymunk_bot.cli.scenario_tests import discover
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = sorted((ROOT / "scenarios").glob("*.yaml"))

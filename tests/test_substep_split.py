@@ -1,4 +1,4 @@
-"""Robots that nothing can reach step apart (pymunk_bot/substep_split.py): a fleet of
+"""Robots that nothing can reach step apart (pymunk_bot/physics/apart.py): a fleet of
 SPLIT_FROM robots, where most step once a tick in a Space of their own while the others
 substep, keeps its contacts shallow, runs the same twice, and gives the whole world back to
 whoever asks for its Space."""
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pymunk
 
-from pymunk_bot.benchmarks.fleet import swarm_scenario
-from pymunk_bot.sim import Simulation
-from pymunk_bot.substep_split import SPLIT_FROM, FixedOutlines
+from bench.fleet import swarm_scenario
+from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.physics.apart import SPLIT_FROM, FixedOutlines
 
 
 def _swarm(**changes: object) -> Simulation:

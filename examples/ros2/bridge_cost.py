@@ -22,7 +22,7 @@ def paced(scenario: str, duration: float, bridge: bool, clients: int) -> float:
     code = f"""
 import time, sys
 from pymunk_bot.config import load_scenario
-from pymunk_bot.sim import Simulation
+from pymunk_bot.engine.simulation import Simulation
 from pymunk_bot.foxglove.live import run_paced
 config = load_scenario({scenario!r})
 sim = Simulation(config, seed=1, source={scenario!r})

@@ -10,8 +10,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .motion import PathScript, ScriptedMotion
-from .pedestrians import Crowd, make_crowd
+from pymunk_bot.actors.motion import PathScript, ScriptedMotion
+from pymunk_bot.actors.pedestrians import Crowd, make_crowd
 
 __all__ = ["Crowd", "PathScript", "ScriptedMotion", "make_actors"]
 

@@ -10,7 +10,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..obstacles import Obstacle
+from pymunk_bot.physics.obstacles import Obstacle
 
 
 class PathScript:

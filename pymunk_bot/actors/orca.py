@@ -92,7 +92,7 @@ class Orca:
         ``visible`` (k, m): who each agent takes into account (not itself); ``walls``: per
         agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
         nearest first, (k, MAX_WALL_LINES, 3), and how many (k,)."""
-        from .orca_lp import solve_all
+        from pymunk_bot.actors.orca_lp import solve_all
 
         c, s = np.cos(KEEP_RIGHT_ANGLE), np.sin(KEEP_RIGHT_ANGLE)
         pref = np.column_stack([c * pref[:, 0] + s * pref[:, 1], -s * pref[:, 0] + c * pref[:, 1]])

@@ -31,13 +31,13 @@ from typing import Any, Sequence
 import numpy as np
 import pymunk
 
-from .. import physics
-from ..config.motion import MAX_SPEED_FACTOR
-from ..obstacles import Obstacle
-from .body_state import BodyStates
-from .orca import MAX_WALL_LINES, Orca
-from .social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
-from .surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
+from pymunk_bot.physics import settings as physics
+from pymunk_bot.config.motion import MAX_SPEED_FACTOR
+from pymunk_bot.physics.obstacles import Obstacle
+from pymunk_bot.actors.body_state import BodyStates
+from pymunk_bot.actors.orca import MAX_WALL_LINES, Orca
+from pymunk_bot.actors.social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
+from pymunk_bot.actors.surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
 
 WALL_REACH = 5.0  # wall forces are computed out to this many ranges R
 PEDESTRIAN_FRICTION = 0.3
@@ -81,7 +81,7 @@ class Crowd:
     """Every pedestrian of a world (an actor: ``before_step`` each tick).
 
     It feels only what its walkers collide with (by their filters), so copies of a world on a
-    shared ground (:mod:`pymunk_bot.replicas`) each keep to their own."""
+    shared ground (:mod:`pymunk_bot.engine.replicas`) each keep to their own."""
 
     keeps_to_its_copy = True
 

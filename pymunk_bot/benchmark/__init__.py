@@ -6,15 +6,15 @@
                          seeds=range(5), backend="process", out="episodes.csv")
     print(markdown(summarize(rows)))
 
-See docs/benchmark.md (the metrics are :mod:`pymunk_bot.navmetrics`).
+See docs/benchmark.md (the metrics are :mod:`pymunk_bot.outcomes.navigation`).
 """
 from __future__ import annotations
 
-from .controllers import ControllerChoice, controller_choice, controller_choices
-from .layouts import LAYOUTS, draw_layout
-from .runner import ROW_KEYS, run_benchmark, run_episode
-from .suite import Entry, episode_data, load_suite, shipped_suites
-from .summary import MixedSignatures, markdown, summarize, to_json
+from pymunk_bot.benchmark.controllers import ControllerChoice, controller_choice, controller_choices
+from pymunk_bot.benchmark.layouts import LAYOUTS, draw_layout
+from pymunk_bot.benchmark.runner import ROW_KEYS, run_benchmark, run_episode
+from pymunk_bot.benchmark.suite import Entry, episode_data, load_suite, shipped_suites
+from pymunk_bot.benchmark.summary import MixedSignatures, markdown, summarize, to_json
 
 __all__ = ["ControllerChoice", "Entry", "LAYOUTS", "MixedSignatures", "ROW_KEYS",
            "controller_choice", "controller_choices", "draw_layout", "episode_data",

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import yaml
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 
 @dataclass(frozen=True)
@@ -22,7 +22,7 @@ class ControllerChoice:
 
 def controller_choice(spec: str) -> ControllerChoice:
     """``spec`` -> the controller it names (ScenarioError naming ``--controller`` if none)."""
-    from .. import plugins
+    from pymunk_bot import plugins
 
     plugins.load()
     path = Path(spec)
@@ -42,7 +42,7 @@ def controller_choice(spec: str) -> ControllerChoice:
         return ControllerChoice(path.stem, block, str(path.resolve().parent))
     if spec in plugins.controllers:
         return ControllerChoice(spec, {"type": spec})
-    from ..config.messages import did_you_mean
+    from pymunk_bot.config.messages import did_you_mean
     names = plugins.controllers.names()
     raise ScenarioError("--controller", "", f"'{spec}' is neither a controller type nor a "
                         f"controller file{did_you_mean(spec, names)} (types: {', '.join(names)})")

@@ -24,11 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from ..config.outlines import obstacle_outline
-from ..planning.astar import astar
-from ..planning.grid import ClearanceGrid
-from ..planning.map import MapCircle, MapInfo, MapPolygon, map_polygons
-from ..planning.paths import path_length, shortcut
+from pymunk_bot.config.outlines import obstacle_outline
+from pymunk_bot.planning.astar import astar
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapCircle, MapInfo, MapPolygon, map_polygons
+from pymunk_bot.planning.paths import path_length, shortcut
 
 LAYOUTS = ("circle_crossing", "square_crossing", "corridor_passing", "doorway")
 GRID = 0.1  # [m] planning grid of the placement checks and routes
@@ -51,7 +51,7 @@ class LayoutError(ValueError):
 def static_map(world: dict, obstacles: list[dict], map_geometry: Any = None) -> MapInfo:
     """The static map of a world section and obstacle list (plain data); ``map_geometry``
     the loaded ``world.map`` if it has one."""
-    from .. import plugins
+    from pymunk_bot import plugins
 
     plugins.load()
     polygons: list[MapPolygon] = []

@@ -5,7 +5,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ..navmetrics import BY_NAME
+from pymunk_bot.outcomes.navigation import BY_NAME
 
 PLOTTED = ("success", "collision_human", "spl", "time_to_goal", "min_distance_to_human",
            "personal_space_time", "human_impulse", "max_jerk")
@@ -20,7 +20,7 @@ def plot_summary(summary: dict[str, Any], path: str | Path, title: str = "") -> 
         import matplotlib.pyplot as plt
     except ImportError:
         raise ValueError("--plot needs matplotlib: pip install matplotlib") from None
-    from ..results import temp_beside
+    from pymunk_bot.outcomes.results import temp_beside
 
     names = list(summary["controllers"])
     fig, axes = plt.subplots(2, 4, figsize=(16, 7), constrained_layout=True)

@@ -14,11 +14,11 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Iterable
 
-from ..config import parse_scenario
-from ..errors import ScenarioError
-from ..navmetrics import METRIC_NAMES, Thresholds
-from .controllers import ControllerChoice
-from .suite import Entry, episode_data
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.outcomes.navigation import METRIC_NAMES, Thresholds
+from pymunk_bot.benchmark.controllers import ControllerChoice
+from pymunk_bot.benchmark.suite import Entry, episode_data
 
 ROW_KEYS = ("run", "suite", "scenario", "controller", "seed", "signature", "status", "error",
             "sim_time") + METRIC_NAMES
@@ -49,8 +49,8 @@ def run_episode(entry: Entry, choice: ControllerChoice, seed: int, thresholds: T
     """One episode's row; anything that goes wrong (a controller that raises, a layout
     without room for this seed) marks it failed, with the reason. Bad input is caught before
     the run by :func:`check_episodes`."""
-    from ..navmetrics import track
-    from ..sim import Simulation
+    from pymunk_bot.outcomes.navigation import track
+    from pymunk_bot.engine.simulation import Simulation
 
     row: dict[str, Any] = {"suite": entry.suite, "scenario": entry.scenario,
                            "controller": choice.name, "seed": seed,
@@ -117,8 +117,8 @@ def run_benchmark(entries: list[Entry], choices: list[ControllerChoice], seeds: 
     ValueError before anything runs."""
     from tqdm import tqdm
 
-    from ..sweep.backends import default_workers, run_chunks
-    from ..sweep.output import check_output, write_table
+    from pymunk_bot.sweep.backends import default_workers, run_chunks
+    from pymunk_bot.sweep.output import check_output, write_table
 
     thresholds = thresholds or Thresholds()
     seeds = [int(s) for s in seeds]

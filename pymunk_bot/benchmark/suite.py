@@ -16,10 +16,10 @@ from typing import Annotated, Any
 import yaml
 from pydantic import Field, ValidationError
 
-from ..config.loader import shipped_scenario_dirs
-from ..config.types import Duration, Name, PositiveFloat, PositiveInt, Section, Vec2
-from ..errors import ScenarioError
-from .layouts import LAYOUTS, LayoutError, draw_layout
+from pymunk_bot.config.loader import shipped_scenario_dirs
+from pymunk_bot.config.types import Duration, Name, PositiveFloat, PositiveInt, Section, Vec2
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.benchmark.layouts import LAYOUTS, LayoutError, draw_layout
 
 MAX_ENTRIES = 10_000  # scenarios per suite at most
 MAX_HUMANS = 500  # pedestrians per generated scenario at most
@@ -130,7 +130,7 @@ def load_suite(spec: str) -> list[Entry]:
     if not path.exists():
         shipped = shipped_suites()
         if spec not in shipped:
-            from ..config.messages import did_you_mean
+            from pymunk_bot.config.messages import did_you_mean
             raise ScenarioError(spec, "", "no such file, folder or shipped suite"
                                 f"{did_you_mean(spec, list(shipped))}; see `pymunk-bot "
                                 "benchmark --list`")
@@ -149,7 +149,7 @@ def load_suite(spec: str) -> list[Entry]:
 
 @functools.lru_cache(maxsize=16)
 def _map_geometry(path: str, scale: float | None) -> Any:
-    from ..maps.files import load_world_map
+    from pymunk_bot.maps.files import load_world_map
     return load_world_map(path, scale, source=path)
 
 
@@ -173,7 +173,7 @@ def _generate(entry: Entry, seed: int) -> dict:
     geometry = None
     obstacles = [dict(o) for o in world.obstacles]
     if world.generate is not None:
-        from ..maps.generate import generate
+        from pymunk_bot.maps.generate import generate
         made = generate(world.generate, world.seed, None if world.size is None
                         else (float(world.size[0]), float(world.size[1])))
         section: dict[str, Any] = {"size": made["world"]["size"]}

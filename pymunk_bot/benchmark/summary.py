@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..navmetrics import BY_NAME, METRIC_NAMES
+from pymunk_bot.outcomes.navigation import BY_NAME, METRIC_NAMES
 
 # Columns of the Markdown table (all metrics are in the JSON).
 TABLE = ("success", "collision", "collision_human", "timeout", "spl", "time_to_goal",

@@ -7,8 +7,8 @@ import re
 from pathlib import Path
 from typing import Callable
 
-from ..errors import ScenarioError
-from ..results import writable_problem
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.outcomes.results import writable_problem
 
 # 0 ran and every expectation held; 1 an expectation failed, could not be decided, or a
 # controller failed (or raised); 2 bad input; 3 an internal error (a bug: traceback shown).
@@ -44,7 +44,7 @@ def seed_number(text: str) -> int:
         value = int(text, 10)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a whole number >= 0 (got '{text}')") from None
-    from ..config.checks import check_seed  # here: `import pymunk_bot.cli` stays light
+    from pymunk_bot.config.checks import check_seed  # here: `import pymunk_bot.cli` stays light
 
     try:
         seed = check_seed(value)

@@ -6,12 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..errors import ScenarioError
-from .arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_OK
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.cli.arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_OK
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from ..sweep import BACKENDS
+    from pymunk_bot.sweep import BACKENDS
 
     bench = subparsers.add_parser(
         "benchmark", help="score navigation controllers on a suite of scenarios (metrics)",
@@ -49,11 +49,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
-    from ..benchmark import controller_choices, load_suite, markdown, run_benchmark, \
+    from pymunk_bot.benchmark import controller_choices, load_suite, markdown, run_benchmark, \
         shipped_suites, summarize, to_json
-    from ..navmetrics import Thresholds
-    from ..results import writable_problem, write_atomic
-    from ..sweep import BackendUnavailable, parse_seeds
+    from pymunk_bot.outcomes.navigation import Thresholds
+    from pymunk_bot.outcomes.results import writable_problem, write_atomic
+    from pymunk_bot.sweep import BackendUnavailable, parse_seeds
 
     if args.list:
         return _list(shipped_suites())
@@ -89,7 +89,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         write_atomic(args.summary, to_json(summary).encode("utf-8"))
         write_atomic(args.summary.with_suffix(".md"), table.encode("utf-8"))
     if args.plot is not None:
-        from ..benchmark.plot import plot_summary
+        from pymunk_bot.benchmark.plot import plot_summary
         plot_summary(summary, args.plot)
     failed = [r for r in rows if r["status"] != "ok"]
     for row in failed[:10]:
@@ -100,7 +100,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
 
 
 def _list(suites: dict[str, Path]) -> int:
-    from ..benchmark import load_suite
+    from pymunk_bot.benchmark import load_suite
 
     for name, path in suites.items():
         try:

@@ -15,8 +15,8 @@ import json
 import sys
 from pathlib import Path
 
-from ..errors import ScenarioError
-from .arguments import (
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.cli.arguments import (
     EXIT_BAD_INPUT, EXIT_OK, check_output, count_up_to, duration_seconds, jobs_count, seed_number,
 )
 
@@ -75,12 +75,12 @@ def env_kwargs(args: argparse.Namespace) -> dict:
 
 def command(args: argparse.Namespace) -> int:
     try:
-        from ..envs import NavigationEnv
+        from pymunk_bot.envs import NavigationEnv
     except ImportError as exc:
         print(f"error: evaluate: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    from ..envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
-    from ..policy_file import PolicyFileError, load_policy
+    from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
+    from pymunk_bot.policy.files import PolicyFileError, load_policy
 
     if args.out is not None:
         check_output("--out", args.out, (".csv",))
@@ -107,7 +107,7 @@ def command(args: argparse.Namespace) -> int:
     summary = summarize(outcomes)
     print(json.dumps(summary, indent=2) if args.json else format_summary(summary))
     if args.out is not None:
-        from ..results import write_atomic
+        from pymunk_bot.outcomes.results import write_atomic
 
         text = io.StringIO()
         rows = outcome_rows(outcomes)

@@ -5,15 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import ScenarioError
-from .served import ServedOutputs
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.cli.served import ServedOutputs
 
 LOG_FORMATS = (".npz", ".mcap")
 
 
 def add_run_options(run: argparse.ArgumentParser) -> None:
     """``--foxglove [--port] [--host] [--speed]`` on ``run``."""
-    from ..foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+    from pymunk_bot.foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
 
     group = run.add_argument_group("live view in Foxglove")
     group.add_argument("--foxglove", action="store_true",
@@ -33,26 +33,26 @@ def add_parser(sub) -> None:
     convert = sub.add_parser("convert", help="convert a run log between .npz and .mcap")
     convert.add_argument("source", type=Path, help="a run log (.npz or .mcap)")
     convert.add_argument("target", type=Path, help="the file to write (.mcap or .npz)")
-    from .ros2 import add_convert_options
+    from pymunk_bot.cli.ros2 import add_convert_options
 
     add_convert_options(convert)  # --profile ros2
     convert.set_defaults(func=cmd_convert)
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    from .arguments import check_output
+    from pymunk_bot.cli.arguments import check_output
 
     source, target = Path(args.source), Path(args.target)
     if source.suffix.lower() not in LOG_FORMATS:
         raise ScenarioError(str(source), "", f"unsupported file type; use {' or '.join(LOG_FORMATS)}")
     check_output("target", target, LOG_FORMATS)
     if getattr(args, "profile", None) == "ros2":
-        from .ros2 import convert_to_bag
+        from pymunk_bot.cli.ros2 import convert_to_bag
 
         return convert_to_bag(source, target)
     if target.suffix.lower() == ".mcap" or source.suffix.lower() == ".mcap":
         _require_all("convert")
-    from ..foxglove.convert import convert
+    from pymunk_bot.foxglove.convert import convert
 
     log = convert(source, target)
     print(f"wrote {target} ({len(log.time) - 1} steps, {log.time[-1]:.2f} s)")
@@ -60,7 +60,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _require_all(option: str) -> None:
-    from ..foxglove import require
+    from pymunk_bot.foxglove import require
 
     for module in ("foxglove", "mcap", "mcap_protobuf"):
         require(module, option)
@@ -84,17 +84,17 @@ def prepare_foxglove(args, sim, log_path: Path | None) -> FoxgloveOutputs | None
     _require_all("--foxglove" if live else "--log")
     import foxglove
 
-    from ..foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
-    from ..foxglove.live import LiveServer, check_speed
-    from ..foxglove.mcap_log import McapLogger
-    from ..foxglove.publisher import Publisher, SimPublisher
+    from pymunk_bot.foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
+    from pymunk_bot.foxglove.live import LiveServer, check_speed
+    from pymunk_bot.foxglove.mcap_log import McapLogger
+    from pymunk_bot.foxglove.publisher import Publisher, SimPublisher
 
     speed = 1.0 if args.speed is None else args.speed
     outputs = FoxgloveOutputs(speed=check_speed(speed) if live else 1.0)
     context = foxglove.Context()
     try:
         if live:
-            from ..foxglove.teleop import attach_teleop  # /cmd_vel from Foxglove's Teleop panel
+            from pymunk_bot.foxglove.teleop import attach_teleop  # /cmd_vel from Foxglove's Teleop panel
 
             outputs.server = LiveServer(context, args.host or DEFAULT_HOST,
                                         DEFAULT_PORT if args.port is None else args.port,

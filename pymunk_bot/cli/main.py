@@ -15,13 +15,13 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..benchmarks.names import SECTION_NAMES
-from ..errors import ControllerError, ScenarioError, ScenarioWarning
-from .arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_INTERNAL_ERROR, EXIT_OK, \
+from pymunk_bot.cli.bench import SECTION_NAMES, cmd_bench
+from pymunk_bot.config.errors import ControllerError, ScenarioError, ScenarioWarning
+from pymunk_bot.cli.arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_INTERNAL_ERROR, EXIT_OK, \
     Parser, duration_seconds, seed_number
 
 if TYPE_CHECKING:
-    from .compiling import CompileWatch
+    from pymunk_bot.cli.compiling import CompileWatch
 
 DESCRIPTION = ("pymunk-bot: a 2D mobile-robot simulator on pymunk. Run, check and test "
                "scenarios, sweep their parameters, plot and replay run logs, and convert maps.")
@@ -35,26 +35,26 @@ def _display_available() -> bool:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from ..config import load_scenario
-    from ..results import writable_problem
-    from ..sim import Simulation
+    from pymunk_bot.config import load_scenario
+    from pymunk_bot.outcomes.results import writable_problem
+    from pymunk_bot.engine.simulation import Simulation
 
     if args.out is not None and (problem := writable_problem(args.out)) is not None:
         raise ScenarioError("--out", "", problem)  # before anything runs
-    from .sweep import parse_settings, scenario_with_settings
+    from pymunk_bot.cli.sweep import parse_settings, scenario_with_settings
 
     settings = parse_settings(args.assignments, one_value=True)  # before loading anything
     config = load_scenario(args.scenario)
     if settings:
         config = scenario_with_settings(config, args.scenario, settings)
-    from .compiling import CompileWatch
+    from pymunk_bot.cli.compiling import CompileWatch
 
     with CompileWatch() as compiling:  # the first run after installing compiles numba's kernels
         sim = Simulation(config, seed=args.seed, source=args.scenario)
         sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops it
         sim.attach(compiling)  # ticks that compiled are left out of the real-time factor
         duration = args.duration if args.duration is not None else config.world.duration
-        from .outputs import prepare_outputs
+        from pymunk_bot.cli.outputs import prepare_outputs
 
         outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
         try:
@@ -65,12 +65,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs,
                       compiling: CompileWatch) -> int:
-    from ..results import write_json
+    from pymunk_bot.outcomes.results import write_json
 
     interactive = not args.headless and outputs.record is None and _display_available()
     watched: float | None = None
     if interactive:
-        from ..viewer import ViewerUnavailable, run_window
+        from pymunk_bot.viewer import ViewerUnavailable, run_window
 
         opened = time.perf_counter()
         try:
@@ -88,11 +88,30 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs,
     compiling.report()  # on a terminal, after a first run: how long numba compiled
     result = sim.result()
     verdict = sim.verdict()
-    outputs.finish(sim)  # the run log, the built map (--map-out)
-    if args.out:
-        write_json(args.out, result)
+    unwritten = None
+    if args.out:  # first: the result survives a disk that the logs below fill
+        try:
+            write_json(args.out, result)
+        except OSError:
+            unwritten = args.out  # again below: a log that filled the disk is then removed
+    failed = outputs.finish(sim)  # the run log, the built map (--map-out), trajectories
+    if unwritten is not None:
+        try:
+            write_json(unwritten, result)
+        except OSError as exc:
+            failed.insert(0, exc)
     _print_summary(result, verdict.lines(), watched)
+    for problem in failed:  # after the verdict, so the last line says what was lost
+        print(f"error: {write_failure(problem)}", file=sys.stderr)
+    if failed:
+        return EXIT_BAD_INPUT  # the run is told, but a file asked for is missing
     return EXIT_OK if verdict.passed else EXIT_EXPECTATION_FAILED
+
+
+def write_failure(exc: OSError) -> str:
+    """``FILE: problem`` for an output that could not be written (a full disk)."""
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"{where}{exc.strerror or exc} (not written)"
 
 
 def _print_summary(result: dict, verdict_lines: list[str], watched: float | None = None) -> None:
@@ -130,7 +149,7 @@ def summary_line(result: dict, watched: float | None = None) -> str:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from ..config import load_scenario
+    from pymunk_bot.config import load_scenario
 
     status = EXIT_OK
     for spec in args.scenarios:
@@ -145,7 +164,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from ..config import load_scenario, shipped_scenarios
+    from pymunk_bot.config import load_scenario, shipped_scenarios
 
     for name, path in shipped_scenarios().items():
         try:
@@ -157,28 +176,19 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .outputs import cmd_plot
+    from pymunk_bot.cli.outputs import cmd_plot
 
     return cmd_plot(args)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from .outputs import cmd_replay
+    from pymunk_bot.cli.outputs import cmd_replay
 
     return cmd_replay(args, _display_available())
 
 
-def _cmd_bench(args: argparse.Namespace) -> int:
-    # The benchmarks drive this command line themselves (the fuzz run, map building), so they
-    # run as a program of their own rather than as an import of it.
-    argv = [sys.executable, "-m", "pymunk_bot.benchmarks"] + (["--quick"] if args.quick else [])
-    for name in args.only or []:
-        argv += ["--only", name]
-    return subprocess.run(argv, check=False).returncode
-
-
 def _frame_size(text: str) -> tuple[int, int]:
-    from .outputs import parse_size
+    from pymunk_bot.cli.outputs import parse_size
 
     try:
         return parse_size(text)
@@ -195,7 +205,7 @@ def _add_video_options(parser: argparse.ArgumentParser, record_help: str) -> Non
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
+    from pymunk_bot import __version__
 
     parser = Parser(prog="pymunk-bot", description=DESCRIPTION,
                     epilog="`pymunk-bot COMMAND --help` describes each command; docs/cli.md "
@@ -218,16 +228,16 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--log", type=Path, metavar="RUN.npz|RUN.mcap",
                      help="save poses, odometry, commands and LiDAR scans over time (.mcap: "
                           "Foxglove schemas, see docs/foxglove.md)")
-    from .foxglove import add_parser as add_convert_parser, add_run_options
+    from pymunk_bot.cli.foxglove import add_parser as add_convert_parser, add_run_options
 
     add_run_options(run)  # --foxglove --port --host --speed
-    from .ros2 import add_run_options as add_ros2_options
+    from pymunk_bot.cli.ros2 import add_run_options as add_ros2_options
 
     add_ros2_options(run)  # --profile --rosbridge --cmd-timeout
-    from .map_output import add_run_options as add_map_options
+    from pymunk_bot.cli.map_output import add_run_options as add_map_options
 
     add_map_options(run)  # --map-out --map-robot
-    from .trajectory import add_run_options as add_trajectory_options
+    from pymunk_bot.cli.trajectory import add_run_options as add_trajectory_options
 
     add_trajectory_options(run)  # --trajectory-out
     run.set_defaults(func=_cmd_run)
@@ -255,21 +265,21 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="fewer repeats")
     bench.add_argument("--only", action="append", choices=SECTION_NAMES, metavar="NAME",
                        help=f"run only this section (repeatable): {', '.join(SECTION_NAMES)}")
-    bench.set_defaults(func=_cmd_bench)
-    from .test import add_parser as add_test_parser  # `pymunk-bot test`
+    bench.set_defaults(func=cmd_bench)
+    from pymunk_bot.cli.test import add_parser as add_test_parser  # `pymunk-bot test`
 
     add_test_parser(sub)
     add_convert_parser(sub)  # `pymunk-bot convert`
-    from .maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
+    from pymunk_bot.cli.maps import add_parser as add_map_parsers  # `pymunk-bot map`, `generate`
 
     add_map_parsers(sub)
-    from .benchmark import add_parser as add_benchmark_parser  # `pymunk-bot benchmark`
+    from pymunk_bot.cli.benchmark import add_parser as add_benchmark_parser  # `pymunk-bot benchmark`
 
     add_benchmark_parser(sub)
-    from .sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
+    from pymunk_bot.cli.sweep import add_parser as add_sweep_parser  # `pymunk-bot sweep`
 
     add_sweep_parser(sub)
-    from .evaluate import add_parser as add_evaluate_parser  # `pymunk-bot evaluate`
+    from pymunk_bot.cli.evaluate import add_parser as add_evaluate_parser  # `pymunk-bot evaluate`
 
     add_evaluate_parser(sub)
     return parser

@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 MAP_FORMATS = (".yaml", ".yml")
 
@@ -34,7 +34,7 @@ class MapOutput:
 
     def save(self, sim) -> Path:
         """Write the robot's map as it is now; returns the YAML path."""
-        from ..maps.ros import write_ros_map
+        from pymunk_bot.maps.ros import write_ros_map
 
         grid = sim.robots[self.robot].mapper.grid
         image = write_ros_map(grid, self.path)

@@ -5,7 +5,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 MIN_RESOLUTION, MAX_RESOLUTION = 0.005, 1.0  # [m] per cell for `map`
 MAX_MAP_CELLS = 64_000_000  # cells in a written map (as maps.ros.MAX_CELLS)
@@ -13,7 +13,7 @@ MAX_MAP_CELLS = 64_000_000  # cells in a written map (as maps.ros.MAX_CELLS)
 
 def add_parser(sub) -> None:
     """Add the `map` and `generate` subcommands to an argparse subparsers object."""
-    from ..maps.generate import KINDS
+    from pymunk_bot.maps.generate import KINDS
 
     map_cmd = sub.add_parser("map", help="write a scenario's static geometry as a ROS map "
                                          "(YAML + PGM, for Nav2's map_server)")
@@ -43,9 +43,9 @@ def _check_out(out: Path, suffixes: tuple[str, ...]) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    from ..config import load_scenario
-    from ..maps.rasterize import scenario_grid
-    from ..maps.ros import write_ros_map
+    from pymunk_bot.config import load_scenario
+    from pymunk_bot.maps.rasterize import scenario_grid
+    from pymunk_bot.maps.ros import write_ros_map
 
     resolution = args.resolution
     if not (math.isfinite(resolution) and MIN_RESOLUTION <= resolution <= MAX_RESOLUTION):
@@ -68,8 +68,8 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
-    from ..maps.generate import generate
-    from ..results import write_atomic
+    from pymunk_bot.maps.generate import generate
+    from pymunk_bot.outcomes.results import write_atomic
 
     _check_out(args.out, (".yaml", ".yml"))
     data = generate(args.kind, args.seed, tuple(args.size) if args.size else None)

@@ -12,15 +12,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import ScenarioError
-from .arguments import check_output
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.cli.arguments import check_output
 
 if TYPE_CHECKING:
-    from .foxglove import FoxgloveOutputs
-    from .map_output import MapOutput
-    from .trajectory import TrajectoryOutput
-    from .ros2 import Ros2Outputs
-    from ..runlog import RunLogger
+    from pymunk_bot.cli.foxglove import FoxgloveOutputs
+    from pymunk_bot.cli.map_output import MapOutput
+    from pymunk_bot.cli.trajectory import TrajectoryOutput
+    from pymunk_bot.cli.ros2 import Ros2Outputs
+    from pymunk_bot.outcomes.runlog import RunLogger
 
 VIDEO_FORMATS = (".mp4", ".gif")
 LOG_FORMATS = (".npz", ".mcap")
@@ -91,7 +91,7 @@ class RunOutputs:
 
     def record_run(self, sim, duration: float) -> None:
         """Run ``sim`` for ``duration`` while rendering the video (offscreen)."""
-        from ..viewer import ViewerUnavailable, record_video
+        from pymunk_bot.viewer import ViewerUnavailable, record_video
 
         if self.record is None:
             raise RuntimeError("record_run needs the video path (--record)")
@@ -105,41 +105,54 @@ class RunOutputs:
         print(f"wrote {self.record} ({frames} frames in {spent:.1f} s: {frames / spent:.0f} "
               f"frames/s, {duration / spent:.2f}x real time)")
 
-    def finish(self, sim=None) -> None:
-        """Write the run log and the built map (--map-out), if asked for."""
+    def finish(self, sim=None) -> list[OSError]:
+        """Write the run log, the built map (--map-out) and the trajectories, if asked for.
+        Each is tried, whatever happened to the others: returns the writes that failed (a
+        full disk: an OSError naming the file), after keeping what was complete."""
+        failed: list[OSError] = []
+        steps: list = []
         if self.map_out is not None and sim is not None:
-            self.map_out.save(sim)
+            steps.append(lambda: self.map_out.save(sim))
         if self.trajectory is not None and sim is not None:
-            self.trajectory.save(sim)
+            steps.append(lambda: self.trajectory.save(sim))
         if self.logger is not None:
-            if self.log_path is None:
-                raise RuntimeError("a run logger needs its log path (--log)")
-            self.logger.save(self.log_path)
-            steps = len(self.logger.log().time) - 1
-            print(f"wrote {self.log_path} ({steps} steps)")
+            steps.append(self._save_log)
         if self.foxglove is not None:
-            self.foxglove.finish()
+            steps.append(self.foxglove.finish)
         if self.ros2 is not None:
-            self.ros2.finish()
+            steps.append(self.ros2.finish)
+        for step in steps:
+            try:
+                step()
+            except OSError as exc:
+                failed.append(exc)
+        return failed
+
+    def _save_log(self) -> None:
+        if self.logger is None or self.log_path is None:
+            raise RuntimeError("a run logger needs its log path (--log)")
+        self.logger.save(self.log_path)
+        steps = len(self.logger.log().time) - 1
+        print(f"wrote {self.log_path} ({steps} steps)")
 
 
 def prepare_outputs(args, sim) -> RunOutputs:
     """Check --record/--fps/--size/--log before the run and start the logger."""
-    from .map_output import prepare_map_output
-    from .trajectory import prepare_trajectory_output
+    from pymunk_bot.cli.map_output import prepare_map_output
+    from pymunk_bot.cli.trajectory import prepare_trajectory_output
 
     outputs = RunOutputs(record=_check_video_options(args), fps=args.fps, size=args.size,
                          map_out=prepare_map_output(args, sim),
                          trajectory=prepare_trajectory_output(args, sim))
     if args.log is not None:
-        from ..runlog import RunLogger
+        from pymunk_bot.outcomes.runlog import RunLogger
 
         outputs.log_path = check_output("--log", Path(args.log), LOG_FORMATS)
         if outputs.log_path.suffix.lower() == ".npz":
             outputs.logger = RunLogger().attach(sim)
-    from .foxglove import prepare_foxglove
+    from pymunk_bot.cli.foxglove import prepare_foxglove
 
-    from .ros2 import prepare_ros2, wants_ros2_bag
+    from pymunk_bot.cli.ros2 import prepare_ros2, wants_ros2_bag
 
     outputs.ros2 = prepare_ros2(args, sim, outputs.log_path)  # --profile ros2, --rosbridge
     foxglove_log = None if wants_ros2_bag(args) else outputs.log_path
@@ -156,8 +169,8 @@ def prepare_outputs(args, sim) -> RunOutputs:
 
 def cmd_plot(args) -> int:
     """`pymunk-bot plot LOG [-o OUT] [--kind K] [--robot NAME]`."""
-    from ..foxglove.reader import load_any as load_log  # .npz or .mcap
-    from ..plots import save_plot
+    from pymunk_bot.foxglove.reader import load_any as load_log  # .npz or .mcap
+    from pymunk_bot.viewer.plots import save_plot
 
     log_path = Path(args.log)
     if args.output is not None:
@@ -174,13 +187,13 @@ def cmd_plot(args) -> int:
 
 def cmd_replay(args, display_available: bool) -> int:
     """`pymunk-bot replay LOG [--record VIDEO]`: play a run log in the window or to a video."""
-    from ..foxglove.reader import load_any as load_log  # .npz or .mcap
-    from ..viewer import ViewerUnavailable
+    from pymunk_bot.foxglove.reader import load_any as load_log  # .npz or .mcap
+    from pymunk_bot.viewer import ViewerUnavailable
 
     record = _check_video_options(args)
     log = load_log(args.log)
     if record is not None:
-        from ..viewer import record_video
+        from pymunk_bot.viewer import record_video
 
         frames = record_video(log, record, None, fps=args.fps, size=args.size, progress=True)
         print(f"wrote {record} ({frames} frames)")
@@ -189,7 +202,7 @@ def cmd_replay(args, display_available: bool) -> int:
         raise ScenarioError("replay", "", "no display available for the window; render the "
                                           "log to a video instead (--record run.mp4)")
     try:
-        from ..viewer import replay_window
+        from pymunk_bot.viewer import replay_window
 
         replay_window(log)
     except ViewerUnavailable as exc:

@@ -59,7 +59,7 @@ def _help(action: argparse.Action) -> str:
 def render(parser: argparse.ArgumentParser | None = None) -> str:
     """The reference: every subcommand, its one-line help and a table of its arguments."""
     if parser is None:
-        from .main import build_parser
+        from pymunk_bot.cli.main import build_parser
         parser = build_parser()
     helps = command_help(parser)
     lines = [BEGIN, "", "| command | what it does |", "|---|---|"]

@@ -6,8 +6,8 @@ import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import ScenarioError
-from .served import ServedOutputs
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.cli.served import ServedOutputs
 
 PROFILES = ("foxglove", "ros2")
 
@@ -15,7 +15,7 @@ PROFILES = ("foxglove", "ros2")
 def add_run_options(run: argparse.ArgumentParser) -> None:
     """``--profile``, ``--rosbridge`` and ``--cmd-timeout`` on ``run`` (``--port``, ``--host``
     and ``--speed`` are shared with ``--foxglove``)."""
-    from ..ros2.names import DEFAULT_COMMAND_TIMEOUT, DEFAULT_PORT
+    from pymunk_bot.ros2.names import DEFAULT_COMMAND_TIMEOUT, DEFAULT_PORT
 
     group = run.add_argument_group("ROS 2 (see docs/ros2.md)")
     group.add_argument("--profile", choices=PROFILES,
@@ -43,7 +43,7 @@ def wants_ros2_bag(args) -> bool:
 
 
 def _require(option: str) -> None:
-    from ..ros2 import require
+    from pymunk_bot.ros2 import require
 
     for module in ("rosbags", "mcap"):
         require(module, option)
@@ -56,8 +56,8 @@ def convert_to_bag(source: Path, target: Path) -> int:
     if target.suffix.lower() != ".mcap":
         raise ScenarioError("--profile", "", f"ros2 writes an .mcap bag, not "
                                              f"{target.suffix or target}")
-    from ..foxglove.reader import load_any
-    from ..ros2.bag import write_bag
+    from pymunk_bot.foxglove.reader import load_any
+    from pymunk_bot.ros2.bag import write_bag
 
     log = load_any(source)
     messages = write_bag(log, target)
@@ -89,15 +89,15 @@ def prepare_ros2(args, sim, log_path: Path | None) -> Ros2Outputs | None:
         return None
     _require("--rosbridge" if live else "--profile")
     if live:
-        from ..ros2 import require
+        from pymunk_bot.ros2 import require
 
         require("websockets", "--rosbridge")
-    from ..foxglove.frames import DEFAULT_HOST
-    from ..foxglove.live import check_speed
-    from ..ros2.bag import Ros2BagLogger
-    from ..ros2.commands import CommandInbox, check_timeout
-    from ..ros2.worldmap import world_grid
-    from ..ros2.names import DEFAULT_COMMAND_TIMEOUT, DEFAULT_PORT
+    from pymunk_bot.foxglove.frames import DEFAULT_HOST
+    from pymunk_bot.foxglove.live import check_speed
+    from pymunk_bot.ros2.bag import Ros2BagLogger
+    from pymunk_bot.ros2.commands import CommandInbox, check_timeout
+    from pymunk_bot.ros2.worldmap import world_grid
+    from pymunk_bot.ros2.names import DEFAULT_COMMAND_TIMEOUT, DEFAULT_PORT
 
     outputs = Ros2Outputs(speed=check_speed(1.0 if args.speed is None else args.speed)
                           if live else 1.0)
@@ -106,7 +106,7 @@ def prepare_ros2(args, sim, log_path: Path | None) -> Ros2Outputs | None:
     world_map = world_grid(sim.config)
     try:
         if live:
-            from ..ros2.bridge import serve_sim
+            from pymunk_bot.ros2.bridge import serve_sim
 
             outputs.server = serve_sim(sim, args.host or DEFAULT_HOST,
                                        DEFAULT_PORT if args.port is None else args.port,

@@ -25,17 +25,20 @@ class ServedOutputs:
         if self.server is None:
             sim.run(duration)
             return
-        from ..foxglove.live import run_paced
+        from pymunk_bot.foxglove.live import run_paced
 
         run_paced(sim, duration, self.speed)
 
     def finish(self) -> None:
-        """Complete the log and stop the server."""
-        if self.log is not None:
-            self.log.save()
-            print(f"wrote {self.log.path} ({self.kind}{self.log.steps} steps)")
-            self.log = None
-        self.close()
+        """Complete the log and stop the server; a log that cannot be written (OSError naming
+        it) is removed, and the server stopped all the same."""
+        try:
+            if self.log is not None:
+                self.log.save()
+                print(f"wrote {self.log.path} ({self.kind}{self.log.steps} steps)")
+                self.log = None
+        finally:
+            self.close()
 
     def close(self) -> None:
         """Drop an unfinished log and stop the server (after an error or Ctrl-C too)."""

@@ -6,16 +6,16 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 if TYPE_CHECKING:
-    from ..config import ScenarioConfig
+    from pymunk_bot.config import ScenarioConfig
 
 EXIT_OK, EXIT_SOME_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 3
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from ..sweep import BACKENDS
+    from pymunk_bot.sweep import BACKENDS
 
     sweep = subparsers.add_parser(
         "sweep", help="run a scenario over a grid of parameter values and seeds",
@@ -51,7 +51,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def parse_settings(texts: list[str], one_value: bool = False) -> dict[str, list[Any]]:
     """``--set KEY.PATH=V1,V2`` options -> {key path: values}; ScenarioError naming ``--set``
     for a malformed one, a key set twice, or (``one_value``, as ``run`` takes) several values."""
-    from ..sweep import parse_assignment
+    from pymunk_bot.sweep import parse_assignment
 
     grid: dict[str, list[Any]] = {}
     for text in texts:
@@ -73,9 +73,9 @@ def scenario_with_settings(config: ScenarioConfig, spec: str | None,
     """``config`` (loaded from ``spec``) with one value per key path set and validated again,
     as sweep validates its grid: a bad path or value is a ScenarioError naming it and the
     --set that caused it. A user's controller module is still looked for next to the file."""
-    from ..config import parse_scenario, scenario_data
-    from ..config.loader import resolve
-    from ..sweep.grid import scenario_with
+    from pymunk_bot.config import parse_scenario, scenario_data
+    from pymunk_bot.config.loader import resolve
+    from pymunk_bot.sweep.grid import scenario_with
 
     path = resolve(spec)
     source = str(spec) if spec is not None else str(path)
@@ -93,7 +93,7 @@ def scenario_with_settings(config: ScenarioConfig, spec: str | None,
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from ..sweep import BackendUnavailable, SweepInterrupted, format_table, parse_seeds, \
+    from pymunk_bot.sweep import BackendUnavailable, SweepInterrupted, format_table, parse_seeds, \
         plot_summary, run_sweep, summarize
 
     grid = parse_settings(args.assignments)
@@ -105,7 +105,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     plot = None
     if args.plot is not None:
         plot = args.out.with_suffix(".png") if args.plot is True else args.plot
-    from ..controllers.python import batch_budget
+    from pymunk_bot.controllers.python import batch_budget
     try:
         with batch_budget():
             rows = run_sweep(scenario, grid, seeds, backend=args.backend, address=args.address,

@@ -8,9 +8,9 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from ..errors import ControllerError
-from ..scenario_tests import Outcome, discover, format_table, run_scenario
-from .arguments import jobs_count, seed_number
+from pymunk_bot.config.errors import ControllerError
+from pymunk_bot.cli.scenario_tests import Outcome, discover, format_table, run_scenario
+from pymunk_bot.cli.arguments import jobs_count, seed_number
 
 
 def command(args: argparse.Namespace) -> int:
@@ -25,7 +25,7 @@ def command(args: argparse.Namespace) -> int:
         print(f"no scenario files with an 'expect' block under {', '.join(map(str, specs))}")
         return 0
     started = time.perf_counter()
-    from ..controllers.python import batch_budget
+    from pymunk_bot.controllers.python import batch_budget
 
     with batch_budget():
         outcomes = _run_with_progress(paths, args.seed, args.jobs)
@@ -76,7 +76,7 @@ def _default_specs() -> list[str]:
     """./scenarios if there is one, else the shipped scenarios of this installation."""
     if Path("scenarios").is_dir():
         return ["scenarios"]
-    from ..config.loader import shipped_scenario_dirs
+    from pymunk_bot.config.loader import shipped_scenario_dirs
 
     dirs = [str(d) for d in shipped_scenario_dirs()]
     if dirs:

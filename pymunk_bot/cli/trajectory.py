@@ -2,18 +2,22 @@
 
 DIR/<robot>.truth.tum, <robot>.odometry.tum and <robot>.estimate.tum (the localizer's pose;
 the odometry's when the robot names no localizer), sampled at the same times, so evo scores a
-run as it is: ``evo_ape tum DIR/r1.truth.tum DIR/r1.estimate.tum``. DIR is checked (and made,
-if its parent exists) before the run; each file is written atomically after it.
+run as it is: ``evo_ape tum DIR/r1.truth.tum DIR/r1.estimate.tum``. DIR is checked before
+the run and made only after it, with its files: they are written in a hidden folder beside DIR
+that is renamed onto it, so an interrupted run leaves no folder. Into a DIR that exists, each
+file is written atomically. A full disk keeps the files that were complete.
 """
 from __future__ import annotations
 
 import argparse
+import os
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import ScenarioError
-from ..localization.tum import KINDS, TrajectoryRecorder
-from ..results import writable_problem
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.localization.tum import KINDS, TrajectoryRecorder
+from pymunk_bot.outcomes.results import temp_folder_beside, writable_problem
 
 OPTION = "--trajectory-out"
 
@@ -33,25 +37,43 @@ class TrajectoryOutput:
     recorder: TrajectoryRecorder
 
     def save(self, sim) -> list[Path]:
-        """Write every robot's three TUM files; returns their paths."""
-        written = self.recorder.write(self.directory, sim.config.name)
+        """Write every robot's three TUM files; returns their paths. OSError naming the file
+        that could not be written (a full disk), after keeping those that were complete."""
+        if self.directory.is_dir():
+            written = self.recorder.write(self.directory, sim.config.name)
+        else:
+            written = self._write_new_folder(sim.config.name)
         print(f"wrote {len(written)} trajectories ({len(self.recorder.times)} poses each) "
               f"to {self.directory}")
         return written
+
+    def _write_new_folder(self, scenario: str) -> list[Path]:
+        staging = Path(temp_folder_beside(self.directory))
+        try:
+            written = self.recorder.write(staging, scenario)
+        except OSError as exc:
+            if any(staging.iterdir()):  # the complete files are kept
+                os.rename(staging, self.directory)
+            else:
+                shutil.rmtree(staging, ignore_errors=True)
+            if exc.filename:  # the file's name in DIR, not in the hidden folder
+                exc.filename = str(self.directory / Path(exc.filename).name)
+            raise
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        os.rename(staging, self.directory)
+        return [self.directory / path.name for path in written]
 
 
 def _check_directory(directory: Path, robots) -> Path:
     if directory.exists() and not directory.is_dir():
         raise ScenarioError(OPTION, "", f"{directory} exists and is not a directory")
-    if not directory.exists():
-        parent = directory.parent if str(directory.parent) else Path(".")
-        if not parent.is_dir():
-            raise ScenarioError(OPTION, "", f"{directory}: directory {parent} does not exist")
-        try:
-            directory.mkdir()
-        except OSError as exc:
-            raise ScenarioError(OPTION, "", f"{directory}: cannot create it "
-                                            f"({exc.strerror or exc})") from None
+    if not directory.exists():  # made after the run: its parent must take it
+        problem = writable_problem(directory)
+        if problem is not None:
+            raise ScenarioError(OPTION, "", problem)
+        return directory
     for name in robots:
         for kind in KINDS:
             problem = writable_problem(directory / f"{name}.{kind}.tum")

@@ -11,9 +11,9 @@ from typing import Annotated, Any, Union
 
 from pydantic import BeforeValidator, Discriminator, Field, Tag, create_model
 
-from .. import plugins
-from .schema import RobotConfig, ScenarioConfig
-from .types import MAX_OBSTACLES, MAX_ROBOTS
+from pymunk_bot import plugins
+from pymunk_bot.config.schema import RobotConfig, ScenarioConfig
+from pymunk_bot.config.types import MAX_OBSTACLES, MAX_ROBOTS
 
 _cache: dict[str, Any] = {"key": None, "model": None}
 

@@ -1,7 +1,7 @@
 """Checks a file's keys allow but its meaning does not: things outside the arena, controllers
 that cannot work with what the robot carries, grids too big for memory, angles in degrees.
 
-``check(scenario)`` raises :class:`~pymunk_bot.errors.SemanticError` (exit 2); ``angle_warnings``
+``check(scenario)`` raises :class:`~pymunk_bot.config.errors.SemanticError` (exit 2); ``angle_warnings``
 returns the doubtful angles (a warning, the run goes on). ``check_seed`` guards the Python API.
 """
 from __future__ import annotations
@@ -11,13 +11,13 @@ import numbers
 
 import numpy as np
 
-from ..errors import SemanticError
-from .controllers import (
+from pymunk_bot.config.errors import SemanticError
+from pymunk_bot.config.controllers import (
     AvoidControllerConfig, GoToGoalControllerConfig, NavigateControllerConfig,
     PolicyControllerConfig, WaypointsControllerConfig,
 )
-from .schema import RobotConfig, ScenarioConfig
-from .outlines import distance_to_obstacle, is_round, obstacle_outline
+from pymunk_bot.config.schema import RobotConfig, ScenarioConfig
+from pymunk_bot.config.outlines import distance_to_obstacle, is_round, obstacle_outline
 
 MAX_GRID_CELLS = 4_000_000  # planning grid cells (a 200 m x 200 m arena at 0.1 m): ~100 MB
 MAX_SEED = 2**63 - 1
@@ -52,7 +52,7 @@ def _check_events(scenario: ScenarioConfig, extent: tuple[float, float, float, f
     names = [r.name for r in scenario.robots]
     for k, event in enumerate(scenario.events):
         if event.robot not in names:
-            from .messages import did_you_mean
+            from pymunk_bot.config.messages import did_you_mean
             raise SemanticError(("events", k, "robot"), f"no robot '{event.robot}' in the "
                                 f"scenario{did_you_mean(event.robot, names)}")
         if _outside(event.teleport[:2], extent):

@@ -11,8 +11,8 @@ from pydantic import (
     AfterValidator, Field, PrivateAttr, ValidationInfo, field_serializer, model_validator,
 )
 
-from .class_path import check_class_path
-from .types import (
+from pymunk_bot.config.class_path import check_class_path
+from pymunk_bot.config.types import (
     MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, NonNegativeFloat, PositiveFloat,
     PositiveInt, PositiveShort, Rate, Section, Short, Speed, Vec2,
 )
@@ -199,7 +199,7 @@ class PythonControllerConfig(Section):
 def _policy_file(value: str, info: ValidationInfo) -> str:
     """The policy file loads (relative paths from the scenario's folder); its size against
     the robot's LiDAR is checked when the controller is built."""
-    from ..policy_file import PolicyFileError, load_policy
+    from pymunk_bot.policy.files import PolicyFileError, load_policy
 
     try:
         load_policy(resolve_policy_path(value, (info.context or {}).get("base_dir")))
@@ -219,7 +219,7 @@ def resolve_policy_path(path: str, base_dir: str | None) -> str:
 
 class PolicyControllerConfig(Section):
     """A trained policy (``.npz`` MLP or ``.onnx``) seeing what ``pymunk_bot/Navigation-v0``
-    shows it (pymunk_bot/policy_io.py) and driving as the env scales its action."""
+    shows it (pymunk_bot/policy/io.py) and driving as the env scales its action."""
 
     type: Literal["policy"]
     path: Annotated[str, AfterValidator(_policy_file)]
@@ -247,8 +247,8 @@ class PolicyControllerConfig(Section):
     def misfit(self, robot) -> str | None:
         """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
         and a goal, takes the observation of the robot's beams and gives its action."""
-        from ..policy_file import PolicyFileError, load_policy
-        from ..policy_io import action_size, observation_size
+        from pymunk_bot.policy.files import PolicyFileError, load_policy
+        from pymunk_bot.policy.io import action_size, observation_size
 
         if robot.lidar is None:
             return "a policy sees the LiDAR: add a 'lidar' to the robot"

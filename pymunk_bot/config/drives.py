@@ -9,8 +9,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from .schema import RobotConfig
-from .types import Float, Length, NonNegativeFloat, PositiveFloat, Section
+from pymunk_bot.config.schema import RobotConfig
+from pymunk_bot.config.types import Float, Length, NonNegativeFloat, PositiveFloat, Section
 
 MAX_STEER = 1.4  # [rad] (80 deg): beyond this tan() makes the turning circle degenerate
 _Fraction = Annotated[Float, Field(gt=-1.0, lt=1.0)]
@@ -49,7 +49,7 @@ class AckermannRobotConfig(RobotConfig):
 
     def top_speed(self) -> float:
         # Any point of the footprint: v + omega * reach, with omega <= v / R_min.
-        from ..footprint import of_robot
+        from pymunk_bot.geometry.footprint import of_robot
         return self.max_speed * (1.0 + of_robot(self).bounding_radius / self.min_turn_radius())
 
 
@@ -77,5 +77,5 @@ class OmniRobotConfig(RobotConfig):
     odometry: OmniOdometryConfig = OmniOdometryConfig()
 
     def top_speed(self) -> float:
-        from ..footprint import of_robot
+        from pymunk_bot.geometry.footprint import of_robot
         return self.max_speed + self.max_angular_speed * of_robot(self).bounding_radius

@@ -12,7 +12,7 @@ from typing import Annotated
 
 from pydantic import Field
 
-from .types import Float, Name, Pose, Section
+from pymunk_bot.config.types import Float, Name, Pose, Section
 
 MAX_EVENTS = 10_000
 EventTime = Annotated[Float, Field(ge=0.0, le=86_400.0)]  # [s] of simulated time

@@ -8,7 +8,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import Field
 
-from .types import Length, Section, Vec2
+from pymunk_bot.config.types import Length, Section, Vec2
 
 MAX_FOOTPRINT_POINTS = 64
 

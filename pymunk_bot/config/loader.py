@@ -7,16 +7,16 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from ..errors import ScenarioError, ScenarioWarning, SemanticError
-from . import semantics
-from .assemble import scenario_model
-from .checks import angle_warnings
-from .messages import describe, most_helpful, walk
-from .schema import ScenarioConfig
-from .world_map import attach_map
-from .yaml_source import line_of, parse_yaml, read_text
+from pymunk_bot.config.errors import ScenarioError, ScenarioWarning, SemanticError
+from pymunk_bot.config import semantics
+from pymunk_bot.config.assemble import scenario_model
+from pymunk_bot.config.checks import angle_warnings
+from pymunk_bot.config.messages import describe, most_helpful, walk
+from pymunk_bot.config.schema import ScenarioConfig
+from pymunk_bot.config.world_map import attach_map
+from pymunk_bot.config.yaml_source import line_of, parse_yaml, read_text
 
-PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"
+PACKAGE_DATA = Path(__file__).resolve().parent  # the built-in default scenario lives here
 DEFAULT_SCENARIO = PACKAGE_DATA / "default.yaml"
 
 
@@ -50,7 +50,7 @@ def resolve(spec: str | Path | None) -> Path:
     shipped = shipped_scenarios()
     if str(spec) in shipped:
         return shipped[str(spec)]
-    from .messages import did_you_mean
+    from pymunk_bot.config.messages import did_you_mean
     raise ScenarioError(str(spec), "", "no such file or shipped scenario"
                         f"{did_you_mean(str(spec), shipped)}; see `pymunk-bot list`")
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from .types import Section
+from pymunk_bot.config.types import Section
 
 
 class GroundTruthLocalizerConfig(Section):

@@ -1,6 +1,6 @@
 """The navigation metrics' names, units and directions, and the ``expect`` keys that bound them.
 
-Pure data (the scenario schema reads it; :mod:`pymunk_bot.navmetrics` measures them). An
+Pure data (the scenario schema reads it; :mod:`pymunk_bot.outcomes.navigation` measures them). An
 ``expect`` block bounds a metric where larger is better by its own name (at least:
 ``spl: 0.7``, ``min_distance_to_human: 0.3``) and one where smaller is better by ``max_`` and
 its name (at most: ``max_human_impulse: 0.0``, ``max_personal_space_time: 2.0``; a name
@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from .types import Float, Section
+from pymunk_bot.config.types import Float, Section
 
 
 @dataclass(frozen=True)

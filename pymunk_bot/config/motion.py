@@ -8,7 +8,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from .types import (Float, Length, Mass, Name, NonNegativeFloat, PositiveFloat, PositiveInt,
+from pymunk_bot.config.types import (Float, Length, Mass, Name, NonNegativeFloat, PositiveFloat, PositiveInt,
                     Section, Vec2)
 
 MAX_PATH_POINTS = 256

@@ -5,8 +5,8 @@ import math
 
 import numpy as np
 
-from ..errors import SemanticError
-from .outlines import obstacle_outline
+from pymunk_bot.config.errors import SemanticError
+from pymunk_bot.config.outlines import obstacle_outline
 
 PATH_START_TOLERANCE = 1e-3  # [m] a box's or circle's path starts at its center within this
 

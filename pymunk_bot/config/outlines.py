@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 
-from .. import geometry as geo
-from ..footprint import transform
-from .schema import BoxObstacle, PolygonObstacle, WallObstacle
+from pymunk_bot.geometry import plane as geo
+from pymunk_bot.geometry.footprint import transform
+from pymunk_bot.config.schema import BoxObstacle, PolygonObstacle, WallObstacle
 
 
 def obstacle_outline(obstacle) -> np.ndarray | None:

@@ -9,12 +9,12 @@ from typing import Annotated, Any, Callable, ClassVar, Literal
 
 from pydantic import Field, PrivateAttr
 
-from .events import EventList
-from ..localization.config import MappingConfig
-from .footprint import FootprintConfig
-from .metric_bounds import MetricBounds
-from .motion import MotionConfig
-from .types import (
+from pymunk_bot.config.events import EventList
+from pymunk_bot.localization.config import MappingConfig
+from pymunk_bot.config.footprint import FootprintConfig
+from pymunk_bot.config.metric_bounds import MetricBounds
+from pymunk_bot.config.motion import MotionConfig
+from pymunk_bot.config.types import (
     MAX_BEAMS, MAX_OBSTACLES, MAX_ROBOTS, Accel, Angle, Bias, Distance, Duration, Float,
     FieldOfView, Friction, Int, Length, Mass, Name, Noise, Pose, PositiveFloat,
     PositiveInt, Probability, Rate, Region, Resolution, Section, Speed, Vec2,
@@ -71,10 +71,10 @@ class WorldConfig(Section):
         return (float(self.size[0]), float(self.size[1]))
 
     def map_geometry(self) -> Any:
-        """The :class:`~pymunk_bot.maps.geometry.MapGeometry` of ``map`` (loaded once), or None."""
+        """The :class:`~pymunk_bot.maps.outlines.MapGeometry` of ``map`` (loaded once), or None."""
         if self.map is None:
             return None
-        from .world_map import map_geometry
+        from pymunk_bot.config.world_map import map_geometry
         return map_geometry(self)
 
 

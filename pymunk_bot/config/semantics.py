@@ -6,16 +6,16 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .. import geometry as geo
-from ..errors import SemanticError
-from ..footprint import of_robot, transform
-from .checks import check as check_more
-from .movers import check_mover
-from .outlines import (  # noqa: F401 (obstacle_outline, is_round: this module's API before)
+from pymunk_bot.geometry import plane as geo
+from pymunk_bot.config.errors import SemanticError
+from pymunk_bot.geometry.footprint import of_robot, transform
+from pymunk_bot.config.checks import check as check_more
+from pymunk_bot.config.movers import check_mover
+from pymunk_bot.config.outlines import (  # noqa: F401 (obstacle_outline, is_round: this module's API before)
     distance_to_obstacle, footprint_hits, footprints_overlap, is_round, obstacle_outline,
     polygon_of,
 )
-from .schema import PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle
+from pymunk_bot.config.schema import PolygonObstacle, RobotConfig, ScenarioConfig, WallObstacle
 
 
 def _check_polygon(index: int, obstacle: PolygonObstacle) -> None:
@@ -83,7 +83,7 @@ def _check_robot_start(index: int, robot: RobotConfig, scenario: ScenarioConfig,
     footprint = feet[index]
     geometry = scenario.world.map_geometry()
     if geometry is not None:  # the disc that holds the footprint must start in free space
-        from .world_map import disc_problem
+        from pymunk_bot.config.world_map import disc_problem
         cx, cy = transform(np.array([footprint.center]), robot.pose)[0]
         problem = disc_problem(geometry, float(cx), float(cy), footprint.radius)
         if problem is not None:
@@ -122,7 +122,7 @@ def _check_sideways(index: int, robot: RobotConfig) -> None:
     """Only a holonomic drive takes a lateral speed."""
     vy = getattr(robot.controller, "vy", 0.0)
     if vy:
-        from .. import plugins
+        from pymunk_bot import plugins
         if not getattr(plugins.drives.get(robot.drive), "holonomic", False):
             raise SemanticError(("robots", index, "controller", "vy"),
                                 f"the {robot.drive} drive cannot move sideways: vy must be 0 "
@@ -132,7 +132,7 @@ def _check_sideways(index: int, robot: RobotConfig) -> None:
 def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
     geometry = scenario.world.map_geometry()
     if geometry is not None:
-        from .world_map import disc_problem
+        from pymunk_bot.config.world_map import disc_problem
         problem = disc_problem(geometry, float(point[0]), float(point[1]), 0.0)
         if problem is not None:
             raise SemanticError(loc, problem)
@@ -145,7 +145,7 @@ def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
 
 def _check_localization(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
     """A localizer or mapping the robot cannot run (no LiDAR, too large a map) is bad input."""
-    from ..localization.checks import check_localizer, check_mapping
+    from pymunk_bot.localization.checks import check_localizer, check_mapping
     try:
         x0, y0, x1, y1 = scenario.world.extent
         check_localizer(robot.localization, robot, has_map=True,  # the scenario is its map
@@ -195,8 +195,8 @@ def check(scenario: ScenarioConfig) -> None:
             for k, point in enumerate(getattr(robot.controller, "points", None) or ()):
                 _check_point_in_arena(("robots", i, "controller", "points", k), point, scenario)
     if not isinstance(scenario.world.substeps, int):  # None or adaptive: computed
-        from .schema import MAX_SUBSTEPS
-        from .substeps import hardest_shove, required_substeps
+        from pymunk_bot.config.schema import MAX_SUBSTEPS
+        from pymunk_bot.config.substeps import hardest_shove, required_substeps
         needed = required_substeps(scenario)
         shove = hardest_shove(scenario)
         if shove is not None and shove.substeps > MAX_SUBSTEPS:
@@ -216,7 +216,7 @@ def check(scenario: ScenarioConfig) -> None:
                 f"substeps (at most {MAX_SUBSTEPS}) not to tunnel; lower world.dt or the speed")
     for name, expectation in scenario.expect.items():
         if name not in names:
-            from .messages import did_you_mean
+            from pymunk_bot.config.messages import did_you_mean
             raise SemanticError(("expect", name),
                                 f"no robot named '{name}'{did_you_mean(name, names)}")
         needs_goal = expectation.goal_reached is not None or expectation.within is not None

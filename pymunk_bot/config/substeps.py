@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import geometry as geo
-from .outlines import is_round, obstacle_outline, polygon_of
-from .schema import ScenarioConfig
+from pymunk_bot.geometry import plane as geo
+from pymunk_bot.config.outlines import is_round, obstacle_outline, polygon_of
+from pymunk_bot.config.schema import ScenarioConfig
 
 ARENA_WALL_THICKNESS = 1.0  # [m]; thick so that nothing can tunnel out of the arena
 
@@ -101,7 +101,7 @@ def map_half_widths(scenario: ScenarioConfig) -> list[float]:
 def mover_speed(obstacle) -> float:
     """Fastest a scripted obstacle or a pedestrian moves [m/s] (0 for the others)."""
     if getattr(obstacle, "type", "") == "pedestrian":
-        from .motion import MAX_SPEED_FACTOR
+        from pymunk_bot.config.motion import MAX_SPEED_FACTOR
         return MAX_SPEED_FACTOR * (obstacle.speed + 3.0 * obstacle.speed_std)
     motion = getattr(obstacle, "motion", None)
     if motion is None:
@@ -118,7 +118,7 @@ def mover_speed(obstacle) -> float:
 class SubstepNeed:
     """What a scenario's substep count depends on, but for how fast its robots go: the count
     for any speed bound, so that ticks whose robots go slower than their drives allow can
-    take fewer (:mod:`pymunk_bot.substep_gate`). See :func:`required_substeps`."""
+    take fewer (:mod:`pymunk_bot.physics.substeps`). See :func:`required_substeps`."""
 
     dt: float  # [s] the tick
     top_speed: float  # [m/s] the fastest robot's top speed
@@ -170,7 +170,7 @@ class SubstepNeed:
 
 def substep_need(scenario: ScenarioConfig) -> SubstepNeed:
     """The scenario's :class:`SubstepNeed`."""
-    from ..footprint import of_robot
+    from pymunk_bot.geometry.footprint import of_robot
     robots, obstacles = scenario.robots, scenario.obstacles
     movable = [o for o in obstacles if getattr(o, "movable", False)]
     smallest = min([of_robot(r).half_thickness for r in robots] + [half_width(o) for o in movable])

@@ -14,14 +14,11 @@ import functools
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from ..errors import ScenarioError
-
-if TYPE_CHECKING:
-    from .schema import ScenarioConfig, WorldConfig
+from pymunk_bot.config.errors import ScenarioError
 
 MAX_EXTENT = 1e4  # [m] a map's width or height, as any arena side (types.Length)
 _CACHED_MAPS = 8
@@ -37,10 +34,11 @@ def base_dir(source: str) -> Path:
     return path.resolve().parent if source and path.is_file() else Path.cwd()
 
 
-def attach_map(config: ScenarioConfig, source: str, node: Any = None) -> ScenarioConfig:
-    """Check ``size`` / ``map`` / ``map_scale``, load the map and return the config with the map
+def attach_map(config: Any, source: str, node: Any = None) -> Any:
+    """Check ``size`` / ``map`` / ``map_scale`` of ``config`` (a ScenarioConfig, whose module
+    calls this one), load the map and return the config with the map
     resolved and ``world.size`` set to its extent (the config itself when there is no map)."""
-    from .yaml_source import line_of
+    from pymunk_bot.config.yaml_source import line_of
 
     world = config.world
 
@@ -77,7 +75,7 @@ def attach_map(config: ScenarioConfig, source: str, node: Any = None) -> Scenari
     return config.model_copy(update={"world": sized})
 
 
-def map_geometry(world: WorldConfig) -> Any:
+def map_geometry(world: Any) -> Any:
     """The loaded map of a world that ``attach_map`` resolved (from the cache when unchanged)."""
     path = world.map_path
     if path is None:  # a WorldConfig built by hand: resolve against the current directory
@@ -104,7 +102,7 @@ def _load(path: str, mtime: int, scale: float | None, source: str) -> Any:
 
 @functools.lru_cache(maxsize=_CACHED_MAPS)
 def _cached(path: str, mtime: int, scale: float | None) -> Any:
-    from ..maps.files import load_world_map
+    from pymunk_bot.maps.files import load_world_map
 
     return load_world_map(path, scale, source="<map>", key_path="world.map")
 
@@ -114,7 +112,7 @@ def _cached(path: str, mtime: int, scale: float | None) -> Any:
 
 def disc_problem(geometry: Any, x: float, y: float, radius: float) -> str | None:
     """Why a disc of ``radius`` [m] at (x, y) [m] cannot be on the map, or None when it fits."""
-    from ..maps.geometry import free_disc
+    from pymunk_bot.maps.outlines import free_disc
 
     x0, y0, x1, y1 = geometry.extent
     if not (x0 + radius <= x <= x1 - radius and y0 + radius <= y <= y1 - radius):

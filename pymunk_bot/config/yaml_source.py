@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: a scenario is a page of text, not a data set
 MAX_DEPTH = 32  # nesting of mappings and lists (a scenario needs about 6)

@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
-from ..config.controllers import AvoidControllerConfig, DwaConfig
-from ..planning.dwa import DwaParams, DynamicWindow, free_runs, scan_points
-from ..planning.tracking import MovingObstacleTracker, PassingSide
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import AvoidControllerConfig, DwaConfig
+from pymunk_bot.planning.dwa import DwaParams, DynamicWindow, free_runs, scan_points
+from pymunk_bot.planning.tracking import MovingObstacleTracker, PassingSide
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 PROGRESS_WINDOW = 10.0  # [s] without getting closer to the goal before the message says so
 PROGRESS_STEP = 0.1  # [m] of progress that counts

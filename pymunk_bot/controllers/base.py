@@ -2,17 +2,17 @@
 
 A controller is called at its own ``rate`` with an :class:`Observation` (the robot's sensor
 readings and its pose estimate, never ground truth unless the scenario asks for it) and returns
-a :class:`~pymunk_bot.command.Command` (body velocity), which every drive takes. A controller
+a :class:`~pymunk_bot.robots.command.Command` (body velocity), which every drive takes. A controller
 written for the diff drive may still return (left, right) wheel speeds [m/s]; new code should
 return a Command, so it works on every drive. Write your own by subclassing :class:`Controller`.
 """
 from __future__ import annotations
 
-from ..command import STOP, Command
-from ..drives.diff import wheel_speeds
-from ..plugins import controllers
-from ..readings import LaserScan, Observation, RobotSpec
-from .localizing import LOCALIZING, localizing_command
+from pymunk_bot.robots.command import STOP, Command
+from pymunk_bot.robots.drives.diff import wheel_speeds
+from pymunk_bot.plugins import controllers
+from pymunk_bot.robots.readings import LaserScan, Observation, RobotSpec
+from pymunk_bot.controllers.localizing import LOCALIZING, localizing_command
 
 __all__ = ["STOP", "Command", "Controller", "LaserScan", "Observation", "RobotSpec", "controllers",
            "wheel_speeds"]

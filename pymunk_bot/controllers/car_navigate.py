@@ -14,16 +14,16 @@ import math
 
 import numpy as np
 
-from ..config.controllers import NavigateControllerConfig
-from ..footprint import Footprint
-from ..geometry import wrap_angle
-from ..planning.dwa import scan_points
-from ..planning.grid import ClearanceGrid
-from ..planning.hybrid_astar import FootprintChecker, HybridParams, HybridResult, hybrid_astar
-from ..planning.map import MapInfo
-from ..planning.pursuit import PathTracker, PursuitGains
-from ..planning.steering import car_pursue
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import NavigateControllerConfig
+from pymunk_bot.geometry.footprint import Footprint
+from pymunk_bot.geometry.plane import wrap_angle
+from pymunk_bot.planning.dwa import scan_points
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.hybrid_astar import FootprintChecker, HybridParams, HybridResult, hybrid_astar
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.planning.pursuit import PathTracker, PursuitGains
+from pymunk_bot.planning.steering import car_pursue
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 OFF_PATH = 0.5  # [m] farther than this from the segment: replan
 SEGMENT_END = 0.08  # [m] a segment is done this close to its end

@@ -12,14 +12,14 @@ import math
 
 import numpy as np
 
-from ..geometry import wrap_angle
-from ..planning.astar import astar
-from ..planning.dwa import scan_points
-from ..planning.grid import ClearanceGrid
-from ..planning.map import MapInfo
-from ..planning.paths import shortcut
-from ..planning.tracking import MovingObstacleTracker
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.geometry.plane import wrap_angle
+from pymunk_bot.planning.astar import astar
+from pymunk_bot.planning.dwa import scan_points
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.planning.paths import shortcut
+from pymunk_bot.planning.tracking import MovingObstacleTracker
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 SECTORS = 36  # the nearest LiDAR return in each of this many sectors is an obstacle point
 SENSE_RANGE = 4.0  # [m] farther returns are ignored

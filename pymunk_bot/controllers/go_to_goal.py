@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import math
 
-from ..config.controllers import GoToGoalControllerConfig
-from ..geometry import wrap_angle
-from ..planning.steering import car_pursue, holonomic_toward
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import GoToGoalControllerConfig
+from pymunk_bot.geometry.plane import wrap_angle
+from pymunk_bot.planning.steering import car_pursue, holonomic_toward
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 
 REVERSE_CLEARANCE = 1.15  # a car backs up until the goal is this many turning radii from the

@@ -19,10 +19,10 @@ import math
 
 import numpy as np
 
-from ..command import STOP, Command
-from ..localization.explore import corridor_lengths
-from ..localization.se2 import scan_points
-from ..readings import LaserScan, Observation
+from pymunk_bot.robots.command import STOP, Command
+from pymunk_bot.localization.explore import corridor_lengths
+from pymunk_bot.localization.se2 import scan_points
+from pymunk_bot.robots.readings import LaserScan, Observation
 
 LOCALIZING = "localizing: waiting for a trustworthy estimate"  # the controller's message
 LOCALIZING_TURN_RATE = 0.5  # [rad/s] turn on the spot while localizing

@@ -17,16 +17,16 @@ import math
 import numba
 import numpy as np
 
-from ..config.controllers import NavigateControllerConfig
-from ..planning.astar import astar
-from ..planning.dwa import DynamicWindow, scan_points
-from ..planning.grid import ClearanceGrid
-from ..planning.map import MapInfo
-from ..planning.paths import shortcut
-from ..planning.tracking import MovingObstacleTracker, PassingSide
-from .avoid import dwa_params, to_robot_frame
-from .base import STOP, Command, Controller, Observation, RobotSpec
-from .waypoints import PathFollower, pursuit_gains
+from pymunk_bot.config.controllers import NavigateControllerConfig
+from pymunk_bot.planning.astar import astar
+from pymunk_bot.planning.dwa import DynamicWindow, scan_points
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.planning.paths import shortcut
+from pymunk_bot.planning.tracking import MovingObstacleTracker, PassingSide
+from pymunk_bot.controllers.avoid import dwa_params, to_robot_frame
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.controllers.waypoints import PathFollower, pursuit_gains
 
 LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
 OFF_PATH = 1.0  # [m] farther than this from the path: replan from here

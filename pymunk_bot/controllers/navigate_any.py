@@ -3,14 +3,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..config.controllers import NavigateControllerConfig
-from ..readings import RobotSpec
+from pymunk_bot.config.controllers import NavigateControllerConfig
+from pymunk_bot.robots.readings import RobotSpec
 
 
 def make_navigate(config: NavigateControllerConfig, robot: RobotSpec) -> Any:
     """The navigation controller that suits the robot's drive."""
     if robot.min_turn_radius > 0:
-        from .car_navigate import CarNavigateController
+        from pymunk_bot.controllers.car_navigate import CarNavigateController
         return CarNavigateController(config, robot)
-    from .navigate import NavigateController
+    from pymunk_bot.controllers.navigate import NavigateController
     return NavigateController(config, robot)

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..actors.orca import neighbour_lines
-from ..config.controllers import OrcaControllerConfig
-from .crowd_nav import CrowdController
+from pymunk_bot.actors.orca import neighbour_lines
+from pymunk_bot.config.controllers import OrcaControllerConfig
+from pymunk_bot.controllers.crowd_nav import CrowdController
 
 MOVING = 0.05  # [m/s] points faster than this are moving obstacles (soft constraints)
 
@@ -21,7 +21,7 @@ class OrcaController(CrowdController):
 
     def velocity(self, xy: np.ndarray, carrot: np.ndarray, points: np.ndarray,
                  point_velocities: np.ndarray, period: float) -> np.ndarray:
-        from ..actors.orca_lp import solve_all
+        from pymunk_bot.actors.orca_lp import solve_all
 
         c = self.config
         pref = self.heading_to(xy, carrot) * self.max_speed

@@ -1,7 +1,7 @@
 """``controller: {type: policy, path: nav.npz}``: a trained policy drives the robot.
 
 At every tick (``rate``, 10 Hz by default: the env's 0.1 s control period) the policy sees the
-observation ``pymunk_bot/Navigation-v0`` builds (:mod:`pymunk_bot.policy_io`: the latest LiDAR
+observation ``pymunk_bot/Navigation-v0`` builds (:mod:`pymunk_bot.policy.io`: the latest LiDAR
 scan, the goal from the pose estimate, its previous action) and its action is scaled as the env
 scales it. Give the robot ``localization: ground_truth`` to see the pose the env shows by
 default (``pose_source="ground_truth"``); with the default odometry it sees what the env shows
@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.controllers import PolicyControllerConfig
-from ..policy_file import PolicyFileError, load_policy
-from ..policy_io import ActionScale, ObservationBuilder, goal_features
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import PolicyControllerConfig
+from pymunk_bot.policy.files import PolicyFileError, load_policy
+from pymunk_bot.policy.io import ActionScale, ObservationBuilder, goal_features
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 
 class PolicyController(Controller):

@@ -2,13 +2,13 @@
 
 The class follows the :class:`~pymunk_bot.controllers.Controller` protocol: it is built as
 ``ClassName(robot_spec, **params)`` and its ``compute(observation)`` returns (left, right) wheel
-speeds [m/s] (or a :class:`~pymunk_bot.command.Command`, for any drive); ``rate`` [Hz], ``status`` and ``message`` are optional attributes.
+speeds [m/s] (or a :class:`~pymunk_bot.robots.command.Command`, for any drive); ``rate`` [Hz], ``status`` and ``message`` are optional attributes.
 
 Where the module is looked for: next to the scenario file, then in the folders above it, then
 the current folder, then ``sys.path``. Validation only *finds* the module and reads its source
 (no user code runs); the simulation imports it, with the found folder on ``sys.path`` only
 for the import. A bug in the user's code (an exception in its import, constructor or
-``compute``, ``sys.exit()`` included) is a :class:`~pymunk_bot.errors.ControllerError` carrying
+``compute``, ``sys.exit()`` included) is a :class:`~pymunk_bot.config.errors.ControllerError` carrying
 its traceback, not bad input.
 
 Time budget: when the environment variable ``PYMUNK_BOT_CALL_BUDGET`` holds a number of seconds,
@@ -33,10 +33,10 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..config.class_path import module_home
-from ..config.controllers import PythonControllerConfig
-from ..errors import ControllerError
-from .base import Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.class_path import module_home
+from pymunk_bot.config.controllers import PythonControllerConfig
+from pymunk_bot.config.errors import ControllerError
+from pymunk_bot.controllers.base import Command, Controller, Observation, RobotSpec
 
 
 CALL_BUDGET_ENV = "PYMUNK_BOT_CALL_BUDGET"

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.controllers import SocialForceControllerConfig
-from .crowd_nav import CrowdController
+from pymunk_bot.config.controllers import SocialForceControllerConfig
+from pymunk_bot.controllers.crowd_nav import CrowdController
 
 
 ANISOTROPY = 0.3  # lambda: weight of a point straight behind (1 ahead); Helbing et al. 2000

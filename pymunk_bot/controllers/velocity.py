@@ -1,8 +1,8 @@
 """A constant body velocity, on any drive."""
 from __future__ import annotations
 
-from ..config.controllers import VelocityControllerConfig
-from .base import Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import VelocityControllerConfig
+from pymunk_bot.controllers.base import Command, Controller, Observation, RobotSpec
 
 
 class VelocityController(Controller):

@@ -5,11 +5,11 @@ import math
 
 import numpy as np
 
-from ..config.controllers import PursuitConfig, WaypointsControllerConfig
-from ..geometry import wrap_angle
-from ..planning.steering import car_pursue, holonomic_toward
-from ..planning.pursuit import PathTracker, PursuitGains, pursue, round_corners
-from .base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import PursuitConfig, WaypointsControllerConfig
+from pymunk_bot.geometry.plane import wrap_angle
+from pymunk_bot.planning.steering import car_pursue, holonomic_toward
+from pymunk_bot.planning.pursuit import PathTracker, PursuitGains, pursue, round_corners
+from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
 
 def pursuit_gains(config: PursuitConfig, robot: RobotSpec, max_speed: float,

@@ -1,8 +1,8 @@
 """Constant wheel speeds (diff drive); ``velocity`` holds a body velocity on any drive."""
 from __future__ import annotations
 
-from ..config.controllers import WheelsControllerConfig
-from .base import Controller, Observation, RobotSpec
+from pymunk_bot.config.controllers import WheelsControllerConfig
+from pymunk_bot.controllers.base import Controller, Observation, RobotSpec
 
 
 class WheelsController(Controller):

@@ -16,9 +16,9 @@ try:
 except ImportError:  # pragma: no cover - depends on the install
     raise ImportError("pymunk_bot.envs needs gymnasium: pip install 'pymunk-bot[rl]'") from None
 
-from .navigation import NavigationEnv
-from .task import RewardWeights
-from .vector import NavigationVectorEnv
+from pymunk_bot.envs.navigation import NavigationEnv
+from pymunk_bot.envs.task import RewardWeights
+from pymunk_bot.envs.vector import NavigationVectorEnv
 
 NAVIGATION_ID = "pymunk_bot/Navigation-v0"
 
@@ -36,7 +36,7 @@ register_envs()
 
 def __getattr__(name: str):
     if name == "MultiRobotEnv":  # PettingZoo is imported only when asked for
-        from .multi import MultiRobotEnv
+        from pymunk_bot.envs.multi import MultiRobotEnv
 
         return MultiRobotEnv
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

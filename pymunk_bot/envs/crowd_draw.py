@@ -7,7 +7,7 @@ import copy
 from pathlib import Path
 from typing import Any
 
-from ..errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 WORLD_PLACE = ("size", "map", "map_scale")  # the keys of a world section that say where it is
 
@@ -16,7 +16,7 @@ def crowd_suite(spec: Any, generate: str | None, source: str) -> tuple[Any, ...]
     """The entries (:class:`~pymunk_bot.benchmark.suite.Entry`) of the suite ``spec`` names:
     a shipped suite's name, a generator spec or a folder of scenarios. ScenarioError naming
     ``randomize.crowd`` if it is none of them."""
-    from ..benchmark.suite import load_suite
+    from pymunk_bot.benchmark.suite import load_suite
 
     where = "randomize.crowd"
     if generate is not None:
@@ -36,7 +36,7 @@ def crowd_world(base: dict, robot: str, entry: Any, seed: int, source: str) -> d
     """``base`` (scenario data) with the world, obstacles and pedestrians of ``entry``'s
     episode of ``seed``, its learning robot ``robot`` at that episode's start with its goal
     (other robots, ``expect`` and ``events`` left out)."""
-    from ..benchmark.suite import episode_data
+    from pymunk_bot.benchmark.suite import episode_data
 
     try:
         drawn = episode_data(entry, seed)

@@ -8,13 +8,13 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..config import ScenarioConfig, parse_scenario, scenario_data
-from ..errors import ScenarioError
-from ..replicas import Replicas
-from ..sim import Simulation
-from .randomize import Randomization, start_pose
-from .robot_task import RobotTask
-from .task import RewardWeights, end_info, load_config, prepare_scenario, sample_goal
+from pymunk_bot.config import ScenarioConfig, parse_scenario, scenario_data
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.engine.replicas import Replicas
+from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.envs.randomize import Randomization, start_pose
+from pymunk_bot.envs.robot_task import RobotTask
+from pymunk_bot.envs.task import RewardWeights, end_info, load_config, prepare_scenario, sample_goal
 
 MAX_CONTROL_PERIOD = 10.0  # [s]
 MAX_EPISODE_TIME = 24 * 3600.0  # [s] of simulated time

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..policy_file import Policy, load_policy
+from pymunk_bot.policy.files import Policy, load_policy
 
 MAX_EPISODES = 100_000
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -39,7 +39,7 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
                  seeds: list[int], env: Any = None) -> list[EpisodeOutcome]:
     """Play the policy (or the policy file) for one episode per seed, in ``env`` if given
     (kept open: a trainer reuses it, and its generated worlds) or a new env of ``env_kwargs``."""
-    from .navigation import NavigationEnv
+    from pymunk_bot.envs.navigation import NavigationEnv
 
     agent = load_policy(policy) if isinstance(policy, (str, Path)) else policy
     own = env is None

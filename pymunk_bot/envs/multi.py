@@ -19,15 +19,15 @@ except ImportError:  # pragma: no cover - depends on the install
     raise ImportError("MultiRobotEnv needs pettingzoo: pip install 'pymunk-bot[rl]'") from None
 from gymnasium.utils import seeding
 
-from ..config import ScenarioConfig
-from ..sim import Simulation
-from .episode import SEED_BOUND, advance, episode_timing
-from .navigation import RENDER_MODES, make_spaces
-from .robot_task import RobotTask
-from .task import RewardWeights, end_info, load_config, prepare_scenario
+from pymunk_bot.config import ScenarioConfig
+from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.envs.episode import SEED_BOUND, advance, episode_timing
+from pymunk_bot.envs.navigation import RENDER_MODES, make_spaces
+from pymunk_bot.envs.robot_task import RobotTask
+from pymunk_bot.envs.task import RewardWeights, end_info, load_config, prepare_scenario
 
 if TYPE_CHECKING:
-    from .render import FrameRenderer
+    from pymunk_bot.envs.render import FrameRenderer
 
 
 class MultiRobotEnv(ParallelEnv):
@@ -127,7 +127,7 @@ class MultiRobotEnv(ParallelEnv):
         if self.sim is None:
             self.reset()
         if self._renderer is None:
-            from .render import FrameRenderer
+            from pymunk_bot.envs.render import FrameRenderer
 
             self._renderer = FrameRenderer(self._sim(), agents=self.possible_agents)
         if self.render_mode == "rgb_array":

@@ -8,13 +8,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..config import ScenarioConfig
-from .episode import NavigationEpisode, advance
-from .task import RewardWeights
+from pymunk_bot.config import ScenarioConfig
+from pymunk_bot.envs.episode import NavigationEpisode, advance
+from pymunk_bot.envs.task import RewardWeights
 
 if TYPE_CHECKING:
-    from ..sim import Simulation
-    from .render import FrameRenderer
+    from pymunk_bot.engine.simulation import Simulation
+    from pymunk_bot.envs.render import FrameRenderer
 
 RENDER_MODES = ("human", "rgb_array")
 
@@ -109,12 +109,12 @@ class NavigationEnv(gym.Env):
             self._renderer.close()  # a world drawn for this episode (randomize): a new view
             self._renderer = None
         if self._renderer is None:
-            from .render import FrameRenderer
+            from pymunk_bot.envs.render import FrameRenderer
 
             self._renderer = FrameRenderer(self.episode.sim, agents=[self.episode.robot_name])
         if self.render_mode == "rgb_array":
             return self._renderer.rgb()
-        from ..viewer import ViewerUnavailable
+        from pymunk_bot.viewer import ViewerUnavailable
 
         try:
             self._renderer.show(f"pymunk-bot: {self.episode.config.name}")

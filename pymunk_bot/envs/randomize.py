@@ -32,11 +32,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..config import parse_scenario
-from ..errors import ScenarioError
-from ..maps.generate import KINDS, generate
-from ..sweep.grid import apply_override, parse_key_path
-from .crowd_draw import crowd_suite, crowd_world
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.maps.generate import KINDS, generate
+from pymunk_bot.sweep.grid import apply_override, parse_key_path
+from pymunk_bot.envs.crowd_draw import crowd_suite, crowd_world
 
 KEYS = ("generate", "world_seeds", "size", "start", "set", "crowd")
 MAX_CHOICES = 1000

@@ -1,7 +1,7 @@
 """One robot's view of the navigation task: its action, observation and reward, written once
 (:func:`outcomes`) for one robot (:meth:`RobotTask.outcome`) or many of one scenario at once.
 
-The observation and the action scaling are :mod:`pymunk_bot.policy_io`'s (the ``policy``
+The observation and the action scaling are :mod:`pymunk_bot.policy.io`'s (the ``policy``
 controller uses them too); the reward is :class:`~pymunk_bot.envs.task.RewardWeights`'.
 """
 from __future__ import annotations
@@ -10,16 +10,16 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from ..command import STOP
-from ..policy_io import (
+from pymunk_bot.robots.command import STOP
+from pymunk_bot.policy.io import (
     ActionScale, ObservationBuilder, action_size, goal_features, observation_bounds,
     observation_size,
 )
-from .step_rows import step_rows
-from .task import RewardWeights
+from pymunk_bot.envs.step_rows import step_rows
+from pymunk_bot.envs.task import RewardWeights
 
 if TYPE_CHECKING:
-    from ..robot import Robot
+    from pymunk_bot.robots.robot import Robot
 
 Where = tuple[float, float, float, float, float]  # x, y, theta of the robot, goal x, y
 
@@ -173,7 +173,7 @@ class RobotTask:
         return self._lidar.latest.ranges
 
     def observe(self, out: np.ndarray | None = None, where: Where | None = None) -> np.ndarray:
-        """The observation (:mod:`pymunk_bot.policy_io`), written into ``out`` if given;
+        """The observation (:mod:`pymunk_bot.policy.io`), written into ``out`` if given;
         ``where``: :meth:`where`, if already read this step."""
         assert self.builder is not None, "call start() first"
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out

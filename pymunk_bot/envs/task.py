@@ -2,7 +2,7 @@
 
 The Gymnasium env, the vector env and the PettingZoo env all use these pieces and
 :class:`~pymunk_bot.envs.robot_task.RobotTask`, so one robot sees, acts and is rewarded the same
-way in all three. The observation and the action scaling live in :mod:`pymunk_bot.policy_io`,
+way in all three. The observation and the action scaling live in :mod:`pymunk_bot.policy.io`,
 which the ``policy`` controller uses too. Units: metres, seconds, radians.
 """
 from __future__ import annotations
@@ -14,9 +14,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..config import ScenarioConfig, load_scenario, parse_scenario, scenario_data
-from ..errors import ScenarioError
-from ..policy_io import MAX_BEAMS
+from pymunk_bot.config import ScenarioConfig, load_scenario, parse_scenario, scenario_data
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.policy.io import MAX_BEAMS
 
 GOAL_SAMPLE_TRIES = 2000  # random goals tried before giving up on a crowded arena
 GOAL_MIN_DISTANCE = 1.0  # [m] a random goal at least this far from the start

@@ -20,16 +20,16 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..physics import MAX_REPLICAS
-from ..replicas import NotShareable, Replicas
-from .episode import NavigationEpisode, advance
-from .navigation import make_spaces
-from .robot_task import outcomes
-from .task import end_info
+from pymunk_bot.physics.settings import MAX_REPLICAS
+from pymunk_bot.engine.replicas import NotShareable, Replicas
+from pymunk_bot.envs.episode import NavigationEpisode, advance
+from pymunk_bot.envs.navigation import make_spaces
+from pymunk_bot.envs.robot_task import outcomes
+from pymunk_bot.envs.task import end_info
 
 if TYPE_CHECKING:
-    from ..sim import Simulation
-    from .render import FrameRenderer
+    from pymunk_bot.engine.simulation import Simulation
+    from pymunk_bot.envs.render import FrameRenderer
 
 MAX_ENVS = 4096
 
@@ -39,7 +39,7 @@ class NavigationVectorEnv(VectorEnv):
     arguments) whose simulations advance in lockstep.
 
     ``share_space`` (default): up to MAX_REPLICAS worlds share one pymunk Space and advance
-    as one (:class:`~pymunk_bot.replicas.Replicas`), pedestrians included.
+    as one (:class:`~pymunk_bot.engine.replicas.Replicas`), pedestrians included.
     False: each world in a space of its own (slower; a pushed crate then moves exactly as in a
     single env, where sharing can change the last bits of contacts between moving bodies:
     see docs/learning.md)."""
@@ -291,7 +291,7 @@ class NavigationVectorEnv(VectorEnv):
                                                zip(self._renderers, self.episodes)):
             self.close_extras()  # worlds drawn per episode (randomize): new views
         if self.render_mode is not None and self._renderers is None:
-            from .render import FrameRenderer
+            from pymunk_bot.envs.render import FrameRenderer
 
             self._renderers = [FrameRenderer(e.sim, agents=[e.robot_name])
                                for e in self.episodes]

@@ -5,7 +5,7 @@
 - :mod:`.mcap_log`: ``run --log run.mcap``, an observer writing MCAP atomically;
 - :mod:`.live`: ``run --foxglove``, the SDK's WebSocket server, paced at real time;
 - :mod:`.teleop`: client publishing on that server (Foxglove's Teleop panel on ``/cmd_vel``);
-- :mod:`.reader`: MCAP back to a :class:`~pymunk_bot.runlog.RunLog` (``replay``, ``plot``);
+- :mod:`.reader`: MCAP back to a :class:`~pymunk_bot.outcomes.runlog.RunLog` (``replay``, ``plot``);
 - :mod:`.convert`: ``pymunk-bot convert run.npz run.mcap``.
 
 Topic and frame names are in :mod:`.frames` and docs/foxglove.md. The optional packages
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..extras import require as require_extra
+from pymunk_bot.config.extras import require as require_extra
 
 
 def require(module: str, option: str) -> Any:

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..runlog import RunLog
+from pymunk_bot.outcomes.runlog import RunLog
 
 
 def convert(source: str | Path, target: str | Path) -> RunLog:
     """Read ``source`` (.npz or .mcap) and write ``target`` (.mcap or .npz), atomically."""
-    from .reader import load_any
+    from pymunk_bot.foxglove.reader import load_any
 
     log = load_any(source)
     if Path(target).suffix.lower() == ".mcap":
@@ -25,8 +25,8 @@ def convert(source: str | Path, target: str | Path) -> RunLog:
 
 def write_mcap(log: RunLog, path: str | Path) -> None:
     """Write ``log`` as MCAP with Foxglove schemas (see docs/foxglove.md), atomically."""
-    from .mcap_log import McapWriter
-    from .snapshot import geometry_of_log, snapshots_of_log
+    from pymunk_bot.foxglove.mcap_log import McapWriter
+    from pymunk_bot.foxglove.snapshot import geometry_of_log, snapshots_of_log
 
     writer = McapWriter(path)
     try:

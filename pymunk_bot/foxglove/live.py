@@ -17,8 +17,8 @@ from typing import Any
 
 import foxglove
 
-from ..errors import ScenarioError
-from .frames import DEFAULT_HOST, DEFAULT_PORT
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.foxglove.frames import DEFAULT_HOST, DEFAULT_PORT
 MAX_SPEED = 1000.0  # x real time
 MAX_LAG = 0.25  # [s] wall: further behind than this, the pace restarts instead of rushing
 # What one client can make the server print: the SDK logs a line per bad request (a 5,000-entry

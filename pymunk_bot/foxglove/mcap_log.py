@@ -7,6 +7,7 @@ removes the temporary file, so an error or Ctrl-C leaves nothing behind.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import weakref
@@ -15,9 +16,9 @@ from pathlib import Path
 import foxglove
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
-from ..results import temp_beside
-from .frames import METADATA_NAME
-from .publisher import Publisher, SimPublisher
+from pymunk_bot.outcomes.results import naming, temp_beside
+from pymunk_bot.foxglove.frames import METADATA_NAME
+from pymunk_bot.foxglove.publisher import Publisher, SimPublisher
 
 PROFILE = ""  # Foxglove's own schemas: no ROS profile
 CHUNK_SIZE = 4 * 1024 * 1024  # [bytes] uncompressed per chunk; big chunks compress better
@@ -47,16 +48,26 @@ class McapWriter:
     def commit(self) -> None:
         """Write the run's metadata, close the file and move it onto ``path``."""
         geometry = self.publisher.geometry
-        if geometry is not None:
-            self._writer.write_metadata(METADATA_NAME, {"runlog": json.dumps(geometry.meta)})
-        self._writer.close()
-        os.replace(self._tmp, self.path)
+        try:
+            if geometry is not None:
+                self._writer.write_metadata(METADATA_NAME, {"runlog": json.dumps(geometry.meta)})
+            self._writer.close()
+            os.replace(self._tmp, self.path)
+        except OSError as exc:
+            self.abort()
+            raise naming(exc, self.path) from exc
+        except RuntimeError as exc:  # the SDK's own error for a write that failed (a full disk)
+            self.abort()
+            raise OSError(errno.EIO, f"cannot finish the MCAP file ({exc})", str(self.path)) \
+                from exc
         self._cleanup.detach()
 
     def abort(self) -> None:
         """Close and delete the unfinished file."""
         try:
             self._writer.close()
+        except (OSError, RuntimeError):  # the tail of a file being deleted: nothing is lost
+            pass
         finally:
             self._cleanup()
 

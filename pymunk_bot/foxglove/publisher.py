@@ -13,11 +13,11 @@ from foxglove.messages import (FrameTransform, FrameTransforms, Grid, LaserScan,
                                PackedElementField, PackedElementFieldNumericType, PoseInFrame,
                                PosesInFrame, Quaternion, SceneUpdate, Vector2, Vector3)
 
-from . import scene
-from .channels import OBSTACLE_POSES_SCHEMA, ROBOT_STATE_SCHEMA, Channels
-from .frames import (LOG_TOPIC, OBSTACLES_TOPIC, SCENE_TOPIC, TF_TOPIC, WORLD_FRAME, base_frame,
+from pymunk_bot.foxglove import scene
+from pymunk_bot.foxglove.channels import OBSTACLE_POSES_SCHEMA, ROBOT_STATE_SCHEMA, Channels
+from pymunk_bot.foxglove.frames import (LOG_TOPIC, OBSTACLES_TOPIC, SCENE_TOPIC, TF_TOPIC, WORLD_FRAME, base_frame,
                      lidar_frame, nanoseconds, robot_topic, yaw_quaternion)
-from .snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim, movable_bodies,
+from pymunk_bot.foxglove.snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim, movable_bodies,
                        snapshot_of_sim)
 
 REFRESH_PERIOD = 1.0  # [s] simulated: the whole scene and paths again, for late viewers and seeks

@@ -1,4 +1,4 @@
-"""MCAP -> :class:`~pymunk_bot.runlog.RunLog`, so ``replay`` and ``plot`` read MCAP too.
+"""MCAP -> :class:`~pymunk_bot.outcomes.runlog.RunLog`, so ``replay`` and ``plot`` read MCAP too.
 
 Reads what :mod:`.mcap_log` writes: the geometry from the ``pymunk_bot`` metadata record, the
 per-step state from each robot's JSON state channel, scans from the ``foxglove.LaserScan``
@@ -13,10 +13,10 @@ from typing import Any, Callable, TypeVar
 
 import numpy as np
 
-from ..errors import ScenarioError
-from ..runlog import FORMAT, RunLog, ScanLog
-from . import require
-from .frames import METADATA_NAME, OBSTACLES_TOPIC, robot_topic
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.outcomes.runlog import FORMAT, RunLog, ScanLog
+from pymunk_bot.foxglove import require
+from pymunk_bot.foxglove.frames import METADATA_NAME, OBSTACLES_TOPIC, robot_topic
 
 MAX_STEPS = 10_000_000  # refuse absurd files rather than exhaust memory
 
@@ -150,9 +150,9 @@ def _scan_log(robot: dict, rows: list, time: np.ndarray, pose: np.ndarray) -> Sc
 
 
 def load_any(path: str | Path) -> RunLog:
-    """A run log from an .mcap (this module) or an .npz (:func:`pymunk_bot.runlog.load_log`)."""
+    """A run log from an .mcap (this module) or an .npz (:func:`pymunk_bot.outcomes.runlog.load_log`)."""
     if Path(path).suffix.lower() == ".mcap":
         return load_mcap(path)
-    from ..runlog import load_log
+    from pymunk_bot.outcomes.runlog import load_log
 
     return load_log(path)

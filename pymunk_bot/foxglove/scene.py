@@ -15,9 +15,9 @@ from foxglove.messages import (Color, CubePrimitive, CylinderPrimitive, LinePrim
                                SceneEntityDeletion, SceneEntityDeletionType, TextPrimitive,
                                Timestamp, TriangleListPrimitive, Vector3)
 
-from ..viewer import palette
-from ..viewer.scene import ShapeGeometry
-from .frames import NS_PER_S, WORLD_FRAME, base_frame, nanoseconds, yaw_quaternion
+from pymunk_bot.viewer import palette
+from pymunk_bot.viewer.scene import ShapeGeometry
+from pymunk_bot.foxglove.frames import NS_PER_S, WORLD_FRAME, base_frame, nanoseconds, yaw_quaternion
 
 WALL_HEIGHT = 0.4  # [m]
 OBSTACLE_HEIGHT = 0.3  # [m]

@@ -11,9 +11,9 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..readings import LaserScan
-from ..runlog import outline_json
-from ..viewer.scene import ShapeGeometry, body_pose, world_geometry
+from pymunk_bot.robots.readings import LaserScan
+from pymunk_bot.outcomes.runlog import outline_json
+from pymunk_bot.viewer.scene import ShapeGeometry, body_pose, world_geometry
 
 
 @dataclass(frozen=True)
@@ -63,7 +63,7 @@ class RunGeometry:
     height: float  # [m]
     fixed: list[ShapeGeometry]  # walls and fixed obstacles, world frame
     movable: list[tuple[int, list[ShapeGeometry]]]  # (obstacle index, shapes in its body frame)
-    meta: dict  # the run-log metadata (pymunk_bot.runlog format), for replay
+    meta: dict  # the run-log metadata (pymunk_bot.outcomes.runlog format), for replay
 
 
 # ---------------------------------------------------------------------------- live simulation
@@ -161,7 +161,7 @@ def _triple(value) -> tuple[float, float, float]:
 
 
 def geometry_of_log(log) -> RunGeometry:
-    """The static geometry of a :class:`~pymunk_bot.runlog.RunLog`."""
+    """The static geometry of a :class:`~pymunk_bot.outcomes.runlog.RunLog`."""
     movable = [(int(m["obstacle"]), shapes)
                for m, shapes in zip(log.meta["movable"], log.movable_shapes())]
     width, height = log.size

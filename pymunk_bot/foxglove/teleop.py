@@ -14,9 +14,9 @@ from __future__ import annotations
 import time
 from typing import Any, Callable
 
-from ..ros2.commands import CommandInbox, command_of
-from ..ros2.jsonmsg import BadMessage, loads
-from ..ros2.names import command_topics
+from pymunk_bot.ros2.commands import CommandInbox, command_of
+from pymunk_bot.ros2.jsonmsg import BadMessage, loads
+from pymunk_bot.ros2.names import command_topics
 
 ENCODINGS = ["json"]
 LOG_LINES_PER_S = 10
@@ -26,7 +26,7 @@ def attach_teleop(sim, timeout: float | None = None,
                   report: Callable[[str], None] = print) -> "TeleopListener":
     """A listener driving ``sim``'s robots, its command inbox attached to ``sim``
     (``timeout``: the watchdog's [s], default 0.5)."""
-    from ..ros2.names import DEFAULT_COMMAND_TIMEOUT
+    from pymunk_bot.ros2.names import DEFAULT_COMMAND_TIMEOUT
 
     inbox = CommandInbox(DEFAULT_COMMAND_TIMEOUT if timeout is None else timeout,
                          report=report).attach(sim)

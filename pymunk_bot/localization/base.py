@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..maps.grid import OccupancyGrid
-from ..readings import LaserScan, RobotSpec
+from pymunk_bot.maps.grid import OccupancyGrid
+from pymunk_bot.robots.readings import LaserScan, RobotSpec
 
 # When an estimate is trustworthy enough to drive on (docs/localization.md, "Localize before
 # driving"): its position std (along its worst axis) and heading std within these bounds.

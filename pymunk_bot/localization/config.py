@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from ..config.types import Float, Int, NonNegativeFloat, Section
+from pymunk_bot.config.types import Float, Int, NonNegativeFloat, Section
 
 MAX_PARTICLES_LIMIT = 100_000  # ~2.4 MB of particles; a 60-beam update is done in chunks
 MAX_MAP_CELLS = 16_000_000  # cells of a built occupancy grid (e.g. 200 x 200 m at 5 cm)

@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from .base import Localizer, LocalizerContext, LocalizerInputs
-from .config import EkfConfig
-from .likelihood import LikelihoodField
-from .scanmatch import match_scan, subsample
-from .se2 import between, compose, scan_points, wrap
+from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
+from pymunk_bot.localization.config import EkfConfig
+from pymunk_bot.localization.likelihood import LikelihoodField
+from pymunk_bot.localization.scanmatch import match_scan, subsample
+from pymunk_bot.localization.se2 import between, compose, scan_points, wrap
 
 MIN_TRACK = 0.1  # [m] the lever for heading drift when the robot has no wheel track (omni)
 

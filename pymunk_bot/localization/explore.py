@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .likelihood import LikelihoodField
-from .se2 import wrap
+from pymunk_bot.localization.likelihood import LikelihoodField
+from pymunk_bot.localization.se2 import wrap
 
 EXPLORE_HEADINGS = 36  # candidate headings, every 10 deg (robot frame)
 EXPLORE_BEAMS = 24  # predicted ranges per hypothesis and heading

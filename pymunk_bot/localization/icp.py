@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .scanmatch import MIN_POINTS, Match
-from .se2 import transform_points, wrap
+from pymunk_bot.localization.scanmatch import MIN_POINTS, Match
+from pymunk_bot.localization.se2 import transform_points, wrap
 
 POINT_CORRELATION = 3.0  # variance inflation for correlated neighbouring beams (as ekf's match_cov_scale)
 MIN_POINT_STD = 0.002  # [m] floor of the per-point residual std

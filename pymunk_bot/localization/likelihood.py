@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-from ..maps.grid import FREE_THRESH, OccupancyGrid
+from pymunk_bot.maps.grid import FREE_THRESH, OccupancyGrid
 
 MAX_FIELD_CELLS = 64_000_000  # upsampled cells; ~512 MB of float64
 

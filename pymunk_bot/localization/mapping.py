@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..maps.grid import UNKNOWN, OccupancyGrid
-from .config import MAX_MAP_CELLS, MappingConfig
-from .se2 import transform_points
+from pymunk_bot.maps.grid import UNKNOWN, OccupancyGrid
+from pymunk_bot.localization.config import MAX_MAP_CELLS, MappingConfig
+from pymunk_bot.localization.se2 import transform_points
 
 
 def logit(p: float) -> float:

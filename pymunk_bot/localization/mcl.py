@@ -31,15 +31,15 @@ from typing import Any
 
 import numpy as np
 
-from .base import Localizer, LocalizerContext, LocalizerInputs
-from .config import MclConfig
-from .explore import Explorer, trace
-from .likelihood import LikelihoodField
-from .motion import sample_motion
-from .particles import (CLUSTER_BIN, cluster_labels, cluster_modes, kld_limit,
+from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
+from pymunk_bot.localization.config import MclConfig
+from pymunk_bot.localization.explore import Explorer, trace
+from pymunk_bot.localization.likelihood import LikelihoodField
+from pymunk_bot.localization.motion import sample_motion
+from pymunk_bot.localization.particles import (CLUSTER_BIN, cluster_labels, cluster_modes, kld_limit,
                         low_variance_indices, roughen, weighted_pose_stats)
-from .posesearch import beam_log_pz, refine, search
-from .se2 import between, compose, scan_points, transform_points, wrap
+from pymunk_bot.localization.posesearch import beam_log_pz, refine, search
+from pymunk_bot.localization.se2 import between, compose, scan_points, transform_points, wrap
 
 KLD_BIN = (0.5, 0.5, np.deg2rad(10.0))  # [m, m, rad] AMCL's histogram bins
 CHUNK_ENDPOINTS = 1_000_000  # beam end points weighted at once (bounds temporary memory)

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .se2 import between, wrap
+from pymunk_bot.localization.se2 import between, wrap
 
 
 def _check(truth: np.ndarray, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

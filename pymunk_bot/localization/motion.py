@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .se2 import wrap
+from pymunk_bot.localization.se2 import wrap
 
 MIN_TRANS_FOR_HEADING = 0.01  # [m]; below this the direction of travel is meaningless (AMCL)
 

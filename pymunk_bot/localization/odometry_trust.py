@@ -27,7 +27,7 @@ from collections import deque
 
 import numpy as np
 
-from .se2 import compose, wrap
+from pymunk_bot.localization.se2 import compose, wrap
 
 # An uncalibrated robot's odometry error over one step (the EKF's defaults): a systematic share
 # of the motion (wheel radii, track width) and a random walk per metre driven and per radian.

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .se2 import wrap
+from pymunk_bot.localization.se2 import wrap
 
 CLUSTER_BIN = 0.5  # [m] AMCL's cluster histogram (x, y)
 MAX_CLUSTER_BINS = 4_000_000  # particles strewn farther than this many bins: no clustering

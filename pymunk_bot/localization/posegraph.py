@@ -13,7 +13,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.linalg import spsolve
 
-from .se2 import between, wrap
+from pymunk_bot.localization.se2 import between, wrap
 
 ANCHOR = 1e9  # information of the prior that pins the first node
 

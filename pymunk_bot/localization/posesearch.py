@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .likelihood import LikelihoodField
-from .se2 import transform_points, wrap
+from pymunk_bot.localization.likelihood import LikelihoodField
+from pymunk_bot.localization.se2 import transform_points, wrap
 
 SEARCH_DRAWS = 20_000  # uniform poses scored per search (bounds its cost: ~0.5 M lookups)
 SEARCH_BEAMS = 24  # beams that score the draws

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..controllers.python import import_module_attr
-from .base import Localizer, LocalizerContext
+from pymunk_bot.controllers.python import import_module_attr
+from pymunk_bot.localization.base import Localizer, LocalizerContext
 
 
 def PythonLocalizer(config: Any, context: LocalizerContext) -> Localizer:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..maps.grid import OccupancyGrid
+from pymunk_bot.maps.grid import OccupancyGrid
 
 PARTICLE_PERIOD = 0.2  # [s] between logged particle clouds
 MAX_PARTICLES = 1000  # particles kept per logged cloud (an even subsample of the filter's)

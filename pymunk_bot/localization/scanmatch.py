@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .likelihood import LikelihoodField
-from .se2 import transform_points, wrap
+from pymunk_bot.localization.likelihood import LikelihoodField
+from pymunk_bot.localization.se2 import transform_points, wrap
 
 MIN_POINTS = 10  # fewer matched end points than this: no match
 

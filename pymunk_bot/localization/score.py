@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..sensors.schedule import Schedule
-from .metrics import error_block
+from pymunk_bot.sensors.schedule import Schedule
+from pymunk_bot.localization.metrics import error_block
 
 
 class LocalizationScore:

@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .base import Localizer, LocalizerContext, LocalizerInputs
+from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
 
 
 class GroundTruthLocalizer(Localizer):

@@ -24,15 +24,15 @@ from typing import Any
 
 import numpy as np
 
-from ..maps.grid import OccupancyGrid
-from .base import Localizer, LocalizerContext, LocalizerInputs
-from .config import MappingConfig, SlamConfig
-from .mapping import OccupancyMapper
-from .odometry_trust import OdometryTrust
-from .posegraph import Edge, optimize
-from .icp import Reference, icp
-from .scanmatch import subsample
-from .se2 import between, scan_points, transform_points
+from pymunk_bot.maps.grid import OccupancyGrid
+from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
+from pymunk_bot.localization.config import MappingConfig, SlamConfig
+from pymunk_bot.localization.mapping import OccupancyMapper
+from pymunk_bot.localization.odometry_trust import OdometryTrust
+from pymunk_bot.localization.posegraph import Edge, optimize
+from pymunk_bot.localization.icp import Reference, icp
+from pymunk_bot.localization.scanmatch import subsample
+from pymunk_bot.localization.se2 import between, scan_points, transform_points
 
 EDGE_FLOOR = np.diag([0.01, 0.01, 0.005]) ** 2  # [m^2, m^2, rad^2] added to every edge covariance
 LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes

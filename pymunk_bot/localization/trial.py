@@ -13,11 +13,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..config.controllers import PursuitConfig
-from ..controllers.waypoints import PathFollower, pursuit_gains
-from ..maps.grid import OccupancyGrid
-from .base import Localizer, LocalizerContext, LocalizerInputs
-from .metrics import error_block
+from pymunk_bot.config.controllers import PursuitConfig
+from pymunk_bot.controllers.waypoints import PathFollower, pursuit_gains
+from pymunk_bot.maps.grid import OccupancyGrid
+from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
+from pymunk_bot.localization.metrics import error_block
 
 CONTROL_RATE = 10.0  # [Hz]
 

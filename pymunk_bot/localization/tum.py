@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import write_atomic
+from pymunk_bot.outcomes.results import write_atomic
 
 MAX_TUM_BYTES = 1 << 30  # a file larger than this is refused on reading (1 GiB)
 

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import ScenarioError
-from .geometry import MapGeometry, geometry_from_grid
-from .ros import read_ros_map
-from .svg import read_svg_map
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.maps.outlines import MapGeometry, geometry_from_grid
+from pymunk_bot.maps.ros import read_ros_map
+from pymunk_bot.maps.svg import read_svg_map
 
 SUFFIXES = (".yaml", ".yml", ".svg")
 

@@ -13,13 +13,13 @@ import math
 
 import numpy as np
 
-from ..config import parse_scenario
-from ..errors import ScenarioError
-from ..planning.astar import astar
-from ..planning.grid import ClearanceGrid
-from ..planning.map import MapInfo
-from ..planning.layouts import clutter, maze_walls
-from ..planning.paths import path_length
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.planning.astar import astar
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.planning.layouts import clutter, maze_walls
+from pymunk_bot.planning.paths import path_length
 
 KINDS = ("maze", "clutter", "office")
 DEFAULT_SIZE = {"maze": (8.4, 8.4), "clutter": (12.0, 8.0), "office": (16.0, 10.0)}

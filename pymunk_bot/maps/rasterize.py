@@ -5,10 +5,10 @@ import math
 
 import numpy as np
 
-from ..planning.grid import ClearanceGrid
-from ..planning.map import MapInfo
-from .grid import FREE, OCCUPIED, OccupancyGrid
-from .geometry import solid_cells
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.maps.grid import FREE, OCCUPIED, OccupancyGrid
+from pymunk_bot.maps.outlines import solid_cells
 
 BORDER_CELLS = 2  # occupied cells kept outside the arena's interior, so its walls are on the map
 THIN = math.sqrt(2.0)  # [cells] obstacles narrower than this also get their centre line marked

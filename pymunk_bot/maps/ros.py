@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ..config.messages import clip
-from ..errors import ScenarioError
-from ..results import write_atomic
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from pymunk_bot.config.messages import clip
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.outcomes.results import write_atomic
+from pymunk_bot.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 MODES = ("trinary", "scale", "raw")
 KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")

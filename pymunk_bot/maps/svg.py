@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 import shapely
 
-from ..errors import ScenarioError
-from ..geometry import signed_area
-from .geometry import FilledArea, MapGeometry, convex_pieces, edge_chain
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.geometry.plane import signed_area
+from pymunk_bot.maps.outlines import FilledArea, MapGeometry, convex_pieces, edge_chain
 
 CURVE_TOLERANCE = 0.01  # [m] largest distance between a sampled curve and its chords
 # Bounds on the work one plan may cost (measured: about 0.3 ms per painted shape to read and

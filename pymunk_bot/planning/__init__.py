@@ -1,8 +1,8 @@
 """Path planning on the map a scenario describes: clearance grid, A*, smoothing, DWA."""
-from .astar import PlanResult, astar
-from .grid import ClearanceGrid
-from .map import MapCircle, MapInfo, MapPolygon
-from .paths import densify, path_length, shortcut
+from pymunk_bot.planning.astar import PlanResult, astar
+from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.map import MapCircle, MapInfo, MapPolygon
+from pymunk_bot.planning.paths import densify, path_length, shortcut
 
 __all__ = ["ClearanceGrid", "MapCircle", "MapInfo", "MapPolygon", "PlanResult", "astar",
            "densify", "path_length", "shortcut"]

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from .grid import ClearanceGrid
+from pymunk_bot.planning.grid import ClearanceGrid
 
 SQRT2 = math.sqrt(2.0)
 

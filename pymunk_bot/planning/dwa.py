@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..readings import LaserScan, RobotSpec
+from pymunk_bot.robots.readings import LaserScan, RobotSpec
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from typing import overload
 
 import numpy as np
 
-from .map import MapInfo
+from pymunk_bot.planning.map import MapInfo
 
 
 def _segment_distances(px: np.ndarray, py: np.ndarray, points: np.ndarray) -> np.ndarray:

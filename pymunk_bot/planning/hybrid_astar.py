@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .grid import ClearanceGrid
+from pymunk_bot.planning.grid import ClearanceGrid
 
 HEURISTIC_CELL = 0.2  # [m] cells of the obstacle-aware distance heuristic
 CURVATURE_FRACTIONS = (-1.0, -0.5, 0.0, 0.5, 1.0)
@@ -232,7 +232,7 @@ def _analytic(checker: FootprintChecker, pose, target, radius: float, spacing: f
               reverse: bool) -> tuple[np.ndarray, np.ndarray] | None:
     """A collision-free finish from ``pose`` to ``target``: the Reeds-Shepp path when reversing
     is allowed (else the Dubins path); (poses, direction per pose) or None."""
-    from . import dubins, reeds_shepp
+    from pymunk_bot.planning import dubins, reeds_shepp
     if reverse:
         segments = reeds_shepp.shortest(pose, target, radius)
         if segments is None:

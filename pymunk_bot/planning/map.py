@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from ..config.schema import CircleObstacle, ScenarioConfig
-from ..config.outlines import obstacle_outline
-from ..maps.grid import OccupancyGrid
+from pymunk_bot.config.schema import CircleObstacle, ScenarioConfig
+from pymunk_bot.config.outlines import obstacle_outline
+from pymunk_bot.maps.grid import OccupancyGrid
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,7 @@ class MapInfo:
 
 
 def map_polygons(geometry: Any) -> list[MapPolygon]:
-    """A map file's static geometry (:class:`~pymunk_bot.maps.geometry.MapGeometry`) as
+    """A map file's static geometry (:class:`~pymunk_bot.maps.outlines.MapGeometry`) as
     polygons: its convex pieces, and each segment as a two-point polygon (a line), or as the
     rectangle it sweeps when it has a radius (an SVG stroke)."""
     out = [MapPolygon(_frozen(piece)) for piece in geometry.polygons]

@@ -6,7 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .grid import ClearanceGrid
+from pymunk_bot.planning.grid import ClearanceGrid
 
 Point = tuple[float, float]
 

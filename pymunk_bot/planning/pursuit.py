@@ -17,8 +17,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..geometry import wrap_angle
-from .paths import densify
+from pymunk_bot.geometry.plane import wrap_angle
+from pymunk_bot.planning.paths import densify
 
 Point = tuple[float, float]
 PROFILE_SPACING = 0.1  # [m] longest segment of a tracked path

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from ..command import Command
-from ..geometry import wrap_angle
+from pymunk_bot.robots.command import Command
+from pymunk_bot.geometry.plane import wrap_angle
 
 K_FACE = 2.5  # [1/s] turn rate per radian of heading error for an omni robot
 MIN_CAR_SPEED_FRACTION = 0.3  # a car facing away from its target still creeps at this fraction

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..extras import require as require_extra
+from pymunk_bot.config.extras import require as require_extra
 
 
 def require(module: str, option: str) -> Any:

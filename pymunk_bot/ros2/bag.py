@@ -4,7 +4,8 @@ The file is one MCAP in rosbag2's layout: the ``ros2`` profile, ``ros2msg`` sche
 message definitions of the standard packages, Humble), CDR-encoded messages, and each topic's
 ``offered_qos_profiles`` in its channel's metadata (the maps and ``/tf_static`` transient
 local, so ``ros2 bag play`` latches them). It is written to a temporary file beside the target
-and renamed onto it by :meth:`Ros2Bag.commit`; an error or Ctrl-C leaves nothing behind.
+and renamed onto it by :meth:`Ros2Bag.commit`; an error or Ctrl-C leaves nothing behind, and
+a full disk is an OSError naming the target (an incomplete bag is removed).
 """
 from __future__ import annotations
 
@@ -13,10 +14,10 @@ import weakref
 from pathlib import Path
 from typing import Any
 
-from ..foxglove.snapshot import geometry_of_log, snapshots_of_log
-from ..results import temp_beside
-from .messages import LiveMessages, Outgoing, RosMessages, typestore
-from .names import latched, qos_yaml
+from pymunk_bot.foxglove.snapshot import geometry_of_log, snapshots_of_log
+from pymunk_bot.outcomes.results import naming, temp_beside
+from pymunk_bot.ros2.messages import LiveMessages, Outgoing, RosMessages, typestore
+from pymunk_bot.ros2.names import latched, qos_yaml
 
 PROFILE = "ros2"
 CHUNK_SIZE = 4 * 1024 * 1024  # [bytes] uncompressed per chunk
@@ -64,16 +65,23 @@ class Ros2Bag:
         return channel
 
     def commit(self) -> None:
-        """Finish the file (summary, indexes) and move it onto ``path``."""
-        self._writer.finish()
-        self._stream.close()
-        os.replace(self._tmp, self.path)
+        """Finish the file (summary, indexes) and move it onto ``path``; OSError naming
+        ``path`` if it cannot be written (then nothing is left behind)."""
+        try:
+            self._writer.finish()
+            self._stream.close()
+            os.replace(self._tmp, self.path)
+        except OSError as exc:
+            self.abort()
+            raise naming(exc, self.path) from exc
         self._cleanup.detach()
 
     def abort(self) -> None:
         """Close and delete the unfinished file."""
         try:
             self._stream.close()
+        except OSError:  # the buffered tail of a file being deleted: its loss changes nothing
+            pass
         finally:
             self._cleanup()
 
@@ -89,6 +97,17 @@ class Ros2BagLogger:
         self.bag = Ros2Bag(path)
         self.steps = 0
         self._messages: LiveMessages | None = None
+        self.failed: OSError | None = None  # a write that failed (a full disk): the run goes on
+
+    def _write(self, messages) -> None:
+        if self.failed is not None:
+            return
+        try:
+            for message in messages:
+                self.bag.write(message)
+        except OSError as exc:  # the bag is lost, the run is not: save() reports it
+            self.failed = naming(exc, self.path)
+            self.bag.abort()
 
     def attach(self, sim) -> "Ros2BagLogger":
         """Start recording ``sim`` from its present state."""
@@ -97,17 +116,18 @@ class Ros2BagLogger:
 
     def on_reset(self, sim) -> None:
         self._messages = LiveMessages(sim, self.world_map)
-        for message in self._messages.start(sim):
-            self.bag.write(message)
+        self._write(self._messages.start(sim))
 
     def __call__(self, sim) -> None:
         if self._messages is None:
             raise RuntimeError("Ros2BagLogger: attach() it to the simulation first")
         self.steps += 1
-        for message in self._messages.step(sim):
-            self.bag.write(message)
+        self._write(self._messages.step(sim))
 
     def save(self) -> None:
+        """Finish the bag; OSError naming it if it could not be written (nothing is left)."""
+        if self.failed is not None:
+            raise self.failed
         self.bag.commit()
 
     def abort(self) -> None:
@@ -115,11 +135,11 @@ class Ros2BagLogger:
 
 
 def write_bag(log, path: str | Path) -> int:
-    """Write a :class:`~pymunk_bot.runlog.RunLog` as a ROS 2 bag, atomically; returns the
+    """Write a :class:`~pymunk_bot.outcomes.runlog.RunLog` as a ROS 2 bag, atomically; returns the
     number of messages. ``/map`` is rasterised from the fixed shapes the log keeps. A log holds
     no plans, localizer estimates or IMU readings: those topics are absent, and ``map`` ->
     ``odom`` is the identity (odometry is the estimate)."""
-    from .worldmap import geometry_grid
+    from pymunk_bot.ros2.worldmap import geometry_grid
 
     bag = Ros2Bag(path)
     try:

@@ -5,9 +5,10 @@ waits for it. After each step :class:`BridgeObserver` builds the messages that s
 subscribed to, encodes each once and hands them to the loop, which queues them per client:
 a slow client loses its oldest messages (``CLIENT_QUEUE``), never stalls the run. Requests
 are handled by :class:`~.protocol.Protocol`; commands go through a
-:class:`~.commands.CommandInbox`. Every bad request is answered with a ``status`` error and
-logged as one line (at most ``LOG_LINES_PER_S`` per client, then a count); a client sending
-more than ``MAX_REQUESTS_PER_S`` has the excess dropped.
+:class:`~.commands.CommandInbox`. Every bad request, and every command a robot refuses after
+the step, is answered with a ``status`` (at most ``STATUS_PER_S`` per client per second, then
+one count) and logged as one line (at most ``LOG_LINES_PER_S`` per client, then a count); a
+client sending more than ``MAX_REQUESTS_PER_S`` has the excess dropped.
 """
 from __future__ import annotations
 
@@ -21,20 +22,21 @@ import time
 import weakref
 from typing import Any, Callable
 
-from ..errors import ScenarioError
-from ..foxglove.frames import DEFAULT_HOST
-from ..foxglove.snapshot import geometry_of_sim
-from .commands import CommandInbox
-from .jsonmsg import dumps, loads, to_plain
-from .messages import LiveMessages, Outgoing, typestore
-from .names import DEFAULT_PORT, latched, robot_names
-from .protocol import BadRequest, Catalog, ClientState, Protocol, status
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.foxglove.frames import DEFAULT_HOST
+from pymunk_bot.foxglove.snapshot import geometry_of_sim
+from pymunk_bot.ros2.commands import CommandInbox
+from pymunk_bot.ros2.jsonmsg import dumps, loads, to_plain
+from pymunk_bot.ros2.messages import LiveMessages, Outgoing, typestore
+from pymunk_bot.ros2.names import DEFAULT_PORT, latched, robot_names
+from pymunk_bot.ros2.protocol import BadRequest, Catalog, ClientState, Protocol, status, valid_id
 
 CLIENT_QUEUE = 200  # messages waiting for one client; older ones are dropped
 MAX_FRAME = 1 << 20  # [bytes] largest request accepted
 MAX_REQUESTS_PER_S = 200.0  # per client, sustained
 REQUEST_BURST = 400.0  # per client, at once
 LOG_LINES_PER_S = 10  # bad-request lines per client per second; the rest are counted
+STATUS_PER_S = 10  # status messages per client per second; the rest are counted
 START_TIMEOUT = 10.0  # [s]
 CLOSE_TIMEOUT = 1.0  # [s] for a client to answer the closing handshake when the server stops
 
@@ -51,10 +53,27 @@ class _Client:
         self.dropped = 0  # requests dropped for flooding
         self.flood_logged = -1e18  # [s] monotonic: when flooding was last reported
         self.log_window, self.logged, self.suppressed = 0.0, 0, 0
+        self.status_window, self.statuses, self.statuses_held = 0.0, 0, 0
 
     def queue(self, text: str) -> None:
         self.outbox.append(text)
         self.ready.set()
+
+    def status(self, level: str, message: str, request_id: Any = None) -> None:
+        """Queue a ``status``: at most STATUS_PER_S a second; the next second's first says how
+        many were held back."""
+        now = time.monotonic()
+        if now - self.status_window >= 1.0:
+            if self.statuses_held:
+                self.queue(dumps(status("warning", f"{self.statuses_held} more problems with "
+                                        f"this client's requests not told (at most "
+                                        f"{STATUS_PER_S} a second)")))
+            self.status_window, self.statuses, self.statuses_held = now, 0, 0
+        if self.statuses < STATUS_PER_S:
+            self.statuses += 1
+            self.queue(dumps(status(level, message, request_id)))
+        else:
+            self.statuses_held += 1
 
     def admit(self) -> bool:
         """Token bucket: may this request be handled?"""
@@ -176,6 +195,8 @@ class RosbridgeServer:
 
         host, port = connection.remote_address[:2]
         client = _Client(f"client {next(self._ids)} ({host}:{port})", connection)
+        client.state.tell = lambda level, message, request_id: self._tell_soon(
+            client, level, message, request_id)
         self._clients.add(client)
         sender = asyncio.create_task(self._send(client))
         try:
@@ -203,6 +224,22 @@ class RosbridgeServer:
         except ConnectionClosed:
             pass
 
+    def _tell_soon(self, client: _Client, level: str, message: str, request_id: Any) -> None:
+        """From the simulation's thread: a refused command, to the client that sent it."""
+        loop = self._loop
+        if loop is None:
+            return
+        try:
+            loop.call_soon_threadsafe(self._tell, client, level, message, request_id)
+        except RuntimeError:  # the loop has stopped
+            pass
+
+    def _tell(self, client: _Client, level: str, message: str, request_id: Any) -> None:
+        if client not in self._clients:  # it has left
+            return
+        self._log(client, message)
+        client.status(level, message, request_id)
+
     def _request(self, client: _Client, text: str | bytes) -> None:
         if not client.admit():
             now = time.monotonic()
@@ -217,7 +254,7 @@ class RosbridgeServer:
         except BadRequest as exc:
             self._log(client, str(exc))
             request_id, service = _id_and_service(text)
-            client.queue(dumps(status("error", str(exc), request_id)))
+            client.status("error", str(exc), request_id)
             if service is not None:  # a service call must get an answer, or the caller waits
                 client.queue(dumps({"op": "service_response", "service": service,
                                          "result": False, "values": str(exc),
@@ -281,7 +318,8 @@ def _id_and_service(text: str | bytes) -> tuple[Any, str | None]:
     if not isinstance(request, dict):
         return None, None
     service = request.get("service") if request.get("op") == "call_service" else None
-    return request.get("id"), service if isinstance(service, str) else None
+    request_id = request.get("id") if valid_id(request.get("id")) else None  # not echoed
+    return request_id, service if isinstance(service, str) else None
 
 
 class BridgeObserver:

@@ -17,12 +17,12 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ..foxglove.frames import nanoseconds, yaw_quaternion
-from ..foxglove.publisher import heading_along
-from ..foxglove.snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim,
+from pymunk_bot.foxglove.frames import nanoseconds, yaw_quaternion
+from pymunk_bot.foxglove.publisher import heading_along
+from pymunk_bot.foxglove.snapshot import (RobotSnapshot, RunGeometry, Snapshot, geometry_of_sim,
                                  movable_bodies, snapshot_of_sim)
-from ..maps.grid import OccupancyGrid
-from .names import (CLOCK_TOPIC, MAP_FRAME, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC,
+from pymunk_bot.maps.grid import OccupancyGrid
+from pymunk_bot.ros2.names import (CLOCK_TOPIC, MAP_FRAME, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC,
                     TYPES, RobotNames, robot_names)
 
 REFRESH_PERIOD = 1.0  # [s] simulated: plans and markers again, for late subscribers

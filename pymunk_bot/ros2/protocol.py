@@ -5,16 +5,17 @@ Supported ops: ``advertise``, ``unadvertise``, ``publish`` (on ``/cmd_vel`` and
 ``call_service``
 for the ``rosapi`` services that rosbridge clients ask for when they connect (topics, their
 types and definitions, the time, services, nodes). A bad request gets a ``status`` reply at
-level ``error`` (as rosbridge sends) and one line in the server's log.
+level ``error`` (as rosbridge sends) and one line in the server's log; so does a command the
+robot refuses when it is applied after the step (through ``ClientState.tell``).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-from .commands import CommandInbox, command_of
-from .jsonmsg import BadMessage, loads
-from .names import (CLOCK_TOPIC, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC, TYPES,
+from pymunk_bot.ros2.commands import CommandInbox, command_of
+from pymunk_bot.ros2.jsonmsg import BadMessage, loads
+from pymunk_bot.ros2.names import (CLOCK_TOPIC, MAP_TOPIC, OBSTACLES_TOPIC, TF_STATIC_TOPIC, TF_TOPIC, TYPES,
                     command_topics, robot_names)
 
 NODE = "/pymunk_bot"
@@ -88,13 +89,25 @@ class Subscription:
     ids: set = field(default_factory=set)  # the request ids that subscribed (unsubscribe by id)
 
 
+def valid_id(value: Any) -> bool:
+    """Whether ``value`` may be a request's ``id`` (rosbridge's are strings; numbers too)."""
+    return value is None or isinstance(value, str) or (
+        isinstance(value, (int, float)) and not isinstance(value, bool))
+
+
+def _no_reply(level: str, message: str, request_id: Any) -> None:
+    pass
+
+
 @dataclass
 class ClientState:
-    """What one client has asked for."""
+    """What one client has asked for; ``tell(level, message, id)`` sends it a ``status`` from
+    any thread (the server sets it)."""
 
     name: str  # for the log: "client 3 (127.0.0.1:50312)"
     subscriptions: dict[str, Subscription] = field(default_factory=dict)
     advertised: dict[str, str] = field(default_factory=dict)  # topic -> type
+    tell: Callable[[str, str, Any], None] = _no_reply
 
 
 class Protocol:
@@ -116,6 +129,9 @@ class Protocol:
             raise BadRequest(f"malformed JSON ({exc})") from None
         if not isinstance(request, dict):
             raise BadRequest("a request must be a JSON object")
+        if not valid_id(request.get("id")):
+            raise BadRequest(f"'id' must be a string or a number (got "
+                             f"{type(request['id']).__name__})")
         op = request.get("op")
         handler = self.OPS.get(op) if isinstance(op, str) else None
         if handler is None:
@@ -170,8 +186,13 @@ class Protocol:
         if command is None:
             raise BadRequest(f"publish: this simulator takes only "
                              f"{', '.join(sorted(self.catalog.commands))}, not {topic}")
+        request_id = request.get("id")
+
+        def reply(level: str, message: str) -> None:  # a refusal after the step
+            client.tell(level, message, request_id)
+
         try:
-            accepted = self.inbox.put(command_of(*command, request.get("msg")))
+            accepted = self.inbox.put(command_of(*command, request.get("msg"), reply))
         except BadMessage as exc:
             raise BadRequest(f"publish on {topic}: {exc}") from None
         if not accepted:

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..maps.grid import OccupancyGrid
+from pymunk_bot.maps.grid import OccupancyGrid
 
 MAP_RESOLUTION = 0.05  # [m] of /map (Nav2's usual)
 MAX_MAP_CELLS = 4_000_000  # a bigger arena gets coarser cells rather than a huge message
@@ -20,7 +20,7 @@ def _resolution(width: float, height: float) -> float:
 
 def world_grid(config) -> OccupancyGrid:
     """The scenario's arena and fixed obstacles (a ROS map file's own cells included)."""
-    from ..maps.rasterize import scenario_grid
+    from pymunk_bot.maps.rasterize import scenario_grid
 
     x0, y0, x1, y1 = config.world.extent
     return scenario_grid(config, _resolution(x1 - x0, y1 - y0))
@@ -30,8 +30,8 @@ def geometry_grid(geometry) -> OccupancyGrid:
     """The fixed shapes of a :class:`~pymunk_bot.foxglove.snapshot.RunGeometry` (what a run
     log keeps: a converted log has no scenario). Arena walls are left to the rasteriser,
     which marks everything outside the arena occupied."""
-    from ..maps.rasterize import grid_from_map
-    from ..planning.map import MapCircle, MapInfo, map_polygons
+    from pymunk_bot.maps.rasterize import grid_from_map
+    from pymunk_bot.planning.map import MapCircle, MapInfo, map_polygons
 
     pieces, segments, radii, circles = [], [], [], []
     for shape in geometry.fixed:

@@ -5,14 +5,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..plugins import sensors as sensor_kinds
-from .bumper import Bumper
-from .imu import Imu
-from .lidar import Lidar
+from pymunk_bot.plugins import sensors as sensor_kinds
+from pymunk_bot.sensors.bumper import Bumper
+from pymunk_bot.sensors.imu import Imu
+from pymunk_bot.sensors.lidar import Lidar
 
 if TYPE_CHECKING:
-    from ..robot import Robot
-    from ..world import World
+    from pymunk_bot.robots.robot import Robot
+    from pymunk_bot.physics.world import World
 
 
 def make_lidar(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Lidar:

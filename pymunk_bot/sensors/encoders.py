@@ -11,7 +11,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..arcs import integrate_arcs
+from pymunk_bot.geometry.arcs import integrate_arcs
 
 
 class EncoderBank:

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from ..config.schema import ImuConfig
-from .schedule import Schedule
+from pymunk_bot.config.schema import ImuConfig
+from pymunk_bot.sensors.schedule import Schedule
 
 
 @dataclass(frozen=True)

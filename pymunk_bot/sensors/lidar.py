@@ -14,9 +14,9 @@ from typing import Any, Protocol, Sequence
 import numpy as np
 import pymunk
 
-from ..config.schema import LidarConfig
-from ..readings import LaserScan
-from .schedule import Schedule
+from pymunk_bot.config.schema import LidarConfig
+from pymunk_bot.robots.readings import LaserScan
+from pymunk_bot.sensors.schedule import Schedule
 
 FULL_CIRCLE_TOLERANCE = 1e-9  # [rad]; a fov this close to 2*pi is a full circle
 

@@ -22,9 +22,9 @@ from typing import Any, Sequence
 import numba
 import numpy as np
 
-from ..arcs import arc_step
-from ..stacking import join_odometry, split_odometry
-from .encoders import EncoderBank
+from pymunk_bot.geometry.arcs import arc_step
+from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.sensors.encoders import EncoderBank
 
 
 class DiffOdometryGroup:
@@ -59,7 +59,7 @@ class DiffOdometryGroup:
     @classmethod
     def stacked(cls, parts: list["DiffOdometryGroup"]) -> "DiffOdometryGroup":
         """The groups of copies as one, on arrays, drawing from the same generators (see
-        :mod:`pymunk_bot.stacking`)."""
+        :mod:`pymunk_bot.robots.stacking`)."""
         configs = [c for part in parts for c in part.configs]
         whole = cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
                     [t for part in parts for t in part.track_widths],

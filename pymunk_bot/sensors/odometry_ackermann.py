@@ -15,8 +15,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..stacking import join_odometry, split_odometry
-from .encoders import EncoderBank, OdometryHandle, integrate_twist
+from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.sensors.encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
 class AckermannOdometryGroup:
@@ -52,7 +52,7 @@ class AckermannOdometryGroup:
     @classmethod
     def stacked(cls, parts: list["AckermannOdometryGroup"]) -> "AckermannOdometryGroup":
         """The groups of copies as one, drawing from the same generators (see
-        :mod:`pymunk_bot.stacking`)."""
+        :mod:`pymunk_bot.robots.stacking`)."""
         whole = cls([c for part in parts for c in part.configs],
                     np.concatenate([part._geometry[0] for part in parts]),
                     np.concatenate([part._geometry[1] for part in parts]),

@@ -11,9 +11,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..drives.omni import wheel_matrix
-from ..stacking import join_odometry, split_odometry
-from .encoders import EncoderBank, OdometryHandle, integrate_twist
+from pymunk_bot.robots.drives.omni import wheel_matrix
+from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.sensors.encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
 class OmniOdometryGroup:
@@ -47,7 +47,7 @@ class OmniOdometryGroup:
     @classmethod
     def stacked(cls, parts: list["OmniOdometryGroup"]) -> "OmniOdometryGroup":
         """The groups of copies as one, drawing from the same generators (see
-        :mod:`pymunk_bot.stacking`)."""
+        :mod:`pymunk_bot.robots.stacking`)."""
         whole = cls([c for part in parts for c in part.configs],
                     np.concatenate([part._wheels for part in parts]),
                     [rng for part in parts for rng in part._rngs])

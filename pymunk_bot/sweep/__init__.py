@@ -12,13 +12,13 @@ import math
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from ..config import ScenarioConfig, load_scenario, parse_scenario, resolve, scenario_data
-from ..errors import ScenarioError
-from .backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
-from .grid import Run, build_grid, parse_assignment, parse_seeds
-from .output import Journal, check_output, journal_path, read_journal, read_table, write_table
-from .summary import Group, format_table, summarize
-from .summary_plot import plot_summary
+from pymunk_bot.config import ScenarioConfig, load_scenario, parse_scenario, resolve, scenario_data
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.sweep.backends import BACKENDS, BackendUnavailable, default_workers, run_chunks
+from pymunk_bot.sweep.grid import Run, build_grid, parse_assignment, parse_seeds
+from pymunk_bot.sweep.output import Journal, check_output, journal_path, read_journal, read_table, write_table
+from pymunk_bot.sweep.summary import Group, format_table, summarize
+from pymunk_bot.sweep.summary_plot import plot_summary
 
 class SweepInterrupted(RuntimeError):
     """A run or a worker failed mid-sweep; the finished rows are kept for ``resume``."""

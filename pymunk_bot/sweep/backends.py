@@ -10,7 +10,7 @@ import logging
 import os
 from typing import Any, Callable, Iterator, Sequence
 
-from .runner import run_chunk
+from pymunk_bot.sweep.runner import run_chunk
 
 BACKENDS = ("serial", "process", "dask", "ray")
 CONNECT_TIMEOUT = 10.0  # [s] to reach a cluster's scheduler

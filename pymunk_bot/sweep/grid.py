@@ -14,8 +14,8 @@ from typing import Any, Iterable, Sequence
 
 import yaml
 
-from ..config import ScenarioConfig, parse_scenario, scenario_data
-from ..errors import ScenarioError
+from pymunk_bot.config import ScenarioConfig, parse_scenario, scenario_data
+from pymunk_bot.config.errors import ScenarioError
 
 MAX_COMBINATIONS = 10_000  # distinct parameter combinations in one sweep
 MAX_RUNS = 1_000_000  # combinations x seeds

@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Any, Iterable, TextIO
 
-from ..results import write_atomic
+from pymunk_bot.outcomes.results import write_atomic
 
 FORMATS = (".csv", ".parquet")
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..config import parse_scenario
-from ..sim import Simulation
-from .grid import Run, scenario_with
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.sweep.grid import Run, scenario_with
 
 # Result keys left out of rows: they measure the machine, not the run, and would make the
 # same sweep differ between backends.

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .summary import HEADLINE, HEADLINE_UNITS, Group
+from pymunk_bot.sweep.summary import HEADLINE, HEADLINE_UNITS, Group
 
 # Units of the scenario keys a sweep most often varies, by the key's last name (the scenario
 # format's units); a key not listed is labelled by its path alone.
@@ -30,7 +30,7 @@ def plot_summary(groups: list[Group], path: str | Path, scenario: str | None = N
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..results import temp_beside
+    from pymunk_bot.outcomes.results import temp_beside
 
     keys = list(dict.fromkeys(g.key for g in groups))
     shown = [m for m in groups[0].metrics if m.rsplit(".", 1)[-1] in HEADLINE] if groups else []

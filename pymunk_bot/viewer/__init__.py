@@ -13,7 +13,7 @@ from pathlib import Path
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 
-from .unavailable import ViewerUnavailable
+from pymunk_bot.viewer.unavailable import ViewerUnavailable
 
 
 def run_window(sim, duration: float | None = None) -> None:
@@ -21,14 +21,14 @@ def run_window(sim, duration: float | None = None) -> None:
 
     The run pauses when ``duration`` simulated seconds have passed (space runs on, q quits).
     """
-    from .window import run_window as run
+    from pymunk_bot.viewer.window import run_window as run
 
     run(sim, duration)
 
 
 def replay_window(log) -> None:
-    """Play a :class:`~pymunk_bot.runlog.RunLog` in the window."""
-    from .window import replay_window as replay
+    """Play a :class:`~pymunk_bot.outcomes.runlog.RunLog` in the window."""
+    from pymunk_bot.viewer.window import replay_window as replay
 
     replay(log)
 
@@ -43,7 +43,7 @@ def record_video(source, path: str | Path, duration: float | None, fps: float | 
     the run has settled (every robot done and nothing moving for 1 s) unless ``until_settled``
     is False; the simulation runs ``duration`` either way.
     """
-    from .recorder import record
+    from pymunk_bot.viewer.recorder import record
 
     return record(source, path, duration, fps=fps, size=size, progress=progress,
                   until_settled=until_settled)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from .unavailable import ViewerUnavailable
+from pymunk_bot.viewer.unavailable import ViewerUnavailable
 
 # SDL falls back to these when no real display answers: a window there is invisible.
 INVISIBLE_DRIVERS = ("offscreen", "dummy")

@@ -15,10 +15,10 @@ from typing import Callable
 import numpy as np
 import pygame
 
-from .camera import Camera
-from .draw import Layers, StaticLayer, draw_scene
-from .hud import Hud, HudState
-from .scene import Scene
+from pymunk_bot.viewer.camera import Camera
+from pymunk_bot.viewer.draw import Layers, StaticLayer, draw_scene
+from pymunk_bot.viewer.hud import Hud, HudState
+from pymunk_bot.viewer.scene import Scene
 
 SPEEDS = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, math.inf)  # simulated s per real s
 DEFAULT_SPEED = 3  # index of 1x

@@ -7,12 +7,12 @@ from dataclasses import dataclass
 import numpy as np
 import pygame
 
-from ..footprint import transform
-from . import palette as pal
-from . import primitives as prim
-from .camera import Camera
-from .draw_localization import draw_built_map, draw_localization
-from .scene import RobotView, Scene, ShapeView
+from pymunk_bot.geometry.footprint import transform
+from pymunk_bot.viewer import palette as pal
+from pymunk_bot.viewer import primitives as prim
+from pymunk_bot.viewer.camera import Camera
+from pymunk_bot.viewer.draw_localization import draw_built_map, draw_localization
+from pymunk_bot.viewer.scene import RobotView, Scene, ShapeView
 
 GRID_SPACINGS = (0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)  # [m]
 MAJOR_SPACINGS = (0.5, 1.0, 5.0, 10.0, 50.0, 100.0, 500.0)  # [m] darker lines

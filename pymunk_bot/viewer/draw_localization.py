@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pygame
 
-from . import palette as pal
-from . import primitives as prim
-from .camera import Camera
-from .scene import RobotView
+from pymunk_bot.viewer import palette as pal
+from pymunk_bot.viewer import primitives as prim
+from pymunk_bot.viewer.camera import Camera
+from pymunk_bot.viewer.scene import RobotView
 
 CHI2_2D_95 = 5.991  # chi^2(2) at 95 %: the position ellipse holds the truth 95 % of the time
 Z_95 = 1.96  # two-sided normal quantile: the heading fan

@@ -5,9 +5,9 @@ from dataclasses import dataclass
 
 import pygame
 
-from . import palette as pal
-from .camera import Camera
-from .scene import RobotView, Scene
+from pymunk_bot.viewer import palette as pal
+from pymunk_bot.viewer.camera import Camera
+from pymunk_bot.viewer.scene import RobotView, Scene
 
 HELP_LIVE = (
     ("left click", "send the selected robot there (click a robot: select it)"),

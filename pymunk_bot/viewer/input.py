@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pygame
 
-from .app import CLICK_SLOP, Viewer
+from pymunk_bot.viewer.app import CLICK_SLOP, Viewer
 
 ZOOM_STEP = 1.15  # scale factor per wheel notch
 

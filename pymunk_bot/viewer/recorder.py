@@ -23,15 +23,15 @@ import threading
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..results import temp_beside, termination_deferred
-from ._pygame import require_pygame
+from pymunk_bot.outcomes.results import temp_beside, termination_deferred
+from pymunk_bot.viewer._pygame import require_pygame
 
 pygame = require_pygame()
 
-from .app import Viewer  # noqa: E402
-from .camera import FIT_MARGIN  # noqa: E402
-from .settling import Settling  # noqa: E402
-from .sources import LiveSource, ReplaySource  # noqa: E402
+from pymunk_bot.viewer.app import Viewer  # noqa: E402
+from pymunk_bot.viewer.camera import FIT_MARGIN  # noqa: E402
+from pymunk_bot.viewer.settling import Settling  # noqa: E402
+from pymunk_bot.viewer.sources import LiveSource, ReplaySource  # noqa: E402
 
 if TYPE_CHECKING:
     from pygame import Surface

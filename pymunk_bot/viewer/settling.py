@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scene import Scene
+from pymunk_bot.viewer.scene import Scene
 
 SETTLE_TIME = 1.0  # [s] of simulated time with nothing moving before a video ends
 STILL = 1e-4  # [m] (and [rad]) a pose that changed less than this between frames has not moved

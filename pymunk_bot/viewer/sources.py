@@ -10,15 +10,15 @@ import math
 
 import numpy as np
 
-from ..footprint import drawn_outline
-from .scene import RobotView, Scene, ShapeView, body_pose, scan_end_points, world_geometry
+from pymunk_bot.geometry.footprint import drawn_outline
+from pymunk_bot.viewer.scene import RobotView, Scene, ShapeView, body_pose, scan_end_points, world_geometry
 
 TRAIL_SPACING = 0.01  # [m]; a trail point is added once the robot has moved this far
 TRAIL_MAX_POINTS = 20_000  # older halves are thinned beyond this, so memory stays bounded
 
 
 class LiveSource:
-    """A running :class:`~pymunk_bot.sim.Simulation`, plus the trails and scans seen so far.
+    """A running :class:`~pymunk_bot.engine.simulation.Simulation`, plus the trails and scans seen so far.
 
     Step it only through :meth:`step` so that every scan is seen with the pose it was taken at.
     """
@@ -168,7 +168,7 @@ def _status(controller) -> str:
 
 
 class ReplaySource:
-    """A saved :class:`~pymunk_bot.runlog.RunLog`, played back one logged step at a time."""
+    """A saved :class:`~pymunk_bot.outcomes.runlog.RunLog`, played back one logged step at a time."""
 
     interactive = False
 

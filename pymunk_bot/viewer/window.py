@@ -1,13 +1,13 @@
 """The interactive window: a pygame display around a :class:`~.app.Viewer`."""
 from __future__ import annotations
 
-from ._pygame import open_display, require_pygame
+from pymunk_bot.viewer._pygame import open_display, require_pygame
 
 pygame = require_pygame()  # before the modules below import it: a clear error if missing
 
-from .app import Viewer  # noqa: E402
-from .input import InputHandler  # noqa: E402
-from .sources import LiveSource, ReplaySource  # noqa: E402
+from pymunk_bot.viewer.app import Viewer  # noqa: E402
+from pymunk_bot.viewer.input import InputHandler  # noqa: E402
+from pymunk_bot.viewer.sources import LiveSource, ReplaySource  # noqa: E402
 
 FPS = 60  # [Hz] frames drawn per second at most
 MAX_FRAME_GAP = 0.25  # [s]; a longer stall (window dragged, machine busy) is not caught up

@@ -8,7 +8,7 @@ import pytest
 from builders import robot
 
 from pymunk_bot.actors import PathScript
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.planning.map import MapInfo
 
 PATH = [[2.0, 2.0], [6.0, 2.0], [6.0, 4.0]]  # 6 m long

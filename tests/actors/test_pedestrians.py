@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from builders import robot
 
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 
 def walker(start, goals, **extra) -> dict:

@@ -9,7 +9,7 @@ from pymunk_bot.benchmark import (MixedSignatures, controller_choices, episode_d
                                   load_suite, markdown, run_benchmark, summarize)
 from pymunk_bot.benchmark.layouts import Placement, static_map
 from pymunk_bot.cli import main
-from pymunk_bot.navmetrics import METRIC_NAMES, Thresholds
+from pymunk_bot.outcomes.navigation import METRIC_NAMES, Thresholds
 
 SMALL = {
     "name": "small", "world": {"size": [8.0, 4.0], "duration": 6.0},

@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from pymunk_bot.navmetrics import formulas
-from pymunk_bot.navmetrics.definitions import Thresholds
+from pymunk_bot.outcomes.navigation import formulas
+from pymunk_bot.outcomes.navigation.definitions import Thresholds
 
 
 def test_disc_clearance_is_centre_distance_less_both_radii():

@@ -6,7 +6,7 @@ import pytest
 
 import pymunk_bot as pb
 from pymunk_bot.config.metric_bounds import BOUND_KEYS, MetricBounds
-from pymunk_bot.navmetrics import METRIC_NAMES, Thresholds, track
+from pymunk_bot.outcomes.navigation import METRIC_NAMES, Thresholds, track
 
 
 def scene(person_y=3.0, goal_x=7.0, expect=None, v=0.5):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pymunk_bot import Simulation
-from pymunk_bot.geometry import point_in_polygon
+from pymunk_bot.geometry.plane import point_in_polygon
 
 from helpers import scenario
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from builders import robot
 
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 CAR = {"drive": "ackermann", "wheelbase": 0.33, "max_steer": 0.5, "max_speed": 2.0,
        "footprint": {"type": "box", "size": [0.5, 0.3], "center": [0.165, 0.0]}}

@@ -10,8 +10,8 @@ import pytest
 from builders import robot
 
 from pymunk_bot import Simulation
-from pymunk_bot.footprint import Footprint
-from pymunk_bot.geometry import box_corners
+from pymunk_bot.geometry.footprint import Footprint
+from pymunk_bot.geometry.plane import box_corners
 from pymunk_bot.planning.grid import ClearanceGrid
 from pymunk_bot.planning.hybrid_astar import FootprintChecker, HybridParams, hybrid_astar
 from pymunk_bot.planning.map import MapInfo, MapPolygon

@@ -8,7 +8,7 @@ import pytest
 gym = pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs import NavigationEnv, NavigationVectorEnv  # noqa: E402
-from pymunk_bot.errors import ScenarioError  # noqa: E402
+from pymunk_bot.config.errors import ScenarioError  # noqa: E402
 
 ROBOT = {"name": "me", "pose": [1.0, 1.0, 0.0], "radius": 0.2,
          "lidar": {"beams": 24, "max_range": 5.0}, "goal": {"position": [3.0, 3.0]}}

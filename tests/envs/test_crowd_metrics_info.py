@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from pymunk_bot.envs import MultiRobotEnv, NavigationEnv
-from pymunk_bot.navmetrics import METRIC_NAMES
+from pymunk_bot.outcomes.navigation import METRIC_NAMES
 
 CROWD = {
     "name": "crowd_env", "world": {"size": [8.0, 4.0], "duration": 3.0},

@@ -15,7 +15,7 @@ gym = pytest.importorskip("gymnasium")
 
 import pymunk_bot.envs  # noqa: E402,F401  (registers the ids)
 from pymunk_bot.envs import NavigationEnv  # noqa: E402
-from pymunk_bot.errors import ScenarioError  # noqa: E402
+from pymunk_bot.config.errors import ScenarioError  # noqa: E402
 from bounds import HANG_GUARD
 
 ROOT = Path(__file__).resolve().parents[2]

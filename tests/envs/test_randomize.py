@@ -11,7 +11,7 @@ gym = pytest.importorskip("gymnasium")
 from gymnasium.vector import AutoresetMode  # noqa: E402
 
 from pymunk_bot.envs import NavigationEnv, NavigationVectorEnv  # noqa: E402
-from pymunk_bot.errors import ScenarioError  # noqa: E402
+from pymunk_bot.config.errors import ScenarioError  # noqa: E402
 
 ROBOT = {"name": "r1", "pose": [1.0, 1.0, 0.0], "radius": 0.2,
          "lidar": {"beams": 16, "max_range": 4.0}, "goal": {"position": [3.0, 3.0]}}

@@ -189,7 +189,7 @@ def test_an_agent_that_arrives_leaves_and_its_robot_holds_still():
 
 def test_the_worlds_share_spaces_and_advance_together():
     """Up to 16 worlds to a pymunk Space, every one a control period further per step."""
-    from pymunk_bot.physics import MAX_REPLICAS
+    from pymunk_bot.physics.settings import MAX_REPLICAS
 
     envs = NavigationVectorEnv(num_envs=MAX_REPLICAS + 4, scenario=short_task(duration=2.0))
     envs.reset(seed=0)

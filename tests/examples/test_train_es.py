@@ -22,7 +22,7 @@ def test_a_short_run_learns_saves_and_plots(tmp_path):
     policy = train_es.to_policy(theta, shapes)
     assert policy.inputs == 32 + 8 and policy.outputs == 2
     policy.save(tmp_path / "p.npz")
-    from pymunk_bot.policy_file import load_policy
+    from pymunk_bot.policy.files import load_policy
 
     np.testing.assert_array_equal(load_policy(tmp_path / "p.npz").weights[0], policy.weights[0])
     train_es.plot(history, tmp_path / "curve.png", "test")

@@ -30,7 +30,7 @@ def test_ppo_trains_a_few_thousand_steps_evaluates_and_exports(tmp_path, capsys)
     # The exported actors act as the model does (its mean action, clipped).
     from stable_baselines3 import PPO
 
-    from pymunk_bot.policy_file import load_policy
+    from pymunk_bot.policy.files import load_policy
 
     model = PPO.load(out, device="cpu")
     obs = np.random.default_rng(0).uniform(-1, 1, (5, model.observation_space.shape[0]))

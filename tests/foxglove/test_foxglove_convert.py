@@ -11,11 +11,11 @@ from foxglove_helpers import read_mcap
 
 from pymunk_bot import Simulation
 from pymunk_bot.cli import main
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.foxglove.convert import convert
 from pymunk_bot.foxglove.mcap_log import McapLogger
 from pymunk_bot.foxglove.reader import load_mcap
-from pymunk_bot.runlog import RunLogger, load_log
+from pymunk_bot.outcomes.runlog import RunLogger, load_log
 from pymunk_bot.viewer.sources import ReplaySource
 
 PER_STEP = ("time", "pose", "odometry", "command", "wheel_speeds", "velocity", "collisions",
@@ -114,7 +114,7 @@ def test_command_line(tmp_path, capsys):
 
 
 def test_the_core_does_not_import_foxglove():
-    code = ("import sys, pymunk_bot, pymunk_bot.cli, pymunk_bot.runlog;"
+    code = ("import sys, pymunk_bot, pymunk_bot.cli, pymunk_bot.outcomes.runlog;"
             "pymunk_bot.cli.build_parser();"
             "print(any(m in sys.modules for m in ('foxglove', 'mcap', 'google.protobuf')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

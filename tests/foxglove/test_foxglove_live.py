@@ -13,7 +13,7 @@ import pytest
 from builders import robot, scenario, wheels
 
 from pymunk_bot import Simulation
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.foxglove.frames import quaternion_yaw
 from pymunk_bot.foxglove.live import LiveServer, run_paced
 from pymunk_bot.foxglove.publisher import Publisher, SimPublisher

@@ -13,7 +13,7 @@ from pymunk_bot import Simulation
 from pymunk_bot.foxglove.frames import quaternion_yaw
 from pymunk_bot.foxglove.mcap_log import McapLogger
 from pymunk_bot.maps.grid import OccupancyGrid
-from pymunk_bot.runlog import RunLogger
+from pymunk_bot.outcomes.runlog import RunLogger
 
 
 def lidar_sim(**lidar):

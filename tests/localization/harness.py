@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from pymunk_bot import Simulation
-from pymunk_bot.benchmarks import localization_worlds as worlds
+from bench import localization_worlds as worlds
 from pymunk_bot.localization.trial import Trial, make_context, run_trial
 from pymunk_bot.maps.rasterize import scenario_grid
 

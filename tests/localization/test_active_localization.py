@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import pytest
 
-from pymunk_bot.benchmarks import localization_robustness as bench
+from bench import localization_robustness as bench
 
 pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(not bench.WAREHOUSE.exists(), reason="no warehouse map")]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from pymunk_bot.benchmarks.localization_robustness import run_one
+from bench.localization_robustness import run_one
 
 
 @pytest.mark.parametrize("seed", [0, pytest.param(2, marks=pytest.mark.slow)])  # 2: a second office

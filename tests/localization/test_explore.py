@@ -20,7 +20,7 @@ from pymunk_bot.localization.explore import (EXPLORE_STEP, Explorer, corridor_le
                                              explore_heading, trace)
 from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.maps.grid import OccupancyGrid
-from pymunk_bot.readings import LaserScan, Observation, RobotSpec
+from pymunk_bot.robots.readings import LaserScan, Observation, RobotSpec
 
 RES = 0.05  # [m]
 RADIUS = 0.2  # [m]

@@ -6,7 +6,7 @@ import pytest
 from builders import robot, scenario
 
 from pymunk_bot.config import parse_scenario
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 
 
 @pytest.mark.parametrize("kind", ["ekf", "mcl"])

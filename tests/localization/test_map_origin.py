@@ -78,8 +78,8 @@ def test_slam_without_a_mapping_key_runs_and_maps_in_the_maps_frame(room_map):
 
 def test_the_plot_of_a_map_world_shows_its_walls_at_the_maps_coordinates(room_map):
     pytest.importorskip("matplotlib")
-    from pymunk_bot.plots import make_figure
-    from pymunk_bot.runlog import RunLogger
+    from pymunk_bot.viewer.plots import make_figure
+    from pymunk_bot.outcomes.runlog import RunLogger
 
     sim = Simulation.from_dict(_scenario(room_map, "odometry",
                                          {"type": "velocity", "v": 0.2, "omega": 0.0}))

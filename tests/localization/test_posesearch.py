@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pymunk_bot import Simulation
-from pymunk_bot.benchmarks.localization_robustness import lidar_for, run_one, world_for
+from bench.localization_robustness import lidar_for, run_one, world_for
 from pymunk_bot.localization.mcl import MclLocalizer
 from pymunk_bot.localization.particles import roughen
 from pymunk_bot.localization.posesearch import beam_log_pz, search

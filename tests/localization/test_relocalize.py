@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from pymunk_bot import Simulation
-from pymunk_bot.benchmarks.localization_robustness import run_one, world_for
+from bench.localization_robustness import run_one, world_for
 from pymunk_bot.localization.mcl import GLOBAL_BEAMS, MclLocalizer
 
 

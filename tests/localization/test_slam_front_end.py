@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pymunk_bot.benchmarks.localization_robustness import run_one
+from bench.localization_robustness import run_one
 from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.odometry_trust import OdometryTrust
 from pymunk_bot.localization.se2 import compose

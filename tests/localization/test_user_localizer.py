@@ -8,7 +8,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository r
 
 from examples.my_localizer import GyroOdometry  # noqa: E402
 from pymunk_bot import Simulation  # noqa: E402
-from pymunk_bot.benchmarks.localization_worlds import OFFICE_ROUTE, office_scenario  # noqa: E402
+from bench.localization_worlds import OFFICE_ROUTE, office_scenario  # noqa: E402
 from pymunk_bot.localization import Localizer  # noqa: E402
 from pymunk_bot.localization.trial import make_context, run_trial  # noqa: E402
 

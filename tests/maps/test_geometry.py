@@ -9,7 +9,7 @@ import pytest
 from map_helpers import cast, turtlebot_map, write_map
 from pymunk import autogeometry
 
-from pymunk_bot.maps.geometry import add_to_space, free_disc, geometry_from_grid, trace_outlines
+from pymunk_bot.maps.outlines import add_to_space, free_disc, geometry_from_grid, trace_outlines
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.maps.ros import read_ros_map
 from pymunk_bot.sensors.raycast import RayCaster

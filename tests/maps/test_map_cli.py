@@ -11,7 +11,7 @@ from pymunk_bot.cli import main
 from pymunk_bot.config import load_scenario
 from pymunk_bot.maps.files import load_world_map
 from pymunk_bot.maps.generate import KINDS, solution_length
-from pymunk_bot.maps.geometry import add_to_space
+from pymunk_bot.maps.outlines import add_to_space
 from pymunk_bot.sensors.raycast import RayCaster
 
 STATIC_WORLD = {

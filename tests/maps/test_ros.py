@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from map_helpers import turtlebot_map, write_map
 
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.maps.ros import read_ros_map, write_ros_map
 

@@ -8,9 +8,9 @@ import pymunk
 import pytest
 from map_helpers import cast
 
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.maps.files import load_world_map
-from pymunk_bot.maps.geometry import add_to_space, free_disc
+from pymunk_bot.maps.outlines import add_to_space, free_disc
 
 HEAD = '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 500">'
 

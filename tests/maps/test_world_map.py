@@ -15,7 +15,7 @@ from map_helpers import write_map
 from pymunk_bot import Simulation
 from pymunk_bot.cli import main
 from pymunk_bot.config import load_scenario, parse_scenario
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.maps.files import load_world_map
 from pymunk_bot.maps.rasterize import scenario_grid
 from pymunk_bot.planning.grid import ClearanceGrid
@@ -210,7 +210,7 @@ def test_planning_and_localizer_maps_hold_the_map(tmp_path):
 
 
 def test_navigate_crosses_the_office_map():
-    from pymunk_bot.maps.geometry import free_disc
+    from pymunk_bot.maps.outlines import free_disc
 
     sim = Simulation.from_file("floor_plan")
     robot = sim.robots["r1"]
@@ -245,7 +245,7 @@ def _grid_of(mask: np.ndarray):
 def test_a_rasterised_rotated_box_is_one_shape_and_a_diagonal_wall_has_no_gap():
     import pymunk
 
-    from pymunk_bot.maps.geometry import add_to_space, geometry_from_grid
+    from pymunk_bot.maps.outlines import add_to_space, geometry_from_grid
 
     yy, xx = (np.mgrid[:120, :120] + 0.5) * RES
     u = (xx - 3.0) * math.cos(0.4) + (yy - 3.0) * math.sin(0.4)

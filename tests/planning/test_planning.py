@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from pymunk_bot import geometry as geo
+from pymunk_bot.geometry import plane as geo
 from pymunk_bot.config.loader import parse_scenario
 from pymunk_bot.planning import ClearanceGrid, MapInfo, astar, path_length, shortcut
 from pymunk_bot.planning.layouts import maze_walls

@@ -15,7 +15,7 @@ import yaml
 pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs.evaluation import EpisodeOutcome, summarize, wilson  # noqa: E402
-from pymunk_bot.policy_file import MlpPolicy  # noqa: E402
+from pymunk_bot.policy.files import MlpPolicy  # noqa: E402
 from bounds import HANG_GUARD
 
 BEAMS = 12

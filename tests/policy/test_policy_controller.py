@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 import pymunk_bot as pb
-from pymunk_bot.policy_file import MlpPolicy, PolicyFileError, load_policy
+from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy
 
 gym = pytest.importorskip("gymnasium")
 

@@ -225,14 +225,14 @@ def test_write_bag_aborts_cleanly(tmp_path):
 def test_a_converted_log_gets_the_map_of_its_fixed_shapes(tmp_path):
     """/map from the shapes an .npz keeps matches /map from the scenario (cell for cell but
     along the shapes' edges, where the two rasterisations may round differently)."""
-    from pymunk_bot.runlog import RunLogger
+    from pymunk_bot.outcomes.runlog import RunLogger
 
     sim = make_sim()
     logger = RunLogger().attach(sim)
     sim.run(0.2)
     npz = tmp_path / "run.npz"
     logger.save(npz)
-    from pymunk_bot.runlog import load_log
+    from pymunk_bot.outcomes.runlog import load_log
 
     write_bag(load_log(npz), tmp_path / "c.mcap")
     (_, converted), = read_bag(tmp_path / "c.mcap").messages["/map"]

@@ -11,7 +11,7 @@ import pytest
 from builders import robot, scenario
 
 from pymunk_bot import Simulation
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.foxglove.live import run_paced
 from pymunk_bot.ros2.bridge import serve_sim
 from pymunk_bot.ros2.commands import CommandInbox
@@ -257,7 +257,7 @@ from pymunk_bot.ros2.bridge import serve_sim
 sim = Simulation.from_file("default")  # a module-level run, kept until the interpreter exits
 server = serve_sim(sim, port=0, report=lambda line: None)
 ros = roslibpy.Ros(host="127.0.0.1", port=server.port)
-ros.run(timeout=5)
+ros.run(timeout=60)
 roslibpy.Topic(ros, "/odom", "nav_msgs/msg/Odometry").subscribe(lambda message: None)
 sim.run(0.5)
 ros.terminate()

@@ -9,7 +9,7 @@ import pytest
 from builders import robot, wheels
 
 from pymunk_bot.config.schema import ImuConfig
-from pymunk_bot.arcs import sinc_half
+from pymunk_bot.geometry.arcs import sinc_half
 from pymunk_bot.sensors.imu import Imu, ImuReading
 
 TRACK = 0.3  # [m]

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from builders import robot, wheels
 
-from pymunk_bot.readings import LaserScan
+from pymunk_bot.robots.readings import LaserScan
 from pymunk_bot.sensors.lidar import beam_angles
 
 ARENA = (10.0, 8.0)

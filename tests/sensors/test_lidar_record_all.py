@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pymunk_bot.sensors.lidar import record_all
-from pymunk_bot.sim import Simulation
+from pymunk_bot.engine.simulation import Simulation
 
 LIDARS = [{"beams": 90, "noise_std": 0.01},
           {"beams": 90, "noise_std": 0.05, "dropout": 0.2, "min_range": 0.5, "max_range": 4.0},

@@ -17,7 +17,7 @@ from pymunk_bot import Simulation
 from pymunk_bot.config import parse_scenario
 from pymunk_bot.config.assemble import obstacle_union
 from pymunk_bot.config.outlines import distance_to_obstacle
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.sensors.raycast import reference_cast
 
 SIZE = 20.0  # [m]

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from builders import robot, wheels
 
-from pymunk_bot.arcs import sinc_half
+from pymunk_bot.geometry.arcs import sinc_half
 
 TRACK = 0.3  # [m], the robot default
 

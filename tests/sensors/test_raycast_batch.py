@@ -206,7 +206,7 @@ def test_side_lines_are_found_alike_for_few_and_many_origins():
 def test_body_reader_gives_pymunks_own_transforms():
     """One batch read gives every moving body's (cos, sin, tx, ty) exactly as pymunk's
     rotation_vector and position, also after bodies come and go."""
-    from pymunk_bot.sensors.raycast.geometry import BodyReader, transforms
+    from pymunk_bot.sensors.raycast.primitives import BodyReader, transforms
 
     space, robots = sharp_world(4)
     spare = pymunk.Body(body_type=pymunk.Body.KINEMATIC)  # shapeless, before the crate

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from pymunk_bot.cli import main as cli_main
-from pymunk_bot.errors import ScenarioError
+from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.sweep import backends, parse_assignment, parse_seeds, run_sweep, summarize
 from pymunk_bot.sweep.output import journal_path
 from bounds import HANG_GUARD

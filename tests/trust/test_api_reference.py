@@ -22,16 +22,16 @@ def test_the_reference_documents_the_public_api(tmp_path):
     pages = {name: (tmp_path / (name.replace(".", "/") + ".html")).read_text(encoding="utf-8")
              for name in build_api.PUBLIC_MODULES}
     # the names of the contract, each with its own docstring on its page
-    for module, names in {"pymunk_bot.sim": ["Simulation.from_file", "Simulation.from_dict",
+    for module, names in {"pymunk_bot.engine.simulation": ["Simulation.from_file", "Simulation.from_dict",
                                              "Simulation.reset", "Simulation.run"],
-                          "pymunk_bot.robot": ["Robot.set_velocity", "Robot.teleport"],
-                          "pymunk_bot.replicas": ["Replicas"],
-                          "pymunk_bot.runlog": ["load_log"],
+                          "pymunk_bot.robots.robot": ["Robot.set_velocity", "Robot.teleport"],
+                          "pymunk_bot.engine.replicas": ["Replicas"],
+                          "pymunk_bot.outcomes.runlog": ["load_log"],
                           "pymunk_bot.envs": ["MultiRobotEnv", "NavigationEnv"],
                           "pymunk_bot.plugins": ["controllers", "localizers"]}.items():
         for name in names:
             assert f'id="{name}"' in pages[module], f"{module}.{name} is not in the reference"
-    assert "Ground truth" in pages["pymunk_bot.robot"] or "ground truth" in pages["pymunk_bot.robot"]
+    assert "Ground truth" in pages["pymunk_bot.robots.robot"] or "ground truth" in pages["pymunk_bot.robots.robot"]
 
 
 def test_a_broken_docstring_fails_the_build(tmp_path, monkeypatch, capsys):

@@ -12,7 +12,7 @@ from PIL import Image
 
 from pymunk_bot.cli import main
 from pymunk_bot.maps import svg
-from pymunk_bot.maps.geometry import geometry_from_grid
+from pymunk_bot.maps.outlines import geometry_from_grid
 from pymunk_bot.maps.grid import OccupancyGrid
 
 ROBOT = {"name": "r", "pose": [1.0, 1.0, 0.0]}
@@ -161,7 +161,7 @@ def test_a_long_traced_outline_builds_in_seconds_not_minutes():
     took 4.7 s, 190,000 minutes); they are added interleaved."""
     import pymunk
 
-    from pymunk_bot.maps.geometry import MapGeometry, add_to_space
+    from pymunk_bot.maps.outlines import MapGeometry, add_to_space
 
     n = 40_000
     x = np.linspace(0.0, 60.0, n)

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from pymunk_bot.benchmarks.contacts import deepest_overlap
-from pymunk_bot.errors import ScenarioError
-from pymunk_bot.sim import Simulation
+from bench.contacts import deepest_overlap
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.engine.simulation import Simulation
 
 WALL_X = 3.0  # [m]
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pymunk_bot as pb
-from pymunk_bot.robot import RobotsByName
+from pymunk_bot.robots.robot import RobotsByName
 
 
 @pytest.fixture(scope="module")

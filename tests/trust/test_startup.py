@@ -41,7 +41,7 @@ def test_ctrl_c_during_start_up_is_one_line(delay):
 
 def _frames_past_the_entry_point(err: str) -> list[str]:
     """The traceback's frames in pymunk-bot's own code, past the package files that lead to
-    the command line (``pymunk_bot.entry`` imports it inside a Ctrl-C handler)."""
-    entry = ("pymunk_bot/__init__.py", "pymunk_bot/__main__.py", "pymunk_bot/entry.py")
+    the command line (``pymunk_bot.cli.entry`` imports it inside a Ctrl-C handler)."""
+    entry = ("pymunk_bot/__init__.py", "pymunk_bot/__main__.py", "pymunk_bot/cli/entry.py")
     frames = re.findall(r'File "([^"]+)"', err)
     return [f for f in frames if "pymunk_bot/" in f and not f.endswith(entry)]

@@ -14,7 +14,7 @@ from bounds import HANG_GUARD
 
 from pymunk_bot.cli import main
 from pymunk_bot.controllers.python import CALL_BUDGET_ENV, batch_budget, budgeted, call_budget
-from pymunk_bot.errors import ControllerError
+from pymunk_bot.config.errors import ControllerError
 
 PLAIN = {"name": "plain", "world": {"size": [4.0, 4.0], "duration": 1.0},
          "robots": [{"name": "r", "pose": [1.0, 1.0, 0.0]}]}

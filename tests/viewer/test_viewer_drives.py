@@ -63,7 +63,7 @@ def test_a_moving_obstacle_is_drawn_where_it_is_now():
 
 
 def test_run_logs_and_replays_hold_cars_omni_robots_and_moving_things(tmp_path):
-    from pymunk_bot.runlog import RunLogger, load_log
+    from pymunk_bot.outcomes.runlog import RunLogger, load_log
     from pymunk_bot.viewer.sources import ReplaySource
 
     mover = {"type": "circle", "center": [3.0, 0.5], "radius": 0.2,

@@ -5,7 +5,7 @@ import numpy as np
 import pygame
 import pytest
 
-from pymunk_bot.runlog import RunLogger
+from pymunk_bot.outcomes.runlog import RunLogger
 from pymunk_bot.viewer.app import SPEEDS
 from viewer_helpers import Harness, build, wheels
 from bounds import HANG_GUARD

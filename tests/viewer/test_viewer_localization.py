@@ -8,7 +8,7 @@ import pytest
 
 from viewer_helpers import Harness, build, near
 from pymunk_bot.cli import main
-from pymunk_bot.runlog import RunLogger, load_log
+from pymunk_bot.outcomes.runlog import RunLogger, load_log
 from pymunk_bot.viewer import palette as pal
 from pymunk_bot.viewer.sources import ReplaySource
 

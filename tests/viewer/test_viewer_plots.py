@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from pymunk_bot.cli import main
-from pymunk_bot.errors import ScenarioError
-from pymunk_bot.plots import DPI, make_figure, save_plot
-from pymunk_bot.runlog import RunLogger, load_log
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.viewer.plots import DPI, make_figure, save_plot
+from pymunk_bot.outcomes.runlog import RunLogger, load_log
 from pymunk_bot.viewer import palette as pal
 from viewer_helpers import build, near, wheels
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pygame
 
-from pymunk_bot.runlog import RunLogger
+from pymunk_bot.outcomes.runlog import RunLogger
 from pymunk_bot.viewer import palette as pal
 from pymunk_bot.viewer.sources import LiveSource, ReplaySource
 from viewer_helpers import Harness, build, near, wheels

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pymunk_bot.errors import ScenarioError
-from pymunk_bot.runlog import RunLogger, load_log
+from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.outcomes.runlog import RunLogger, load_log
 from viewer_helpers import build, wheels
 
 

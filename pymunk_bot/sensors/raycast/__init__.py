@@ -46,7 +46,7 @@ Modules (all but this one are internal):
 - ``caster``: ``RayCaster``, which ties these together and picks pymunk fallbacks.
 """
 
-from .caster import RayCaster
-from .reference import reference_cast
+from pymunk_bot.sensors.raycast.caster import RayCaster
+from pymunk_bot.sensors.raycast.reference import reference_cast
 
 __all__ = ["RayCaster", "reference_cast"]

@@ -12,27 +12,25 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 import pymunk
 
-from .fan import TWO_PI
-from .geometry import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN, World
-from .kernels import circle_pairs, edge_pairs, segment_pairs
-from .reference import check_args, endpoints
-from .scene import DENSE_SHAPES, EDGE_NEAR, _EDGE_MARGIN
-
-if TYPE_CHECKING:
-    from .caster import RayCaster
+from pymunk_bot.sensors.raycast.fan import TWO_PI
+from pymunk_bot.sensors.raycast.primitives import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN, World
+from pymunk_bot.sensors.raycast.kernels import circle_pairs, edge_pairs, segment_pairs
+from pymunk_bot.sensors.raycast.reference import check_args, endpoints
+from pymunk_bot.sensors.raycast.scene import DENSE_SHAPES, EDGE_NEAR, _EDGE_MARGIN
 
 _TURNS = np.array([-TWO_PI, 0.0, TWO_PI])
 _SPACING = 8.0 * math.pi  # [rad] each origin's angles are shifted apart by this much
 
 
-def cast_many(caster: "RayCaster", origins: list[tuple[float, float]], angles: list[np.ndarray],
+def cast_many(caster: Any, origins: list[tuple[float, float]], angles: list[np.ndarray],
               max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
-    """Distances along every ray of every cast, as ``caster.cast`` gives them one by one."""
+    """Distances along every ray of every cast, as ``caster.cast`` gives them one by one
+    (``caster``: the RayCaster, whose module calls this one)."""
     out: list[np.ndarray | None] = [None] * len(origins)
     # Casts grouped by the table they see (filters whose bodies rested may keep an older
     # one): per table, its bounding circles and (index, ox, oy, angles, max range, keep, filter).
@@ -62,7 +60,7 @@ def cast_many(caster: "RayCaster", origins: list[tuple[float, float]], angles: l
     return [r if r is not None else np.empty(0) for r in out]
 
 
-def _near_side_lines(caster: "RayCaster", ox: float, oy: float, scale: float) -> bool:
+def _near_side_lines(caster: Any, ox: float, oy: float, scale: float) -> bool:
     """Within EDGE_NEAR * scale of a static bounding box's side line (see caster._side_flags)."""
     near = EDGE_NEAR * scale
     for sides, v in ((caster.scene_cache.side_x, ox), (caster.scene_cache.side_y, oy)):
@@ -72,7 +70,7 @@ def _near_side_lines(caster: "RayCaster", ox: float, oy: float, scale: float) ->
     return False
 
 
-def _trace(caster: "RayCaster", table: World, bounds: np.ndarray,
+def _trace(caster: Any, table: World, bounds: np.ndarray,
            batch: list[tuple]) -> tuple[dict[int, np.ndarray], set[int]]:
     """Ranges by cast index; or, if some origins lie on an edge's plane or see crowds (more
     shapes in range than the single cast traces without rings), nothing traced and those

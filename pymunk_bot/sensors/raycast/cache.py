@@ -12,7 +12,7 @@ from typing import Callable
 import numpy as np
 import pymunk
 
-from .geometry import (AX, AY, BX, BY, RAD, ROWS, BodyReader, Collector, World, body_transform,
+from pymunk_bot.sensors.raycast.primitives import (AX, AY, BX, BY, RAD, ROWS, BodyReader, Collector, World, body_transform,
                        kind_slices, merge, moved)
 
 

@@ -15,12 +15,12 @@ from typing import Callable
 import numpy as np
 import pymunk
 
-from .cache import SceneCache
-from .fan import Fan
-from .geometry import World
-from .reference import check_args, endpoints, reference_cast
-from .scene import DENSE_SHAPES, Scene, trace_rings
-from .sides import side_directions, side_lohi, sides_many
+from pymunk_bot.sensors.raycast.cache import SceneCache
+from pymunk_bot.sensors.raycast.fan import Fan
+from pymunk_bot.sensors.raycast.primitives import World
+from pymunk_bot.sensors.raycast.reference import check_args, endpoints, reference_cast
+from pymunk_bot.sensors.raycast.scene import DENSE_SHAPES, Scene, trace_rings
+from pymunk_bot.sensors.raycast.sides import side_directions, side_lohi, sides_many
 
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
@@ -65,8 +65,8 @@ class RayCaster:
         self._kernel = _load_kernel(compiled)
         mover: Callable[..., None] | None = None
         if self._kernel is not None:
-            from .compiled import move_into as mover
-            from .compiled import endpoints_rows, near_admitted
+            from pymunk_bot.sensors.raycast.compiled import move_into as mover
+            from pymunk_bot.sensors.raycast.compiled import endpoints_rows, near_admitted
             self._near_admitted, self._endpoints_rows = near_admitted, endpoints_rows
         self._cache = SceneCache(space, mover)
         self._filter_rows: dict[pymunk.ShapeFilter, np.ndarray] = {}
@@ -101,7 +101,7 @@ class RayCaster:
         (compiled: one tracer call for every cast on the same table and ray count; numpy:
         one pass for them all, see :mod:`.batch`)."""
         if self._kernel is None:
-            from .batch import cast_many
+            from pymunk_bot.sensors.raycast.batch import cast_many
             return cast_many(self, origins, angles, max_ranges, filters)
         if len(origins) > 1:
             uniform = _uniform(origins, angles, max_ranges)
@@ -360,7 +360,7 @@ def _load_kernel(compiled: bool | None) -> Callable[..., None] | None:
     if compiled is False or (compiled is None and os.environ.get("PYMUNK_BOT_NUMBA") == "0"):
         return None
     try:
-        from .compiled import trace_filtered
+        from pymunk_bot.sensors.raycast.compiled import trace_filtered
     except ImportError:
         if compiled:
             raise

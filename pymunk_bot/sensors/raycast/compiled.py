@@ -16,7 +16,7 @@ import math
 import numba
 import numpy as np
 
-from .geometry import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN
+from pymunk_bot.sensors.raycast.primitives import AX, AY, BX, BY, DTMAX, DTMIN, NX, NY, RAD, VN
 
 _TWO_PI = 2.0 * math.pi
 _PARALLEL_EPS = 10e-6  # as kernels._PARALLEL_EPS (Chipmunk's 10e-6)

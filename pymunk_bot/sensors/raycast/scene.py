@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 
-from .fan import TWO_PI, Fan, Rays
-from .geometry import AX, AY, NX, NY, RAD, VN, World, merge
-from .kernels import circle_pairs, edge_pairs, segment_pairs
+from pymunk_bot.sensors.raycast.fan import TWO_PI, Fan, Rays
+from pymunk_bot.sensors.raycast.primitives import AX, AY, NX, NY, RAD, VN, World, merge
+from pymunk_bot.sensors.raycast.kernels import circle_pairs, edge_pairs, segment_pairs
 
 # Candidate rays of a sharp polygon edge: its end points' directions widened by this margin
 # [rad], or every ray when the origin is within EDGE_NEAR * scale of the edge's plane.

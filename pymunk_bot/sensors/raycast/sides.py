@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .scene import EDGE_NEAR
+from pymunk_bot.sensors.raycast.scene import EDGE_NEAR
 
 # Rays within this angle [rad] of a box side line through the origin are left to pymunk.
 SIDE_ANGLE = 1e-4

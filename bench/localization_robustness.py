@@ -1,0 +1,356 @@
+"""Localization on worlds nobody tuned it on, with its defaults (issue 20's benchmark).
+
+    python -m bench.localization_robustness [--seeds 10 | --quick] [--verbose]
+        [--localizers mcl,ekf,mcl_global,slam] [--families office,clutter,warehouse]
+        [--profiles perfect,typical,uncalibrated] [--out summary.json]
+    pymunk-bot bench --only localization_robustness [--quick]
+    python -m bench.localization --robustness [--quick]
+
+Every run: one robot, ``localization: {type: <mcl|ekf|slam>}`` and nothing else (``initial:
+global`` for the global runs), the ``navigate`` controller driving to the world's goal on the
+estimate.
+Worlds: ``pymunk-bot generate office`` (seed k), a box-cluttered room (``generate clutter``,
+seed k) and Nav2's warehouse map (../shared/maps/warehouse.yaml, skipped when absent), a tour
+between its shelves. The LiDAR is drawn per seed from what users configure (180-360 beams,
+3.5-8 m, 5-15 Hz, 1-2.5 cm noise); the odometry from three profiles (perfect; typical:
+0.5 % wheel scale, 1 % track width; uncalibrated: 2 % / 3 %, noise 0.02), signs per seed.
+
+A tracking run succeeds when the position RMSE (estimate vs truth, 10 Hz) is <= 10 cm and the
+robot never collides; a global run when the estimate stays within 0.3 m / 10 deg from some
+time <= 20 s on, without a collision; a slam run (typical odometry) when its ATE is <= 5 cm and
+its map's precision >= 0.9. Every failure is printed as a line.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+WAREHOUSE = Path(__file__).resolve().parents[3] / "shared" / "maps" / "warehouse.yaml"
+# A tour between the warehouse's shelves (map frame, origin [-15.1, -25]).
+WAREHOUSE_TOURS = [((-5.4, -19.0, math.pi / 2), (1.9, -3.0)),
+                   ((1.9, -19.0, math.pi / 2), (-5.4, -3.0)),
+                   ((-12.0, -3.0, 0.0), (8.5, -15.0))]
+PROFILES: dict[str, dict[str, float]] = {
+    "perfect": {},
+    "typical": {"scale": 0.005, "track": 0.01, "noise": 0.005},
+    "uncalibrated": {"scale": 0.02, "track": 0.03, "noise": 0.02},
+}
+FAMILIES = ("office", "clutter", "warehouse")
+SAMPLE_RATE = 10.0  # [Hz] error samples
+TRACK_RMSE = 0.10  # [m] success bound of a tracking run
+GLOBAL_POSITION, GLOBAL_HEADING, GLOBAL_TIME = 0.3, math.radians(10.0), 20.0  # [m, rad, s]
+MAX_TIME = 90.0  # [s] per run
+LOCALIZERS = ("mcl", "ekf", "mcl_global", "mcl_kidnap", "slam")
+KIDNAP_TIME = 3.0  # [s] mcl_kidnap: when the robot is teleported
+KIDNAP_CLEARANCE = 0.6  # [m] mcl_kidnap: the least distance of the drop point to the map's obstacles
+KIDNAP_NOTICE = 1.0  # [s] after a kidnapping, time the filter has to notice it (see wrong_localized)
+KIDNAP_GOAL_DISTANCE = 2.0  # [m] mcl_kidnap: the least distance of the drop point to the goal
+MAX_KIDNAP_DRAWS = 100  # drop points drawn until one is far enough from the goal
+SLAM_ATE, SLAM_PRECISION = 0.05, 0.9  # [m], fraction: the issue's bounds for SLAM
+QUICK_SEEDS = 2  # seeds per world and profile in quick mode (a few minutes)
+MAX_SEEDS = 1000
+
+
+@dataclass
+class Outcome:
+    """One run's figures."""
+
+    localizer: str
+    family: str
+    profile: str
+    seed: int
+    rmse: float = math.nan  # [m]
+    heading_rmse: float = math.nan  # [rad]
+    converged_at: float = math.inf  # [s] global runs: from then on within the bounds
+    localized_at: float = math.inf  # [s] global runs: when the filter first said "localized"
+    # [s] global runs: time the filter said "localized" while its estimate was outside the
+    # bounds (it drove on a wrong mode), not counting KIDNAP_NOTICE after a kidnapping
+    wrong_localized: float = 0.0
+    collisions: int = 0
+    goal_reached: bool = False
+    map_precision: float = math.nan  # slam: share of its occupied cells on the true map
+    lidar: dict = field(default_factory=dict)
+    error: str = ""
+
+    @property
+    def success(self) -> bool:
+        if self.error or self.collisions:
+            return False
+        if self.localizer in ("mcl_global", "mcl_kidnap"):
+            return self.converged_at <= GLOBAL_TIME
+        if self.localizer == "slam":
+            return self.rmse <= SLAM_ATE and self.map_precision >= SLAM_PRECISION
+        return self.rmse <= TRACK_RMSE
+
+    def line(self) -> str:
+        what = (f"converged at {self.converged_at:.1f} s" if self.localizer == "mcl_global"
+                else f"re-converged {self.converged_at:.1f} s after the kidnapping"
+                if self.localizer == "mcl_kidnap"
+                else f"rmse {100 * self.rmse:.1f} cm, heading {math.degrees(self.heading_rmse):.2f} deg")
+        if self.localizer == "slam":
+            what += f", map precision {self.map_precision:.3f}"
+        if self.localizer in ("mcl_global", "mcl_kidnap"):
+            what += (f", localized at {self.localized_at:.1f} s, {self.wrong_localized:.1f} s "
+                     f"localized on a wrong pose")
+        extra = f" ERROR {self.error}" if self.error else ""
+        return (f"{self.localizer:11s} {self.family:9s} {self.profile:12s} seed {self.seed:2d}: "
+                f"{what}, {self.collisions} collision(s), goal {'yes' if self.goal_reached else 'no'}"
+                f", lidar {self.lidar}{extra}")
+
+
+def lidar_for(seed: int) -> dict:
+    """A LiDAR drawn from the ranges users configure."""
+    rng = np.random.default_rng([seed, 20])
+    return {"beams": int(rng.choice([180, 270, 360])), "max_range": float(rng.choice([3.5, 5.0, 6.0, 8.0])),
+            "rate": float(rng.choice([5.0, 10.0, 15.0])), "noise_std": float(rng.choice([0.01, 0.015, 0.025]))}
+
+
+def odometry_for(profile: str, seed: int) -> dict:
+    """The odometry section of ``profile``, error signs drawn from ``seed``."""
+    p = PROFILES[profile]
+    if not p:
+        return {}
+    rng = np.random.default_rng([seed, 21])
+    sign = rng.choice([-1.0, 1.0], 3)
+    return {"left_scale_error": sign[0] * p["scale"], "right_scale_error": -sign[0] * 0.5 * p["scale"],
+            "track_width_error": sign[1] * p["track"], "wheel_noise_std": p["noise"]}
+
+
+def world_for(family: str, seed: int) -> dict | None:
+    """A scenario of ``family`` (None: the warehouse map is absent)."""
+    if family in ("office", "clutter"):
+        from pymunk_bot.maps.generate import generate
+        data = generate(family, seed)
+        data.pop("expect", None)
+        return data
+    if not WAREHOUSE.exists():
+        return None
+    start, goal = WAREHOUSE_TOURS[seed % len(WAREHOUSE_TOURS)]
+    return {"name": f"warehouse_{seed}", "seed": seed,
+            "world": {"map": str(WAREHOUSE), "duration": MAX_TIME},
+            "robots": [{"name": "r1", "pose": list(start), "radius": 0.2,
+                        "controller": {"type": "navigate"},
+                        "goal": {"position": list(goal), "tolerance": 0.25}}]}
+
+
+def run_one(localizer: str, family: str, profile: str, seed: int,
+            settings: dict | None = None) -> Outcome | None:
+    """One run (``localizer``: mcl, ekf, mcl_global, mcl_kidnap or slam); None when the world is
+    unavailable. ``mcl_kidnap``: default MCL, the robot teleported at KIDNAP_TIME to a free
+    point (at least KIDNAP_CLEARANCE from the map's obstacles, drawn from the seed), any heading;
+    ``converged_at`` then counts from the kidnapping.
+    ``settings``: extra localization keys (for experiments; the benchmark uses none)."""
+    from pymunk_bot.engine.simulation import Simulation
+
+    data = world_for(family, seed)
+    if data is None:
+        return None
+    lidar = lidar_for(seed)
+    out = Outcome(localizer, family, profile, seed, lidar=lidar)
+    robot = data["robots"][0]
+    robot["lidar"] = lidar
+    robot["odometry"] = odometry_for(profile, seed)
+    robot["localization"] = ({"type": "mcl", "initial": "global"} if localizer == "mcl_global"
+                             else {"type": "mcl"} if localizer == "mcl_kidnap"
+                             else {"type": localizer})
+    robot["localization"].update(settings or {})
+    data["seed"] = seed
+    data.setdefault("world", {})["duration"] = MAX_TIME
+    try:
+        sim = Simulation.from_dict(data)
+    except Exception as exc:  # a world that cannot be built is a failure line, not a crash
+        out.error = f"{type(exc).__name__}: {exc}"
+        return out
+    r = sim.robots["r1"]
+    times: list[float] = []
+    errors: list[float] = []
+    headings: list[float] = []
+    next_sample = 0.0
+    kidnap = _kidnap_target(r.localizer, seed, r.goal) if localizer == "mcl_kidnap" else None
+    localized: list[bool] = []
+    kidnapped_at = 0.0  # [s]
+    while sim.time < MAX_TIME:
+        if kidnap is not None and sim.time + 1e-9 >= KIDNAP_TIME:
+            r.teleport(*kidnap)
+            kidnap, kidnapped_at = None, sim.time
+            times, errors, headings, localized = [], [], [], []  # scored from the kidnapping on
+        sim.step()
+        if sim.time + 1e-9 >= next_sample:
+            next_sample += 1.0 / SAMPLE_RATE
+            est, truth = np.asarray(r.localizer.pose), r.pose
+            times.append(sim.time)
+            errors.append(float(np.hypot(*(est[:2] - truth[:2]))))
+            headings.append(abs(math.remainder(float(est[2] - truth[2]), math.tau)))
+            localized.append(bool(getattr(r.localizer, "localized", True)))
+        if r.goal_reached:
+            break
+    e, h = np.asarray(errors), np.asarray(headings)
+    out.rmse = float(np.sqrt(np.mean(e ** 2)))
+    out.heading_rmse = float(np.sqrt(np.mean(h ** 2)))
+    bad = np.flatnonzero((e > GLOBAL_POSITION) | (h > GLOBAL_HEADING))
+    t = np.asarray(times)
+    out.converged_at = (float(t[0]) if bad.size == 0 else
+                        float(t[bad[-1] + 1]) if bad[-1] + 1 < t.size else math.inf)
+    said = np.asarray(localized, dtype=bool)
+    if localizer == "mcl_kidnap":
+        out.converged_at -= KIDNAP_TIME
+        said &= t >= kidnapped_at + KIDNAP_NOTICE  # still on the old estimate: not a verdict
+    if said.any():
+        out.localized_at = float(t[np.argmax(said)]) - (KIDNAP_TIME if localizer == "mcl_kidnap" else 0.0)
+    wrong = said & ((e > GLOBAL_POSITION) | (h > GLOBAL_HEADING))
+    out.wrong_localized = float(wrong.sum()) / SAMPLE_RATE
+    out.collisions = int(r.collisions)
+    out.goal_reached = bool(r.goal_reached)
+    if localizer == "slam":  # the map it built against the scenario's, at its resolution
+        from pymunk_bot.localization.metrics import map_scores
+        from pymunk_bot.maps.rasterize import scenario_grid
+
+        built = r.mapper.grid
+        out.map_precision = map_scores(built, scenario_grid(sim.config, built.resolution))["precision"]
+    return out
+
+
+def _kidnap_target(mcl, seed: int, goal: tuple[float, float] | None) -> tuple[float, float, float]:
+    """A free point at least KIDNAP_CLEARANCE from the map's obstacles and KIDNAP_GOAL_DISTANCE
+    from the robot's goal (a robot dropped on its goal leaves nothing to score), and a heading,
+    from the seed (the localizer's map, so the drop point is where the robot fits)."""
+    rng = np.random.default_rng([seed, 22])
+    free = mcl.field.free_xy
+    open_xy = free[mcl.field.distance(free[None])[0] > KIDNAP_CLEARANCE]
+    for _ in range(MAX_KIDNAP_DRAWS):
+        x, y = open_xy[rng.integers(open_xy.shape[0])]
+        if goal is None or math.hypot(x - goal[0], y - goal[1]) >= KIDNAP_GOAL_DISTANCE:
+            break
+    return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
+
+
+def run(localizers=LOCALIZERS, families=FAMILIES, profiles=tuple(PROFILES),
+        seeds: int = 10, verbose: bool = True, settings: dict | None = None) -> list[Outcome]:
+    """Every combination; prints each failure as a line (and every run when ``verbose``)."""
+    outcomes = []
+    for localizer in localizers:
+        for family in families:
+            for profile in (("typical",) if localizer in ("mcl_global", "mcl_kidnap", "slam")
+                            else profiles):
+                for seed in range(seeds):
+                    o = run_one(localizer, family, profile, seed, settings)
+                    if o is None:
+                        continue
+                    outcomes.append(o)
+                    if verbose or not o.success:
+                        print(("ok   " if o.success else "FAIL ") + o.line(), flush=True)
+    return outcomes
+
+
+def summary(outcomes: list[Outcome]) -> dict[str, Any]:
+    """Success rate, median / worst RMSE and convergence time per localizer and profile."""
+    groups: dict[str, list[Outcome]] = {}
+    for o in outcomes:
+        groups.setdefault(f"{o.localizer}/{o.profile}", []).append(o)
+    result: dict[str, Any] = {}
+    for key, group in sorted(groups.items()):
+        rmse = [o.rmse for o in group]
+        result[key] = {"runs": len(group), "success": sum(o.success for o in group),
+                       "rmse_median": float(np.median(rmse)), "rmse_worst": float(np.max(rmse)),
+                       "heading_rmse_deg_median": math.degrees(float(np.median([o.heading_rmse for o in group]))),
+                       "converged_at_median": float(np.median([o.converged_at for o in group]))}
+        if group[0].localizer in ("mcl_global", "mcl_kidnap"):
+            # a failure is a wrong mode (the filter said "localized" on a wrong estimate) or
+            # slow (it never did, or only once right, but after GLOBAL_TIME)
+            wrong = [o for o in group if o.wrong_localized > 0]
+            result[key]["localized_on_a_wrong_pose"] = len(wrong)
+            result[key]["slow"] = sum(not o.success and o.wrong_localized == 0 for o in group)
+    total = len(outcomes)
+    result["all"] = {"runs": total, "success": sum(o.success for o in outcomes)}
+    return result
+
+
+def verdicts(outcomes: list[Outcome]) -> list[tuple[str, bool | None]]:
+    """The issue's targets, each (target with the figure got, passed)."""
+    out: list[tuple[str, bool | None]] = []
+    tracking = [o for o in outcomes if o.localizer in ("mcl", "ekf")]
+    if tracking:
+        ok = sum(o.success for o in tracking)
+        out.append((f"tracking with defaults: success in >= 95 % of runs (got {ok}/{len(tracking)})",
+                    ok >= 0.95 * len(tracking)))
+    for localizer in ("mcl", "ekf"):
+        for profile, bound in (("typical", 0.05), ("uncalibrated", TRACK_RMSE)):
+            group = [o for o in tracking if o.localizer == localizer and o.profile == profile]
+            if group:
+                median = float(np.median([o.rmse for o in group]))
+                out.append((f"{localizer}, {profile} odometry: median RMSE <= {100 * bound:g} cm "
+                            f"(got {100 * median:.1f} cm)", median <= bound))
+        group = [o for o in tracking if o.localizer == localizer]
+        if group:
+            heading = math.degrees(float(np.median([o.heading_rmse for o in group])))
+            out.append((f"{localizer}: median heading RMSE <= 2 deg (got {heading:.2f} deg)",
+                        heading <= 2.0))
+    slam = [o for o in outcomes if o.localizer == "slam"]
+    for family in sorted({o.family for o in slam}):
+        group = [o for o in slam if o.family == family]
+        ok = sum(o.success for o in group)
+        out.append((f"slam, {family}, typical odometry: ATE <= {100 * SLAM_ATE:g} cm and map "
+                    f"precision >= {SLAM_PRECISION:g}, no collision (got {ok}/{len(group)})",
+                    ok == len(group)))
+    for name, what in (("mcl_global", "global localization driving a tour"),
+                       ("mcl_kidnap", "re-localization after a kidnapping")):
+        out.extend(_convergence_verdicts([o for o in outcomes if o.localizer == name], what))
+    return out
+
+
+def _convergence_verdicts(runs: list[Outcome], what: str) -> list[tuple[str, bool | None]]:
+    out: list[tuple[str, bool | None]] = []
+    for family in sorted({o.family for o in runs}):
+        group = [o for o in runs if o.family == family]
+        ok = sum(o.success for o in group)
+        out.append((f"{what}, {family}: converged within "
+                    f"{GLOBAL_POSITION:g} m / {math.degrees(GLOBAL_HEADING):g} deg in <= "
+                    f"{GLOBAL_TIME:g} s, no collision, in >= 90 % of seeds (got {ok}/{len(group)})",
+                    ok >= 0.9 * len(group)))
+    return out
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """The command line: ``python -m bench.localization_robustness``."""
+    import argparse
+    import json
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=10, help="seeds per world and profile")
+    parser.add_argument("--quick", action="store_true", help="2 seeds (a few minutes)")
+    parser.add_argument("--localizers", default=",".join(LOCALIZERS))
+    parser.add_argument("--families", default=",".join(FAMILIES))
+    parser.add_argument("--profiles", default=",".join(PROFILES))
+    parser.add_argument("--verbose", action="store_true", help="a line for every run")
+    parser.add_argument("--out", help="write the summary as JSON here")
+    args = parser.parse_args(argv)
+    seeds = QUICK_SEEDS if args.quick else args.seeds
+    if not 1 <= seeds <= MAX_SEEDS:
+        parser.error(f"--seeds must be 1..{MAX_SEEDS} (got {seeds})")
+    choices = {"--localizers": (args.localizers, LOCALIZERS), "--families": (args.families, FAMILIES),
+               "--profiles": (args.profiles, tuple(PROFILES))}
+    picked = {}
+    for option, (text, valid) in choices.items():
+        names = tuple(n for n in text.split(",") if n)
+        bad = [n for n in names if n not in valid]
+        if bad or not names:
+            parser.error(f"{option}: unknown {', '.join(bad) or 'empty list'}; valid: {', '.join(valid)}")
+        picked[option] = names
+    outcomes = run(picked["--localizers"], picked["--families"], picked["--profiles"], seeds,
+                   args.verbose)
+    result = summary(outcomes)
+    print(json.dumps(result, indent=1))
+    for target, passed in verdicts(outcomes):
+        print(f"{'PASS' if passed else 'MISS'}  {target}")
+    if args.out:
+        from pymunk_bot.outcomes.results import write_json
+        write_json(args.out, result)
+    return result
+
+
+if __name__ == "__main__":
+    main()

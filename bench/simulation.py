@@ -1,0 +1,104 @@
+"""How fast a headless run is: steps per second and real-time factor, beside bare pymunk.
+
+    python -m bench.simulation      (or: pymunk-bot bench)
+"""
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+from pymunk_bot.config import parse_scenario
+from pymunk_bot.config.substeps import required_substeps
+from pymunk_bot.engine.simulation import Simulation
+
+TARGET = 800.0  # x real time, at least: one robot, 20 obstacles, no sensors (CPU time)
+
+
+def every_substep(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with its substep count named, so that every tick takes every substep: the
+    reference the default (substeps only where a contact can start) is measured against."""
+    data["world"]["substeps"] = required_substeps(parse_scenario(data, data["name"]))
+    return data
+
+
+def benchmark_scenario(n_obstacles: int = 20, n_robots: int = 1, lidar: bool = False,
+                       seed: int = 0) -> dict[str, Any]:
+    """A 20x20 m arena with random boxes and robots circling (so they meet obstacles)."""
+    rng = np.random.default_rng(seed)
+    obstacles: list[dict[str, Any]] = []
+    robots: list[dict[str, Any]] = []
+    while len(obstacles) < n_obstacles:
+        x, y = rng.uniform(1.0, 19.0, size=2)
+        obstacles.append({"type": "box", "center": [float(x), float(y)],
+                          "size": [float(s) for s in rng.uniform(0.3, 1.0, size=2)],
+                          "angle": float(rng.uniform(0, np.pi))})
+    for i in range(n_robots):
+        robot = {"name": f"r{i}", "pose": [1.0 + 0.5 * (i % 36), 0.5 + 0.5 * (i // 36), 0.0],
+                 "controller": {"type": "wheels", "left": 0.9, "right": 1.0}}
+        if lidar:
+            robot["lidar"] = {"beams": 360, "max_range": 10.0}
+        robots.append(robot)
+    for obstacle in list(obstacles):  # keep the start poses free
+        cx, cy = obstacle["center"]
+        if any(abs(cx - r["pose"][0]) < 1.0 and abs(cy - r["pose"][1]) < 1.0 for r in robots):
+            obstacles.remove(obstacle)
+    return {"name": "bench", "world": {"size": [20.0, 20.0]}, "obstacles": obstacles,
+            "robots": robots}
+
+
+def time_run(scenario: dict, sim_seconds: float) -> float:
+    """CPU seconds for a headless run of ``sim_seconds``."""
+    sim = Simulation(parse_scenario(scenario, "bench"))
+    started = time.process_time()
+    sim.run(sim_seconds)
+    return time.process_time() - started
+
+
+def time_bare_pymunk(scenario: dict, sim_seconds: float) -> float:
+    """The physics alone: the same Space stepped with no drive, sensors or bookkeeping."""
+    sim = Simulation(parse_scenario(scenario, "bench"))
+    for robot in sim.robots.values():
+        robot.body.velocity = (0.9, 0.0)
+    space, h = sim.space, sim.dt / sim.substeps
+    steps = round(sim_seconds / sim.dt) * sim.substeps
+    started = time.process_time()
+    for _ in range(steps):
+        space.step(h)
+    return time.process_time() - started
+
+
+def measure(repeats: int = 5, sim_seconds: float = 60.0) -> list[dict]:
+    cases = [("1 robot, 20 obstacles", benchmark_scenario()),
+             ("1 robot + 360-beam LiDAR @10 Hz", benchmark_scenario(lidar=True)),
+             ("10 robots, 20 obstacles", benchmark_scenario(n_robots=10)),
+             ("100 robots, 20 obstacles", benchmark_scenario(n_robots=100))]
+    rows = []
+    for label, scenario in cases:
+        ours, bare = [], []
+        for _ in range(repeats):  # interleaved so both see the same machine load
+            ours.append(time_run(scenario, sim_seconds))
+            bare.append(time_bare_pymunk(scenario, sim_seconds))
+        wall, physics = statistics.median(ours), statistics.median(bare)
+        steps = round(sim_seconds / (1 / 60))
+        rows.append({"case": label, "sim_s": sim_seconds, "wall_s": wall,
+                     "steps_per_s": steps / wall, "real_time_factor": sim_seconds / wall,
+                     "bare_pymunk_s": physics, "overhead": wall / physics})
+    return rows
+
+
+def main(repeats: int = 5) -> list[dict]:
+    """Print the table; returns its rows."""
+    print(f"{'case':<34} {'CPU [s]':>9} {'steps/s':>9} {'x real':>8} {'pymunk [s]':>11} "
+          f"{'ours/pymunk':>11}")
+    rows = measure(repeats)
+    for r in rows:
+        print(f"{r['case']:<34} {r['wall_s']:>9.4f} {r['steps_per_s']:>9.0f} "
+              f"{r['real_time_factor']:>8.0f} {r['bare_pymunk_s']:>11.4f} {r['overhead']:>11.1f}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,168 @@
+"""The batch: runs that share one pymunk Space and the one place where the tick order lives.
+
+A :class:`~pymunk_bot.engine.simulation.Simulation` of its own is a batch of one; copies of a scenario
+sharing a Space (:class:`~pymunk_bot.engine.replicas.Replicas`, the vector env) are a batch of K. The
+batch owns what the runs share: the steering of every robot (:class:`Propulsion`), the substep
+planners, the ray caster and, for copies, their stacked bookkeeping. Each run owns its clock,
+controllers, sensors, localizers and results, and takes part in the tick through its public
+phase methods (``act``, ``tick_clock``, ``bookkeep``, ``due_lidars``, ``read``, ``finish``).
+"""
+from __future__ import annotations
+
+import time as wallclock
+from typing import TYPE_CHECKING, Any, Protocol, Sequence
+
+import numpy as np
+
+from pymunk_bot.physics.propulsion import Propulsion
+from pymunk_bot.sensors.lidar import Lidar
+from pymunk_bot.physics.substeps import SubstepGate
+from pymunk_bot.physics.apart import SPLIT_FROM, SplitPlanner
+from pymunk_bot.physics.world import World
+
+if TYPE_CHECKING:
+    from pymunk_bot.engine.build import Built
+    from pymunk_bot.robots.stacking import Stack
+
+
+class Run(Protocol):
+    """What a run in a batch gives the tick (:class:`~pymunk_bot.engine.simulation.Simulation`
+    is one): its parts, what it has work for, and its phases in the order :meth:`Batch.step`
+    calls them."""
+
+    world: World
+    dt: float
+    substeps: int
+    acts: bool  # work before the physics: controllers, actors, events
+    reads: bool  # work after it: sensors other than LiDARs, localizers, maps, metrics
+    has_lidars: bool
+    robots: dict[str, Any]
+
+    @property
+    def built(self) -> "Built": ...
+    @property
+    def time(self) -> float: ...
+    def act(self) -> None: ...
+    def tick_clock(self) -> float: ...
+    def bookkeep(self, positions: Any) -> float: ...
+    def due_lidars(self, now: float) -> list[Any]: ...
+    def read(self, now: float) -> None: ...
+    def finish(self, wall_time: float) -> None: ...
+
+
+class Batch:
+    """``runs`` (in ``ground``'s Space, their robots ``propulsion``'s: run k's are those of
+    ``spans[k]``, (start, stop)), ticked as one; ``stack``: the runs' bookkeeping stacked
+    (:mod:`pymunk_bot.robots.stacking`), None to keep each run's own."""
+
+    def __init__(self, runs: Sequence[Run], ground: World, propulsion: Propulsion,
+                 spans: Sequence[tuple[int, int]], stack: "Stack | None" = None) -> None:
+        self.runs = tuple(runs)
+        self.ground, self.propulsion, self.stack = ground, propulsion, stack
+        self.spans = list(spans)
+        first = self.runs[0]
+        self.dt, self.substeps = first.dt, first.substeps
+        # Which runs have work before and after the physics: a tick skips the rest.
+        self.acting = tuple(run for run in self.runs if run.acts)
+        self.reading = tuple(run for run in self.runs if run.reads)
+        self.caster = (first.world.ray_caster() if any(run.has_lidars for run in self.runs)
+                       else None)
+        # Substeps where contacts can start (the default; None: every substep every tick).
+        self.gate: SubstepGate | None = None
+        if first.world.adaptive:
+            self.gate = SubstepGate(ground.contact_space,
+                                    [m for run in self.runs for m in run.built.movers],
+                                    self.substeps, self.dt, ground.take_disturbed, ground.need,
+                                    propulsion.fastest_driven)
+        # Robots that nothing can reach step apart (large fleets of one run).
+        self.split: SplitPlanner | None = None
+        if (self.gate is not None and propulsion.batched and ground.can_split
+                and propulsion.n >= SPLIT_FROM):
+            assert ground.apart_space is not None
+            self.split = SplitPlanner(ground.contact_space, ground.apart_space,
+                                      propulsion.bodies, self.gate.movers, self.dt)
+            propulsion.step_apart_in(ground.apart_space)
+
+    @property
+    def single_substep_ticks(self) -> int:
+        """Ticks so far that took one pymunk step (0 without adaptive substeps)."""
+        return self.gate.single_ticks if self.gate is not None else 0
+
+    @property
+    def pymunk_steps(self) -> int | None:
+        """pymunk steps taken so far (None without adaptive substeps: ``substeps`` a tick)."""
+        return self.gate.steps if self.gate is not None else None
+
+    def step(self) -> None:
+        """One tick of ``dt`` for every run:
+
+        1. controllers whose period has come read their observation and set a command; scenario
+           events fire; actors (moving obstacles, pedestrians) set their motion;
+        2. ``substeps`` times: every drive advances and steers its control body, then pymunk
+           steps (in fleets of 2000 robots and more, those nothing can reach are then steered
+           once and step once, apart: physics/apart.py);
+        3. bookkeeping: each run's clock, distance and goals, odometry from the encoders;
+        4. sensors whose period has come read the world (every body has moved): every due LiDAR
+           of every run in one cast;
+        5. localizers fold in odometry and scans, maps integrate scans, the estimate is scored;
+        6. metrics that an expectation needs; then each run's observers (loggers, views).
+        """
+        started = wallclock.perf_counter()
+        for run in self.acting:
+            run.act()
+        self._physics()
+        nows = self._bookkeep()
+        if self.caster is not None:
+            self.caster.begin_frame()  # every cast of this tick sees one scene
+            due = [(lidar, now) for run, now in zip(self.runs, nows)
+                   for lidar in run.due_lidars(now)]
+            if due:
+                Lidar.scan_all(self.caster, due)
+        for run in self.reading:
+            run.read(run.time)
+        share = (wallclock.perf_counter() - started) / len(self.runs)
+        for run in self.runs:
+            run.finish(share)
+
+    def _physics(self) -> None:
+        """Phase 2: the drives and pymunk, with as many substeps as contacts need."""
+        gate, split, propulsion, dt = self.gate, self.split, self.propulsion, self.dt
+        world = self.runs[0].world
+        if split is not None and split.apart.any() and split.layout != world.layout:
+            split.reset()  # someone gathered the robots (asked for the world's Space)
+            propulsion.relocated()
+            assert gate is not None
+            gate.relocated()
+        if gate is None:
+            propulsion.step(dt / self.substeps, self.substeps)
+            return
+        if split is not None and world.can_split:  # physics/apart.py
+            disturbed = world.take_disturbed()
+            if disturbed:  # a teleport: every robot back, decided anew
+                split.settle(world, propulsion, gate, np.zeros(split.n, dtype=bool))
+                split.reset(teleported=True)
+            apart, following_apart = split.apart, split.next_apart(propulsion)
+            substeps, following = gate.counts_apart(
+                disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
+            propulsion.step(dt / substeps, substeps, dt / following, (apart, following_apart))
+            split.settle(world, propulsion, gate, following_apart)
+        else:  # one pymunk step where no contact can start (physics/substeps.py)
+            substeps, following = gate.counts()
+            propulsion.step(dt / substeps, substeps, dt / following)
+        for run in self.runs:  # what the bodies' velocities now move in, for the IMUs
+            run.world.substep = dt / following
+
+    def _bookkeep(self) -> list[float]:
+        """Phase 3: every run's clock, then distance, goals and odometry; the runs' times [s]."""
+        if self.stack is not None:
+            nows = [run.tick_clock() for run in self.runs]
+            self.stack.bookkeep(self.propulsion.position_array(), nows)
+            return nows
+        positions = self.propulsion.positions()
+        return [run.bookkeep(positions[start:stop])
+                for run, (start, stop) in zip(self.runs, self.spans)]
+
+
+def single(run: Run) -> Batch:
+    """The batch of one run, in a world of its own."""
+    return Batch((run,), run.world, run.built.propulsion, [(0, len(run.robots))])

@@ -1,0 +1,2 @@
+"""Plane geometry without pymunk: polygons and distances (shapely), robot footprints, and
+motion along circular arcs (compiled)."""
