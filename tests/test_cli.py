@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from bounds import HANG_GUARD
 
 REPO = Path(__file__).resolve().parent.parent
 SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
@@ -16,7 +17,7 @@ SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
 def cli(*args: str, cwd: Path = REPO, env_extra: dict | None = None) -> subprocess.CompletedProcess:
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", **(env_extra or {})}
     return subprocess.run([sys.executable, "-m", "pymunk_bot", *args], capture_output=True,
-                          text=True, cwd=cwd, env=env, timeout=300)
+                          text=True, cwd=cwd, env=env, timeout=HANG_GUARD)
 
 
 def test_list_shows_every_shipped_scenario_with_its_description():

@@ -7,6 +7,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from bounds import HANG_GUARD
 
 GOOD = """\
 name: good
@@ -28,7 +29,7 @@ expect:
 
 def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "pymunk_bot", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=60)
+                          text=True, cwd=cwd, timeout=HANG_GUARD)
 
 
 def validate(tmp_path: Path, text: str) -> tuple[int, str]:

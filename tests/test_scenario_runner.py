@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from bounds import HANG_GUARD
 
 from pymunk_bot.cli import main
 from pymunk_bot.cli.scenario_tests import discover
@@ -57,7 +58,7 @@ def test_pytest_plugin_collects_only_what_it_is_pointed_at(suite):
 
     def pytest_run(*args):
         return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                               *args], cwd=suite, capture_output=True, text=True)
+                               *args], cwd=suite, capture_output=True, text=True, timeout=HANG_GUARD)
 
     explicit = pytest_run("good.yaml", "failing.yaml")
     assert "1 failed, 1 passed" in explicit.stdout

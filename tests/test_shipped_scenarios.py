@@ -17,7 +17,13 @@ def test_the_four_foundation_scenarios_are_shipped():
     assert "default" in shipped_scenarios()
 
 
-@pytest.mark.parametrize("name", sorted(SHIPPED))
+# The localization scenarios take 5-15 s of CPU each; tests/localization checks what they show
+# (SLAM closing a loop, MCL and the EKF in an office), so they run with the slow tests.
+LONG = {"slam_loop", "mcl_office", "ekf_office"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.slow) if name in LONG
+                                  else name for name in sorted(SHIPPED)])
 def test_shipped_scenario_meets_its_expectations(name):
     config = load_scenario(SHIPPED[name])
     assert config.description

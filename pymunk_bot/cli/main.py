@@ -13,11 +13,15 @@ import time
 import traceback
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pymunk_bot.cli.bench import SECTION_NAMES, cmd_bench
 from pymunk_bot.config.errors import ControllerError, ScenarioError, ScenarioWarning
 from pymunk_bot.cli.arguments import EXIT_BAD_INPUT, EXIT_EXPECTATION_FAILED, EXIT_INTERNAL_ERROR, EXIT_OK, \
     Parser, duration_seconds, seed_number
+
+if TYPE_CHECKING:
+    from pymunk_bot.cli.compiling import CompileWatch
 
 DESCRIPTION = ("pymunk-bot: a 2D mobile-robot simulator on pymunk. Run, check and test "
                "scenarios, sweep their parameters, plot and replay run logs, and convert maps.")
@@ -45,19 +49,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
         loaded, config = config, scenario_with_settings(config, args.scenario, settings)
         for line in settings_echo(loaded, config, settings):  # stderr: stdout is the report
             print(line, file=sys.stderr)
-    sim = Simulation(config, seed=args.seed, source=args.scenario)
-    sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops the run
-    duration = args.duration if args.duration is not None else config.world.duration
-    from pymunk_bot.cli.outputs import prepare_outputs
+    from pymunk_bot.cli.compiling import CompileWatch
 
-    outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
-    try:
-        return _run_with_outputs(args, sim, duration, outputs)
-    finally:
-        outputs.close()  # an unfinished MCAP is removed, a live server stopped
+    with CompileWatch() as compiling:  # the first run after installing compiles numba's kernels
+        sim = Simulation(config, seed=args.seed, source=args.scenario)
+        sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops it
+        sim.attach(compiling)  # ticks that compiled are left out of the real-time factor
+        duration = args.duration if args.duration is not None else config.world.duration
+        from pymunk_bot.cli.outputs import prepare_outputs
+
+        outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
+        try:
+            return _run_with_outputs(args, sim, duration, outputs, compiling)
+        finally:
+            outputs.close()  # an unfinished MCAP is removed, a live server stopped
 
 
-def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -> int:
+def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs,
+                      compiling: CompileWatch) -> int:
     from pymunk_bot.outcomes.results import write_json
 
     interactive = not args.headless and outputs.record is None and _display_available()
@@ -78,6 +87,7 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs) -
         if not args.headless and not _display_available():
             print("note: no display found; running headless (pass --headless to silence this)")
         outputs.run_headless(sim, duration)
+    compiling.report()  # on a terminal, after a first run: how long numba compiled
     result = sim.result()
     verdict = sim.verdict()
     unwritten = None

@@ -218,6 +218,11 @@ class Simulation:
         for _ in range(round(duration / self.dt)):  # read anew each tick: an observer may reset
             self._own_batch().step()
 
+    def exclude_from_wall_time(self, seconds: float) -> None:
+        """Take ``seconds`` [s] spent inside steps on something else than the steps (numba
+        compiling a kernel on its first call) out of ``wall_time`` and the real-time factor."""
+        self.wall_time = max(self.wall_time - seconds, 0.0)
+
     def attach(self, observer: Any) -> None:
         """Add ``observer`` (called after every step) once: if it has ``on_reset(sim)``, that
         is called now, so it starts from the present state, and again after every reset."""

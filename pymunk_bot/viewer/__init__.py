@@ -34,15 +34,19 @@ def replay_window(log) -> None:
 
 
 def record_video(source, path: str | Path, duration: float | None, fps: float | None = None,
-                 size: tuple[int, int] | None = None, progress: bool = True) -> int:
+                 size: tuple[int, int] | None = None, progress: bool = True,
+                 until_settled: bool = True) -> int:
     """Render ``duration`` simulated seconds of a live simulation or run log to .mp4 or .gif.
 
     ``source`` is a Simulation or a RunLog; returns the number of frames written. ``duration``
-    None records a whole RunLog; a Simulation needs a duration.
+    None records a whole RunLog; a Simulation needs a duration. A Simulation's video ends once
+    the run has settled (every robot done and nothing moving for 1 s) unless ``until_settled``
+    is False; the simulation runs ``duration`` either way.
     """
     from pymunk_bot.viewer.recorder import record
 
-    return record(source, path, duration, fps=fps, size=size, progress=progress)
+    return record(source, path, duration, fps=fps, size=size, progress=progress,
+                  until_settled=until_settled)
 
 
 __all__ = ["ViewerUnavailable", "record_video", "replay_window", "run_window"]

@@ -2,19 +2,26 @@
 
 Frame k shows the state after round(k / fps / dt) physics steps, so a recording samples exactly
 the trajectory a headless run computes; when it ends, a live simulation has been advanced by
-exactly as many steps as ``Simulation.run(duration)`` would take.
+exactly as many steps as ``Simulation.run(duration)`` would take. A live run's video ends once
+the run has settled (settling.py: every robot done and nothing moving for 1 s); the simulation
+still runs to its end, headless.
+
+The frames are encoded off the simulation's thread: a writer thread takes them from a short
+queue and feeds the encoder (ffmpeg, a process of its own, or Pillow), so stepping and drawing
+the next frame overlap with encoding this one, and memory stays bounded.
 """
 from __future__ import annotations
 
 import contextlib
 import math
 import os
+import queue
 import subprocess
+import sys
 import tempfile
+import threading
 from pathlib import Path
 from typing import TYPE_CHECKING
-
-import numpy as np
 
 from pymunk_bot.outcomes.results import temp_beside, termination_deferred
 from pymunk_bot.viewer._pygame import require_pygame
@@ -23,6 +30,7 @@ pygame = require_pygame()
 
 from pymunk_bot.viewer.app import Viewer  # noqa: E402
 from pymunk_bot.viewer.camera import FIT_MARGIN  # noqa: E402
+from pymunk_bot.viewer.settling import Settling  # noqa: E402
 from pymunk_bot.viewer.sources import LiveSource, ReplaySource  # noqa: E402
 
 if TYPE_CHECKING:
@@ -33,6 +41,7 @@ DEFAULT_FPS = {".mp4": 30.0, ".gif": 10.0}  # [Hz]; GIF delays are whole 1/100 s
 GIF_COLOURS = 64  # one palette for a whole GIF: the scene's flat colours and their edges
 LONG_SIDE = {".mp4": 1280, ".gif": 720}  # [px] default frame size along the arena's long side
 MARGIN = FIT_MARGIN  # [px] around the arena
+QUEUE_FRAMES = 8  # frames waiting for the encoder at most (8 x 5 MB at 1280 x 1280)
 
 
 def default_size(arena: tuple[float, float], ext: str) -> tuple[int, int]:
@@ -46,10 +55,14 @@ def default_size(arena: tuple[float, float], ext: str) -> tuple[int, int]:
 
 
 def record(source, path: str | Path, duration: float | None = None, fps: float | None = None,
-           size: tuple[int, int] | None = None, progress: bool = True) -> int:
+           size: tuple[int, int] | None = None, progress: bool = True,
+           until_settled: bool = True) -> int:
     """Render a Simulation or RunLog to ``path`` (.mp4 or .gif), atomically; returns frames written.
 
     ``duration`` [s] defaults to the whole log for a RunLog and is required for a Simulation.
+    ``until_settled``: a Simulation's video ends once the run has settled (every robot done,
+    nothing moving for 1 s: settling.py), though the simulation still runs ``duration``; a
+    RunLog's replay always shows the whole log.
     """
     path = Path(path)
     ext = path.suffix.lower()
@@ -75,16 +88,22 @@ def record(source, path: str | Path, duration: float | None = None, fps: float |
     surface = pygame.Surface(size)
     dt = frames_source.dt
     n_frames = int(math.floor(duration * fps + 1e-9)) + 1  # frame 0 shows the start
+    settling = Settling() if until_settled and isinstance(frames_source, LiveSource) else None
+    written = 0
     tmp: str | None = None
-    writer: _GifWriter | _Mp4Writer | None = None
+    writer: _Background | None = None
     try:
         with termination_deferred():  # both or neither: a part file is never left unowned
             tmp = _temp_name(path)
-            writer = _open_writer(tmp, ext, fps, size)
+            layout = _layout(surface)
+            writer = _Background(_open_writer(tmp, ext, fps, size, layout))
         for k in _progress(range(n_frames), progress, path.name):
             _advance_to(frames_source, round(k / fps / dt))
             viewer.draw(surface)
-            writer.append(_pixels(surface))
+            writer.append(_pixels(surface, layout))
+            written += 1
+            if settling is not None and settling.settled(frames_source.scene()):
+                break  # nothing more would change on screen but the clock
         writer.close()
         # End where a headless run of the same duration ends.
         _advance_to(frames_source, round(duration / dt))
@@ -95,7 +114,7 @@ def record(source, path: str | Path, duration: float | None = None, fps: float |
         if tmp is not None:
             Path(tmp).unlink(missing_ok=True)
         raise
-    return n_frames
+    return written
 
 
 def _advance_to(source: LiveSource | ReplaySource, steps: int) -> None:
@@ -103,10 +122,21 @@ def _advance_to(source: LiveSource | ReplaySource, steps: int) -> None:
         source.step()
 
 
-def _pixels(surface: Surface) -> np.ndarray:
-    """(H, W, 3) uint8 RGB (tobytes is ten times faster than surfarray here)."""
-    w, h = surface.get_size()
-    return np.frombuffer(pygame.image.tobytes(surface, "RGB"), np.uint8).reshape(h, w, 3)
+def _layout(surface: Surface) -> str:
+    """How a frame's bytes are laid out, in ffmpeg's names: ``bgr0`` when the surface's own
+    memory is 32-bit pixels stored blue, green, red, unused without padding (pygame's usual
+    surface on a little-endian machine), so a frame is one copy of it; else ``rgb24``."""
+    if (surface.get_bitsize() == 32 and surface.get_masks()[:3] == (0xFF0000, 0xFF00, 0xFF)
+            and sys.byteorder == "little" and surface.get_pitch() == 4 * surface.get_width()):
+        return "bgr0"
+    return "rgb24"
+
+
+def _pixels(surface: Surface, layout: str) -> bytes:
+    """A copy of the frame's pixels, laid out as ``layout`` says (``_layout``)."""
+    if layout == "bgr0":
+        return surface.get_buffer().raw  # a plain copy: a fifth of a conversion's time
+    return pygame.image.tobytes(surface, "RGB")  # ten times faster than surfarray here
 
 
 def _temp_name(path: Path) -> str:
@@ -123,6 +153,62 @@ def _progress(frames, enabled: bool, name: str):
     return tqdm(frames, desc=f"recording {name}", unit="frame", disable=None, leave=False)
 
 
+class _Background:
+    """A GIF or MP4 writer fed from a thread of its own through a queue of QUEUE_FRAMES frames:
+    ``append`` returns at once unless the encoder is that far behind. An error in the writer
+    comes out of the next ``append`` or ``close``."""
+
+    _END = None
+
+    def __init__(self, writer: _GifWriter | _Mp4Writer) -> None:
+        self._writer = writer
+        self._frames: queue.Queue = queue.Queue(maxsize=QUEUE_FRAMES)
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._work, name="video writer", daemon=True)
+        self._thread.start()
+
+    def _work(self) -> None:
+        while (frame := self._frames.get()) is not self._END:
+            if self._error is None:  # after an error, drain so that no put blocks
+                try:
+                    self._writer.append(frame)
+                except BaseException as exc:  # handed to the recording's thread
+                    self._error = exc
+
+    def _raise(self) -> None:
+        if self._error is not None:
+            raise self._error
+
+    def _put(self, item: bytes | None) -> None:
+        while self._thread.is_alive():
+            try:
+                self._frames.put(item, timeout=0.5)
+                return
+            except queue.Full:
+                self._raise()
+
+    def append(self, frame: bytes) -> None:
+        """Queue ``frame``, one frame's pixels (``_pixels``)."""
+        self._raise()
+        self._put(frame)
+
+    def close(self) -> None:
+        """Write what is queued and finish the file."""
+        self._put(self._END)
+        self._thread.join()
+        self._raise()
+        self._writer.close()
+
+    def abort(self) -> None:
+        """Stop the encoder and the thread (idempotent)."""
+        self._writer.abort()  # a write blocked on ffmpeg's pipe fails at once
+        with contextlib.suppress(queue.Empty):
+            while True:  # room for the end mark
+                self._frames.get_nowait()
+        self._put(self._END)
+        self._thread.join()
+
+
 class _GifWriter:
     """GIF through Pillow (imageio's own GIF backend), called directly to control quantisation.
 
@@ -132,18 +218,20 @@ class _GifWriter:
     line art stays crisp. Memory: one byte per pixel per frame until the file is written.
     """
 
-    def __init__(self, path: str, fps: float) -> None:
+    def __init__(self, path: str, fps: float, size: tuple[int, int], layout: str) -> None:
         from PIL import Image
 
         self._image = Image
+        self._size = size
+        self._raw_mode = "BGRX" if layout == "bgr0" else "RGB"  # Pillow's name for the layout
         self._path = path
         self._frames: list = []
         self._palette = None
         self._delay = int(round(1000.0 / fps))  # [ms]; GIF stores whole hundredths of a second
 
-    def append(self, frame: np.ndarray) -> None:
+    def append(self, frame: bytes) -> None:
         Image = self._image
-        image = Image.fromarray(frame)
+        image = Image.frombuffer("RGB", self._size, frame, "raw", self._raw_mode, 0, 1)
         if self._palette is None:
             self._palette = image.quantize(colors=GIF_COLOURS, method=Image.Quantize.FASTOCTREE,
                                            dither=Image.Dither.NONE)
@@ -172,26 +260,27 @@ class _Mp4Writer:
     running would create the removed file again.
     """
 
-    def __init__(self, path: str, fps: float, size: tuple[int, int]) -> None:
+    def __init__(self, path: str, fps: float, size: tuple[int, int], layout: str) -> None:
         import imageio_ffmpeg
 
         width, height = size
         command = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error",
-                   "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}",
+                   "-f", "rawvideo", "-pix_fmt", layout, "-s", f"{width}x{height}",
                    "-r", f"{fps:.12g}", "-i", "-", "-an", "-c:v", "libx264", "-pix_fmt", "yuv420p",
                    # crf 20 keeps thin lines sharp at a few hundred kB per simulated minute.
-                   "-crf", "20", "-preset", "fast", path]
+                   # veryfast: half the CPU of fast for this flat line art, files about as large.
+                   "-crf", "20", "-preset", "veryfast", path]
         self._errors = tempfile.TemporaryFile()  # a file, not a pipe: ffmpeg can never block on it
         # Its own session: a Ctrl-C in the terminal reaches only us, and we stop ffmpeg.
         self._process = subprocess.Popen(command, stdin=subprocess.PIPE,
                                          stdout=subprocess.DEVNULL, stderr=self._errors,
                                          start_new_session=True)
 
-    def append(self, frame: np.ndarray) -> None:
+    def append(self, frame: bytes) -> None:
         stdin = self._process.stdin
         assert stdin is not None
         try:
-            stdin.write(frame.tobytes())
+            stdin.write(frame)
         except BrokenPipeError:  # ffmpeg stopped reading: it has said why
             self._process.wait()
             self._fail()
@@ -223,6 +312,8 @@ class _Mp4Writer:
                            f"{message[-1] if message else 'no message'}")
 
 
-def _open_writer(path: str, ext: str, fps: float,
-                 size: tuple[int, int]) -> _GifWriter | _Mp4Writer:
-    return _GifWriter(path, fps) if ext == ".gif" else _Mp4Writer(path, fps, size)
+def _open_writer(path: str, ext: str, fps: float, size: tuple[int, int],
+                 layout: str) -> _GifWriter | _Mp4Writer:
+    if ext == ".gif":
+        return _GifWriter(path, fps, size, layout)
+    return _Mp4Writer(path, fps, size, layout)

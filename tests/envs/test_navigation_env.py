@@ -16,6 +16,7 @@ gym = pytest.importorskip("gymnasium")
 import pymunk_bot.envs  # noqa: E402,F401  (registers the ids)
 from pymunk_bot.envs import NavigationEnv  # noqa: E402
 from pymunk_bot.config.errors import ScenarioError  # noqa: E402
+from bounds import HANG_GUARD
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -205,10 +206,12 @@ print(h.hexdigest())
 """
 
 
+@pytest.mark.slow  # a whole interpreter; tests/test_cli.py and test_vector_and_multi.py check
+# determinism across processes too
 def test_reset_seed_gives_identical_episodes_in_another_process():
     env = {**os.environ, "PYTHONHASHSEED": "123", "PYTHONPATH": str(ROOT)}
     out = subprocess.run([sys.executable, "-c", EPISODE_SCRIPT], cwd=ROOT, env=env,
-                         capture_output=True, text=True, timeout=120)
+                         capture_output=True, text=True, timeout=HANG_GUARD)
     assert out.returncode == 0, out.stderr
     here = {}
     exec(EPISODE_SCRIPT.replace("print(h.hexdigest())", "result = h.hexdigest()"), here)
@@ -244,6 +247,6 @@ def test_registered_by_module_prefix_without_import():
     code = ("import gymnasium as gym; env = gym.make('pymunk_bot.envs:pymunk_bot/Navigation-v0');"
             "print(env.reset(seed=0)[0].shape)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
-                         env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=120)
+                         env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=HANG_GUARD)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "(368,)"  # 360 beams + 8

@@ -14,6 +14,7 @@ gym = pytest.importorskip("gymnasium")
 import pymunk_bot.envs  # noqa: E402,F401
 from pymunk_bot.envs import NavigationEnv, NavigationVectorEnv  # noqa: E402
 from gymnasium.vector import AutoresetMode  # noqa: E402
+from bounds import HANG_GUARD
 
 
 def short_task(duration=0.5) -> dict:
@@ -283,7 +284,7 @@ def test_shared_space_worlds_are_identical_in_another_process():
     root = Path(__file__).resolve().parents[2]
     env = {**os.environ, "PYTHONHASHSEED": "321", "PYTHONPATH": str(root)}
     out = subprocess.run([sys.executable, "-c", VECTOR_SCRIPT], cwd=root, env=env,
-                         capture_output=True, text=True, timeout=120)
+                         capture_output=True, text=True, timeout=HANG_GUARD)
     assert out.returncode == 0, out.stderr
     here: dict = {}
     exec(VECTOR_SCRIPT.replace("print(h.hexdigest())", "result = h.hexdigest()"), here)

@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 import pytest
+from bounds import HANG_GUARD
 
 nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
@@ -17,7 +18,7 @@ def test_the_quickstart_notebook_runs_and_shows_a_plot_and_a_frame(tmp_path, mon
     notebook = nbformat.read(NOTEBOOK, as_version=4)
     assert all(not c.get("outputs") for c in notebook.cells if c.cell_type == "code"), \
         "commit the notebook without outputs"
-    nbclient.NotebookClient(notebook, timeout=60, kernel_name="python3",
+    nbclient.NotebookClient(notebook, timeout=HANG_GUARD, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}}).execute()
     outputs = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs]
     text = "".join(o.get("text", "") for o in outputs)

@@ -12,7 +12,7 @@ import pytest
 from bench.localization_robustness import run_one
 
 
-@pytest.mark.parametrize("seed", [0, 2])
+@pytest.mark.parametrize("seed", [0, pytest.param(2, marks=pytest.mark.slow)])  # 2: a second office
 def test_mcl_with_its_defaults_tracks_within_5_cm_on_a_generated_office(seed):
     out = run_one("mcl", "office", "perfect", seed)
     assert out is not None and out.collisions == 0

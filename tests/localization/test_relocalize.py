@@ -20,7 +20,7 @@ from bench.localization_robustness import run_one, world_for
 from pymunk_bot.localization.mcl import GLOBAL_BEAMS, MclLocalizer
 
 
-@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("seed", [0, pytest.param(1, marks=pytest.mark.slow)])  # 1: a second office
 def test_a_global_start_in_a_generated_office_converges_within_20_s(seed):
     out = run_one("mcl_global", "office", "typical", seed)
     assert out is not None and not out.error

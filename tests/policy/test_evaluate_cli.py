@@ -16,6 +16,7 @@ pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs.evaluation import EpisodeOutcome, summarize, wilson  # noqa: E402
 from pymunk_bot.policy.files import MlpPolicy  # noqa: E402
+from bounds import HANG_GUARD
 
 BEAMS = 12
 
@@ -39,7 +40,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def run_cli(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "pymunk_bot", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=120,
+                          capture_output=True, text=True, timeout=HANG_GUARD,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
 
 

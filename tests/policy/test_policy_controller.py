@@ -16,6 +16,7 @@ from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy
 gym = pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs import NavigationEnv  # noqa: E402
+from bounds import HANG_GUARD
 
 BEAMS = 16
 
@@ -89,7 +90,7 @@ def test_the_controller_stops_at_the_goal(tmp_path):
 
 def run_cli(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "pymunk_bot", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=HANG_GUARD)
 
 
 def write_scenario(tmp_path, data) -> Path:

@@ -32,4 +32,6 @@ def test_rosbridge_serves_a_run_and_stops(capsys):
     wall = time.perf_counter() - started
     out = capsys.readouterr().out
     assert status in (0, 1) and "rosbridge: serving the run at ws://127.0.0.1:" in out
-    assert 0.25 <= wall < 5.0  # paced at 4x real time, not as fast as it can
+    # Paced at 4x real time, not as fast as it can (a loaded machine only makes it slower:
+    # the upper bound is a hang guard).
+    assert 0.25 <= wall < 120.0

@@ -16,6 +16,7 @@ from pymunk_bot.foxglove.live import run_paced
 from pymunk_bot.ros2.bridge import serve_sim
 from pymunk_bot.ros2.commands import CommandInbox
 from pymunk_bot.ros2.worldmap import world_grid
+from bounds import HANG_GUARD
 
 roslibpy = pytest.importorskip("roslibpy")
 websockets = pytest.importorskip("websockets")
@@ -44,7 +45,7 @@ class Served:
 
     def client(self):
         ros = roslibpy.Ros(host="127.0.0.1", port=self.server.port)
-        ros.run(timeout=5)
+        ros.run(timeout=60)  # connecting: a hang guard, ample on a loaded machine
         self.clients.append(ros)
         return ros
 
@@ -93,15 +94,17 @@ def test_scans_arrive_at_the_lidar_rate_and_services_answer(serve):
     served.wait()
     wall = time.perf_counter() - started
     stamps = [s["header"]["stamp"]["sec"] + 1e-9 * s["header"]["stamp"]["nanosec"] for s in scans]
-    assert len(scans) >= 14 and abs(len(scans) / wall - 10.0) < 2.0  # 10 Hz, in wall time too
+    # Every scan of the 1.5 s arrives, paced: never faster than 10 Hz of wall time (a loaded
+    # machine may only make the pace slower, so that side is not bounded).
+    assert len(scans) >= 14 and len(scans) / wall < 12.0
     assert all(abs(b - a - 0.1) < 1e-6 for a, b in zip(stamps, stamps[1:]))  # and in sim time
     assert len(scans[0]["ranges"]) == 90 and None in scans[0]["ranges"]  # +inf -> null in JSON
     assert len(maps) == 1 and maps[0]["info"]["width"] > 0  # latched: sent on subscribing
     answer = roslibpy.Service(ros, "/rosapi/get_time", "rosapi/GetTime").call(
-        roslibpy.ServiceRequest({}), timeout=5)
+        roslibpy.ServiceRequest({}), timeout=60)
     assert abs(answer["time"]["sec"] + 1e-9 * answer["time"]["nanosec"] - 1.5) < 1e-6
     answer = roslibpy.Service(ros, "/rosapi/topics_and_raw_types", "rosapi/TopicsAndRawTypes").call(
-        roslibpy.ServiceRequest({}), timeout=5)
+        roslibpy.ServiceRequest({}), timeout=60)
     scan = answer["typedefs_full_text"][answer["topics"].index("/scan")]
     assert "float32[] ranges" in scan and "MSG: std_msgs/Header" in scan
 
@@ -254,7 +257,7 @@ from pymunk_bot.ros2.bridge import serve_sim
 sim = Simulation.from_file("default")  # a module-level run, kept until the interpreter exits
 server = serve_sim(sim, port=0, report=lambda line: None)
 ros = roslibpy.Ros(host="127.0.0.1", port=server.port)
-ros.run(timeout=5)
+ros.run(timeout=60)
 roslibpy.Topic(ros, "/odom", "nav_msgs/msg/Odometry").subscribe(lambda message: None)
 sim.run(0.5)
 ros.terminate()
@@ -269,6 +272,6 @@ def test_a_script_that_keeps_its_run_after_stopping_the_server_exits_cleanly():
     import subprocess
     import sys
     done = subprocess.run([sys.executable, "-c", EXIT_SCRIPT], capture_output=True, text=True,
-                          timeout=60)
+                          timeout=HANG_GUARD)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().endswith("stopped")

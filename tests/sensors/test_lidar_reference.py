@@ -107,7 +107,7 @@ def reference_ranges(sim: Simulation, r) -> np.ndarray:
 @pytest.mark.parametrize("seed,obstacle_count,robot_count", [
     *[(seed, (5, 40), 5) for seed in range(10)],
     (100, (300, 400), 12),  # dense: hundreds of obstacles, a dozen robots
-    (101, (300, 400), 12),
+    pytest.param(101, (300, 400), 12, marks=pytest.mark.slow),  # a second dense world
 ])
 def test_lidar_matches_segment_queries_in_random_worlds(seed, obstacle_count, robot_count):
     sim = random_world(seed, obstacle_count, robot_count)

@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from pymunk_bot import cli
+from bounds import HANG_GUARD
 
 NOISY = {
     "name": "noisy_sensors",
@@ -60,7 +61,7 @@ def test_the_installed_command_runs_a_noisy_scenario(tmp_path):
     path, out = write(tmp_path, NOISY), tmp_path / "result.json"
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
     command = [sys.executable, "-m", "pymunk_bot", "run", str(path), "--headless", "--out", str(out)]
-    done = subprocess.run(command, capture_output=True, text=True, env=env, timeout=120)
+    done = subprocess.run(command, capture_output=True, text=True, env=env, timeout=HANG_GUARD)
     assert done.returncode in (0, 1), done.stderr
     assert json.loads(out.read_text())["robots"]["r1"]["odometry_error"] > 0.0
 

@@ -14,6 +14,7 @@ from pymunk_bot.cli import main as cli_main
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.sweep import backends, parse_assignment, parse_seeds, run_sweep, summarize
 from pymunk_bot.sweep.output import journal_path
+from bounds import HANG_GUARD
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEEDS = {"robots[0].max_wheel_speed": [0.5, 1.0]}
@@ -180,7 +181,7 @@ def dask_cluster(tmp_path_factory):
                                   "--no-dashboard", "--scheduler-file", str(info)], **quiet)
     procs = [scheduler]
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + HANG_GUARD
         while not info.exists() and time.monotonic() < deadline:
             time.sleep(0.1)
         address = json.loads(info.read_text())["address"]
@@ -191,14 +192,14 @@ def dask_cluster(tmp_path_factory):
                                           **quiet))
         from distributed import Client
 
-        with Client(address, timeout="30s") as client:
-            client.wait_for_workers(2, timeout=60)
+        with Client(address, timeout=f"{HANG_GUARD:.0f}s") as client:
+            client.wait_for_workers(2, timeout=HANG_GUARD)
         yield address
     finally:
         for proc in reversed(procs):  # workers first, while the scheduler still answers
             proc.terminate()
             try:
-                proc.wait(timeout=5)
+                proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()

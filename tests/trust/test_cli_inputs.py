@@ -14,6 +14,7 @@ import yaml
 
 from pymunk_bot.cli import main
 from pymunk_bot.config.checks import check_seed
+from bounds import HANG_GUARD
 
 REPO = Path(__file__).resolve().parents[2]
 PLAIN = {"name": "plain", "world": {"size": [4.0, 4.0], "duration": 1.0},
@@ -23,7 +24,7 @@ PLAIN = {"name": "plain", "world": {"size": [4.0, 4.0], "duration": 1.0},
 def cli(*args: str, cwd: Path = REPO, **kwargs) -> subprocess.CompletedProcess:
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(REPO)}
     return subprocess.run([sys.executable, "-m", "pymunk_bot", *args], capture_output=True,
-                          text=True, cwd=cwd, env=env, timeout=120, **kwargs)
+                          text=True, cwd=cwd, env=env, timeout=HANG_GUARD, **kwargs)
 
 
 def one_line_exit_2(capsys, argv: list[str], *fragments: str) -> None:
@@ -79,12 +80,12 @@ def test_sigterm_during_record_leaves_no_part_file(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "pymunk_bot", "run", "maze", "--record",
                              str(video), "--duration", "600"], cwd=REPO, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_GUARD
     while not list(tmp_path.glob("*.part*")) and time.monotonic() < deadline:
         time.sleep(0.1)  # wait until the recording has started writing
     assert list(tmp_path.glob("*.part*")), "the recording never started"
     proc.send_signal(signal.SIGTERM)
-    proc.wait(timeout=30)
+    proc.wait(timeout=HANG_GUARD)
     assert proc.returncode != 0
     assert list(tmp_path.iterdir()) == []
 

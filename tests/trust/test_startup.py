@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from bounds import HANG_GUARD
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -28,7 +29,7 @@ def test_ctrl_c_during_start_up_is_one_line(delay):
                                                                         signal.SIG_DFL))
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=HANG_GUARD)
     if "Traceback" in err and not _frames_past_the_entry_point(err):
         # Python itself was still starting (importing site, runpy finding the module): no program
         # can handle a signal then. Seen on a loaded machine only.

@@ -113,8 +113,11 @@ def test_the_summary_says_what_its_real_time_factor_measured(tmp_path, monkeypat
     status = cli_main(["run", str(scenario), "--duration", "0.3"])
     out = capsys.readouterr().out.splitlines()[0]
     assert status == 0
-    assert "0.30 s simulated, watched over 0.3 s in the window (" in out
+    watched = float(out.split("watched over ")[1].split(" s in the window")[0])
+    assert "0.30 s simulated, watched over " in out and watched >= 0.3
     assert "x real time); computing the steps took " in out
     assert "of that (headless, it would run at " in out
     pace = float(out.split("in the window (")[1].split("x real time")[0])
-    assert 0.5 < pace <= 1.05  # what the user watched, not the compute speed
+    # What the user watched (at most the 1x the window slept), not the compute speed; a
+    # loaded machine only lengthens the watch.
+    assert pace == pytest.approx(0.3 / watched, rel=0.25) and pace <= 1.05

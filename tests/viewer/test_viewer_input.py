@@ -8,6 +8,7 @@ import pytest
 from pymunk_bot.outcomes.runlog import RunLogger
 from pymunk_bot.viewer.app import SPEEDS
 from viewer_helpers import Harness, build, wheels
+from bounds import HANG_GUARD
 
 DT = 1.0 / 60.0
 
@@ -223,7 +224,7 @@ def test_an_unreachable_display_falls_back_to_headless_instead_of_an_invisible_w
     env = {k: v for k, v in os.environ.items() if k not in ("SDL_VIDEODRIVER", "WAYLAND_DISPLAY")}
     env.update(DISPLAY=":97", XDG_RUNTIME_DIR=str(tmp_path))  # no X server there
     done = subprocess.run([sys.executable, "-m", "pymunk_bot", "run", "--duration", "0.2"],
-                          env=env, capture_output=True, text=True, timeout=60)
+                          env=env, capture_output=True, text=True, timeout=HANG_GUARD)
     assert done.returncode in (0, 1), done.stderr
     assert "running headless" in done.stdout
     assert "0.20 s simulated" in done.stdout
