@@ -99,3 +99,19 @@ def test_the_layers_debt_only_shrinks():
 def test_the_top_level_is_a_short_list_of_concepts():
     entries = _top_level() | {p.name for p in PACKAGE.iterdir() if p.name in PACKAGE_FILES}
     assert len(entries) <= 24, sorted(entries)
+
+
+def test_objects_read_no_private_state_of_others():
+    # `other._name` (not self's or cls's): an owner gives a public method instead. What is
+    # left reads argparse's internals (it has no public accessor for subcommands and help
+    # expansion) and a pydantic private attribute of the same model class.
+    import re
+
+    reach = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)(?:\[[^]]*\])?\.(_[a-z][A-Za-z0-9_]*)\b")
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            for owner, name in reach.findall(line):
+                if owner not in ("self", "cls", "super") and not owner.startswith("_"):
+                    found.append(f"{path.relative_to(PACKAGE)}:{number}: {owner}.{name}")
+    assert len(found) <= 5, "\n".join(found)

@@ -52,10 +52,10 @@ class CompileWatch:
 
         class _Listener(event.Listener):
             def on_start(self, ev: object) -> None:
-                watch._compile_started()
+                watch.compile_started()
 
             def on_end(self, ev: object) -> None:
-                watch._compile_ended()
+                watch.compile_ended()
 
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
@@ -73,7 +73,7 @@ class CompileWatch:
         if self._announced and self._stream is not None:
             print(f"note: compiling took {self.seconds:.1f} s", file=self._stream, flush=True)
 
-    def _compile_started(self) -> None:
+    def compile_started(self) -> None:
         if self._depth == 0:
             if not self._announced:
                 self._announced = True
@@ -82,7 +82,7 @@ class CompileWatch:
             self._started = time.perf_counter()
         self._depth += 1
 
-    def _compile_ended(self) -> None:
+    def compile_ended(self) -> None:
         self._depth -= 1
         if self._depth == 0:
             self.seconds += time.perf_counter() - self._started

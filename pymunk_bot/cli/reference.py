@@ -18,9 +18,15 @@ END = "<!-- END generated -->"
 CLI_DOC = Path(__file__).resolve().parents[2] / "docs" / "cli.md"
 
 
+def _actions(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    """The parser's arguments, in the order `--help` lists them: argparse has no public
+    accessor for them, so this is the one place that reads its ``_actions``."""
+    return list(parser._actions)
+
+
 def subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
     """The parser's subcommands by name, in the order `--help` lists them."""
-    for action in parser._actions:  # argparse has no public accessor for its subparsers
+    for action in _actions(parser):
         if isinstance(action, argparse._SubParsersAction):
             return dict(action.choices)
     return {}
@@ -28,7 +34,7 @@ def subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentP
 
 def command_help(parser: argparse.ArgumentParser) -> dict[str, str]:
     """The one-line help of each subcommand, as the top-level `--help` shows it."""
-    for action in parser._actions:
+    for action in _actions(parser):
         if isinstance(action, argparse._SubParsersAction):
             return {choice.dest: choice.help or "" for choice in action._choices_actions}
     return {}
@@ -76,7 +82,7 @@ def render(parser: argparse.ArgumentParser | None = None) -> str:
         lines += ["", f"### pymunk-bot {name}", "", helps.get(name, "") + ".", ""]
         if sub.description:
             lines += [_description(sub), ""]
-        actions = [a for a in sub._actions if not isinstance(a, argparse._HelpAction)
+        actions = [a for a in _actions(sub) if not isinstance(a, argparse._HelpAction)
                    and a.help != argparse.SUPPRESS]
         if not actions:
             lines.append("No arguments.")

@@ -20,7 +20,7 @@ class FrameRenderer:
     def __init__(self, sim, size: tuple[int, int] | None = None,
                  agents: Iterable[str] = ()) -> None:
         """``agents``: the robots the env's agent drives, labelled as such in the HUD."""
-        from pymunk_bot.viewer._pygame import require_pygame
+        from pymunk_bot.viewer.display import require_pygame
 
         self.pygame = require_pygame()
         from pymunk_bot.viewer.app import Viewer
@@ -58,7 +58,7 @@ class FrameRenderer:
         """Draw into a window (opened on first use; ViewerUnavailable without a display)."""
         pygame = self.pygame
         if self._window is None:
-            from pymunk_bot.viewer._pygame import open_display
+            from pymunk_bot.viewer.display import open_display
 
             open_display()
             self._window = pygame.display.set_mode(self.size)

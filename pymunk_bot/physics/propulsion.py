@@ -305,12 +305,16 @@ class Propulsion:
         for k, body in enumerate(self.bodies):
             j = known.get(id(body))
             if j is not None:
-                self._given[k] = previous._given[j]
-                self._held[k] = previous._held[j]
-                self._anchored[k] = previous._anchored[j]
+                self._given[k], self._held[k], self._anchored[k] = previous.steering_of(j)
         if self.batched and any(self._anchored):
             self._holding = True  # so a release lets them go
             self._held_twists.fill(np.nan)  # every anchor written anew
+
+    def steering_of(self, k: int) -> tuple[tuple[float, float, float],
+                                           tuple[float, float, float] | None, bool]:
+        """What this Propulsion knows of robot ``k``'s control body: the twist last written,
+        the twist held (None: none) and whether its pivot's anchor is off the centre."""
+        return self._given[k], self._held[k], self._anchored[k]
 
     def step_apart_in(self, apart: pymunk.Space) -> None:
         """Robots may step apart, in ``apart`` (physics/apart.py): its bodies are read too

@@ -61,10 +61,8 @@ class World:
             self._space, self.map = ground.contact_space, ground.map
             self.arena_shapes = ground.arena_shapes
             self.substeps, self.need = ground.substeps, ground.need
-            self._on_contact = ground._on_contact
-            self._on_solved = ground._on_solved
+            self._on_contact, self._on_solved, self._fixed = ground.shared_tables()
             self._ground = ground
-            self._fixed = ground._fixed
             self.apart_space = None
         self.obstacles: list[Obstacle] = []
         for index, o in enumerate(config.obstacles):  # in the file's order, for determinism
@@ -97,6 +95,11 @@ class World:
         self._apart: dict[pymunk.Body, pymunk.Body] = {}
         self.whole = False  # someone holds the world's Space: every robot stays in it
         self.layout = 0  # counts the moves between the two Spaces (batch readers re-index)
+
+    def shared_tables(self) -> tuple[dict, dict, dict]:
+        """What copies on this ground share with it: the contact callbacks by shape, those of
+        solved contacts, and the fixed obstacles by their index in the scenario."""
+        return self._on_contact, self._on_solved, self._fixed
 
     @property
     def space(self) -> pymunk.Space:

@@ -53,7 +53,7 @@ class Fleet:
     def __init__(self, configs: list[RobotConfig]) -> None:
         n = len(configs)
         self.configs = configs
-        self._whole: tuple[Fleet, int] | None = None  # (stack, first row) while stacked
+        self.stacked_in: tuple[Fleet, int] | None = None  # (stack, first row) while stacked
         self.xy = np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2)  # [m]
         self.distance = np.zeros(n)  # true path length [m]
         self.collisions = np.zeros(n, dtype=np.int64)  # contact episodes
@@ -78,9 +78,9 @@ class Fleet:
         join_rows(whole, parts, cls.ROWS)
         offset = 0
         for part in parts + [whole]:
-            part._watch_unreached()
+            part.watch_unreached()
             if part is not whole:
-                part._whole = (whole, offset)
+                part.stacked_in = (whole, offset)
                 offset += part.goal.shape[0]
         return whole
 
@@ -88,10 +88,10 @@ class Fleet:
         """Undo :meth:`stacked`: each part on arrays of its own."""
         split_rows(self, parts, self.ROWS)
         for part in parts:
-            part._whole = None
-            part._watch_unreached()
+            part.stacked_in = None
+            part.watch_unreached()
 
-    def _watch_unreached(self) -> None:
+    def watch_unreached(self) -> None:
         """Every goal not reached yet is pending."""
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]) & np.isnan(self.time_to_goal))
         self._refresh_targets()
@@ -101,8 +101,8 @@ class Fleet:
         self.time_to_goal[i] = self.distance_to_goal[i] = np.nan
         self._pending = np.union1d(self._pending, [i])
         self._refresh_targets()
-        if self._whole is not None:  # stacked: the stack checks the goals
-            whole, offset = self._whole
+        if self.stacked_in is not None:  # stacked: the stack checks the goals
+            whole, offset = self.stacked_in
             whole.watch_goal(offset + i)
 
     def _refresh_targets(self) -> None:

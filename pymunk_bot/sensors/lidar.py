@@ -63,8 +63,8 @@ class Lidar:
     def __init__(self, config: LidarConfig, body: pymunk.Body, shape_filter: pymunk.ShapeFilter,
                  caster: Caster, rng: np.random.Generator, start_time: float = 0.0) -> None:
         self.config = config
-        self._body = body
-        self._filter = shape_filter
+        self.body = body
+        self.shape_filter = shape_filter
         self._caster = caster
         self._periodic_rng, self._on_demand_rng = rng.spawn(2)
         self._schedule = Schedule(config.rate, start_time)
@@ -74,8 +74,9 @@ class Lidar:
         angles = float(yaw) + beam_angles(config.beams, config.fov)
         angles.setflags(write=False)
         self._angles = angles
-        # The error model as floats, for record_all's arrays.
-        self._model = (float(config.noise_std), float(config.min_range),
+        # The error model as floats, for record_all's arrays: (noise_std, min_range,
+        # max_range, dropout).
+        self.model = (float(config.noise_std), float(config.min_range),
                        float(config.max_range), float(config.dropout))
         self.latest: LaserScan | None = None  # None until the first scan
         self._normals_ahead: np.ndarray | None = None  # periodic noise drawn ahead (_normals)
@@ -99,14 +100,14 @@ class Lidar:
 
     def origin(self) -> tuple[float, float]:
         """Where the beams start now, in the world frame [m]."""
-        body = self._body
+        body = self.body
         # At the body's origin: its position, exactly (what local_to_world gives, cheaper).
         p = body.position if self._mount == (0.0, 0.0) else body.local_to_world(self._mount)
         return (p.x, p.y)
 
     def cast_request(self) -> tuple[tuple[float, float], np.ndarray, float, pymunk.ShapeFilter]:
         """(origin, world-frame beam angles, max range, filter) of a cast from here now."""
-        return self.origin(), self._body.angle + self._angles, self.config.max_range, self._filter
+        return self.origin(), self.body.angle + self._angles, self.config.max_range, self.shape_filter
 
     def true_ranges(self) -> np.ndarray:
         """Noise-free distances [m] to the first thing each beam meets, capped at max_range."""
@@ -130,9 +131,9 @@ class Lidar:
         """Store the periodic scan taken at ``time`` [s] from these noise-free ranges [m]."""
         ranges = self._apply_model(true_ranges, self._periodic_rng)
         ranges.setflags(write=False)
-        self._keep(time, ranges)
+        self.keep(time, ranges)
 
-    def _keep(self, time: float, ranges: np.ndarray) -> None:
+    def keep(self, time: float, ranges: np.ndarray) -> None:
         c = self.config
         self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
                                 max_range=c.max_range, offset=self.offset, time=time)
@@ -160,6 +161,15 @@ class Lidar:
             no_return |= rng.random(true.shape[0]) < c.dropout
         ranges[no_return] = c.max_range
         return ranges
+
+    def periodic_normals(self, n: int) -> np.ndarray:
+        """``n`` standard normals of the periodic scans' noise stream (record_all draws a
+        batch of scans' noise through this, as each scan would)."""
+        return self._normals(self._periodic_rng, n)
+
+    def periodic_dropout(self, n: int, dropout: float) -> np.ndarray:
+        """Which of ``n`` beams of a periodic scan drop out (probability ``dropout``)."""
+        return self._periodic_rng.random(n) < dropout
 
     def _normals(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` standard normal draws from ``rng``. The periodic stream's come from a block
@@ -193,12 +203,12 @@ class Lidar:
         origins, thetas, offsets, ranges, filters = [], [], [], [], []
         for lidar in lidars:
             origins.append(lidar.origin())
-            thetas.append(lidar._body.angle)
-            offsets.append(lidar._angles)
+            thetas.append(lidar.body.angle)
+            offsets.append(lidar.angles)
             ranges.append(lidar.config.max_range)
-            filters.append(lidar._filter)
+            filters.append(lidar.shape_filter)
         if len({a.shape[0] for a in offsets}) == 1:
-            # body.angle + _angles, row by row
+            # body.angle + angles, row by row
             angles: Any = np.array(thetas)[:, None] + np.stack(offsets)
         else:
             angles = [theta + a for theta, a in zip(thetas, offsets)]
@@ -216,7 +226,7 @@ class Lidar:
             for (lidar, time), true in zip(due, true_ranges):
                 lidar.record(time, true)
             return
-        models = [lidar._model for lidar, _ in due]
+        models = [lidar.model for lidar, _ in due]
         if all(noise_std > 0.0 for noise_std, _, _, _ in models):  # the usual case: all noisy
             noisy = list(range(len(due)))
             true = np.asarray(true_ranges)  # read only below: no copy of the caster's rows
@@ -231,7 +241,7 @@ class Lidar:
                     lidar, time = due[k]
                     lidar.record(time, true_ranges[k])
             if exact:
-                Lidar._record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
+                Lidar.record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
             if not noisy:
                 return
             models = [models[k] for k in noisy]
@@ -242,7 +252,7 @@ class Lidar:
         ranges = np.empty_like(true)
         n = ranges.shape[1]
         for row, lidar in zip(ranges, lidars):
-            row[:] = lidar._normals(lidar._periodic_rng, n)
+            row[:] = lidar.periodic_normals(n)
         ranges *= std  # the single scan's true + std * noise, operand for operand
         ranges += true
         np.maximum(ranges, low, out=ranges)
@@ -252,26 +262,26 @@ class Lidar:
         if any(dropout > 0.0 for _, _, _, dropout in models):
             for row, lidar, (_, _, _, dropout) in zip(no_return, lidars, models):
                 if dropout > 0.0:
-                    row |= lidar._periodic_rng.random(row.shape[0]) < dropout
+                    row |= lidar.periodic_dropout(row.shape[0], dropout)
         np.copyto(ranges, high, where=no_return)  # high broadcast along each row
         ranges.setflags(write=False)
         for row, k in zip(ranges, noisy):
             lidar, time = due[k]
-            lidar._keep(time, row)
+            lidar.keep(time, row)
 
 
     @staticmethod
-    def _record_exact(due: Sequence[tuple["Lidar", float]],
+    def record_exact(due: Sequence[tuple["Lidar", float]],
                       true_ranges: Sequence[np.ndarray]) -> None:
         """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
-        model = np.array([lidar._model for lidar, _ in due])
+        model = np.array([lidar.model for lidar, _ in due])
         low, high = model[:, 1:2], model[:, 2:3]
         ranges = np.stack(true_ranges)
         np.minimum(ranges, high, out=ranges)
         np.copyto(ranges, high, where=ranges < low)
         ranges.setflags(write=False)
         for row, (lidar, time) in zip(ranges, due):
-            lidar._keep(time, row)
+            lidar.keep(time, row)
 
 
 # The batched forms, by their module-level names.

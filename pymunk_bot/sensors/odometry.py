@@ -39,7 +39,7 @@ class DiffOdometryGroup:
         self.configs = list(configs)
         self.track_widths = list(track_widths)  # [m] the true ones
         n = len(self.configs)
-        self._rngs = list(rngs)
+        self.rngs = list(rngs)
         self.pose = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
         self.believed_track = np.array(
             [t * (1.0 + c.track_width_error) for t, c in zip(track_widths, configs)])  # [m]
@@ -47,7 +47,7 @@ class DiffOdometryGroup:
                                for c in configs]).reshape(n, 2)
         self.noise_var = np.array([c.wheel_noise_std ** 2 for c in configs])  # [m^2 per m]
         self.encoders = EncoderBank(self.scale, self.noise_var,
-                                    np.array([c.encoder_resolution for c in configs]), self._rngs)
+                                    np.array([c.encoder_resolution for c in configs]), self.rngs)
         self._noisy = self.encoders.noisy
         self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
@@ -63,7 +63,7 @@ class DiffOdometryGroup:
         configs = [c for part in parts for c in part.configs]
         whole = cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
                     [t for part in parts for t in part.track_widths],
-                    [rng for part in parts for rng in part._rngs])
+                    [rng for part in parts for rng in part.rngs])
         join_odometry(whole, parts)
         return whole
 
@@ -106,7 +106,7 @@ class DiffOdometryGroup:
 
     def handle(self, i: int) -> "Odometry":
         """Robot ``i``'s view (``robot.odometry``)."""
-        return Odometry(self.configs[i], (0.0, 0.0, 0.0), 0.0, self._rngs[i], group=self, index=i)
+        return Odometry(self.configs[i], (0.0, 0.0, 0.0), 0.0, self.rngs[i], group=self, index=i)
 
 
 class Odometry:

@@ -28,15 +28,15 @@ class AckermannOdometryGroup:
     def __init__(self, configs: Sequence[Any], wheelbase: np.ndarray, track: np.ndarray,
                  rngs: Sequence[np.random.Generator]) -> None:
         self.configs = list(configs)
-        self._geometry = (np.asarray(wheelbase, dtype=float), np.asarray(track, dtype=float))
+        self.geometry = (np.asarray(wheelbase, dtype=float), np.asarray(track, dtype=float))
         odo = [c.odometry for c in self.configs]
         n = len(odo)
-        self._rngs = list(rngs)
+        self.rngs = list(rngs)
         self.pose = np.array([c.pose for c in self.configs], dtype=float).reshape(n, 3)
         self.encoders = EncoderBank(
             np.array([(1 + o.left_scale_error, 1 + o.right_scale_error) for o in odo]).reshape(n, 2),
             np.array([o.wheel_noise_std ** 2 for o in odo]),
-            np.array([o.encoder_resolution for o in odo]), self._rngs)
+            np.array([o.encoder_resolution for o in odo]), self.rngs)
         self.believed_wheelbase = np.array(
             [w * (1 + o.wheelbase_error) for w, o in zip(wheelbase, odo)])  # [m]
         self.steer_scale = np.array([1 + o.steer_scale_error for o in odo])
@@ -54,9 +54,9 @@ class AckermannOdometryGroup:
         """The groups of copies as one, drawing from the same generators (see
         :mod:`pymunk_bot.robots.stacking`)."""
         whole = cls([c for part in parts for c in part.configs],
-                    np.concatenate([part._geometry[0] for part in parts]),
-                    np.concatenate([part._geometry[1] for part in parts]),
-                    [rng for part in parts for rng in part._rngs])
+                    np.concatenate([part.geometry[0] for part in parts]),
+                    np.concatenate([part.geometry[1] for part in parts]),
+                    [rng for part in parts for rng in part.rngs])
         join_odometry(whole, parts)
         return whole
 
@@ -83,7 +83,7 @@ class AckermannOdometryGroup:
         for i in self._steer_noisy:
             if true_ds[i] != 0.0:
                 dtheta[i] += (np.sqrt(self.steer_var[i] * abs(true_ds[i])) * heading_gain[i]
-                              * self._rngs[i].standard_normal())
+                              * self.rngs[i].standard_normal())
         c, s, chord = integrate_twist(self.pose, ds, np.zeros_like(ds), dtheta)
         if self._random:
             self._propagate(np.array(self._random), c, s, chord * ds, kappa, heading_gain,

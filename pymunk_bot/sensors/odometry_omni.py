@@ -24,8 +24,8 @@ class OmniOdometryGroup:
     def __init__(self, configs: Sequence[Any], wheels: np.ndarray,
                  rngs: Sequence[np.random.Generator]) -> None:
         self.configs = list(configs)
-        self._wheels = np.asarray(wheels)  # the drive's true wheel matrices
-        self._rngs = list(rngs)
+        self.wheels = np.asarray(wheels)  # the drive's true wheel matrices
+        self.rngs = list(rngs)
         n = len(self.configs)
         self.pose = np.array([c.pose for c in self.configs], dtype=float).reshape(n, 3)
         self.used = np.array([4 if c.wheels == "mecanum" else 3 for c in self.configs])
@@ -49,8 +49,8 @@ class OmniOdometryGroup:
         """The groups of copies as one, drawing from the same generators (see
         :mod:`pymunk_bot.robots.stacking`)."""
         whole = cls([c for part in parts for c in part.configs],
-                    np.concatenate([part._wheels for part in parts]),
-                    [rng for part in parts for rng in part._rngs])
+                    np.concatenate([part.wheels for part in parts]),
+                    [rng for part in parts for rng in part.rngs])
         join_odometry(whole, parts)
         return whole
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pymunk_bot.outcomes.results import temp_beside, termination_deferred
-from pymunk_bot.viewer._pygame import require_pygame
+from pymunk_bot.viewer.display import require_pygame
 
 pygame = require_pygame()
 

@@ -1,7 +1,7 @@
 """The interactive window: a pygame display around a :class:`~.app.Viewer`."""
 from __future__ import annotations
 
-from pymunk_bot.viewer._pygame import open_display, require_pygame
+from pymunk_bot.viewer.display import open_display, require_pygame
 
 pygame = require_pygame()  # before the modules below import it: a clear error if missing
 

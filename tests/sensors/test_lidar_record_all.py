@@ -44,7 +44,7 @@ def test_requests_of_many_lidars_are_each_lidars_request():
 
     lidars = _lidars(LIDARS[:3] + [{"beams": 90, "offset": [0.1, -0.05, 0.3]}])
     for k, lidar in enumerate(lidars):  # turned off the grid
-        lidar._body.angle = 0.37 + 1.1 * k
+        lidar.body.angle = 0.37 + 1.1 * k
     origins, angles, ranges, filters = requests_all(lidars)
     for k, lidar in enumerate(lidars):
         origin, want, max_range, f = lidar.cast_request()

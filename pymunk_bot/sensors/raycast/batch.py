@@ -61,7 +61,7 @@ def cast_many(caster: Any, origins: list[tuple[float, float]], angles: list[np.n
 
 
 def _near_side_lines(caster: Any, ox: float, oy: float, scale: float) -> bool:
-    """Within EDGE_NEAR * scale of a static bounding box's side line (see caster._side_flags)."""
+    """Within EDGE_NEAR * scale of a static bounding box's side line (see the caster's side flags, RayCaster _side_flags)."""
     near = EDGE_NEAR * scale
     for sides, v in ((caster.scene_cache.side_x, ox), (caster.scene_cache.side_y, oy)):
         i = bisect.bisect_left(sides, v - near)
@@ -129,7 +129,7 @@ def _trace(caster: Any, table: World, bounds: np.ndarray,
     pp = np.concatenate((ep, op))
     n_e = ek.shape[0]
 
-    # The ray-angle interval each (origin, primitive) can be hit in (see scene._intervals).
+    # The ray-angle interval each (origin, primitive) can be hit in (see the scene's _intervals).
     relx_a = rows[AX, pp] - ox[pk]
     rely_a = rows[AY, pp] - oy[pk]
     relx_b = rows[BX, pp] - ox[pk]

@@ -36,7 +36,7 @@ def corner_flags(world: World, box: np.ndarray) -> World:
     pymunk tests a static shape only if the query segment meets its bounding box, by a
     rounded slab test. The box test can reject a ray that the shape's exact test accepts
     only if the ray runs (within rounding) along a side line of the box (see
-    caster.RayCaster._side_flags)
+    RayCaster's _side_flags in caster.py)
     or through a corner that lies on the shape; rays near a flag are answered by pymunk.
     'Nearly' is generous (1e-6 of the world's size): extra flags only cost time."""
     rows, owner, sl = world.rows, world.owner, kind_slices(world.counts)

@@ -169,7 +169,7 @@ class World:
         self.count_array = np.array(counts, dtype=np.intp)  # the compiled tracer's form
         # Whether any polygon edge has a radius (those need the slower interval rule).
         self.rounded = bool(rows[RAD, :counts[0]].any()) if rounded is None else rounded
-        # Cast-independent work on a cached static table (see scene._static_selection).
+        # Cast-independent work on a cached static table (see _static_selection in scene.py).
         self.scratch: np.ndarray | None = None
         self.selections: dict = {}
 

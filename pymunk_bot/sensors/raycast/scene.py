@@ -146,7 +146,7 @@ class Scene:
         np.add(span, TWO_PI, out=span, where=span < 0.0)
         # Origin near an edge's plane: its end points may be near too, and Chipmunk may
         # report t = 0 on any ray when the origin is on the plane; take the full turn.
-        # (An origin near a flag is caught by caster.RayCaster._side_flags.)
+        # (An origin near a flag is caught by the RayCaster's _side_flags.)
         # With d > 0 only den > 0 gives t >= 0, unless d / den underflows to -0.0, which
         # Chipmunk's t >= 0 test passes: keep that test when some d is (nearly) zero.
         self.on_plane = ne > 0 and float(d.min()) <= EDGE_NEAR * self.scale
