@@ -1,7 +1,8 @@
 """Localization on worlds nobody tuned it on, with its defaults (issue 20's benchmark).
 
     python -m bench.localization_robustness [--seeds 10 | --quick] [--verbose]
-        [--localizers mcl,ekf,mcl_global,slam] [--families office,clutter,warehouse]
+        [--localizers mcl,ekf,mcl_global,mcl_kidnap,slam,slam_revisit]
+        [--families office,clutter,warehouse]
         [--profiles perfect,typical,uncalibrated] [--out summary.json]
     pymunk-bot bench --only localization_robustness [--quick]
     python -m bench.localization --robustness [--quick]
@@ -18,7 +19,11 @@ between its shelves. The LiDAR is drawn per seed from what users configure (180-
 A tracking run succeeds when the position RMSE (estimate vs truth, 10 Hz) is <= 10 cm and the
 robot never collides; a global run when the estimate stays within 0.3 m / 10 deg from some
 time <= 20 s on, without a collision; a slam run (typical odometry) when its ATE is <= 5 cm and
-its map's precision >= 0.9. Every failure is printed as a line.
+its map's precision >= 0.9, with no false loop closure (an accepted closure off the truth by
+more than 0.2 m or 3 deg). ``slam_revisit`` drives a tour that comes back to where it has
+been (offices and clutter rooms: to the goal and back to the start; the warehouse: a loop
+around a shelf, or there and back), and needs at least one verified loop closure besides.
+SLAM rows run with typical and uncalibrated odometry. Every failure is printed as a line.
 """
 from __future__ import annotations
 
@@ -29,11 +34,15 @@ from typing import Any
 
 import numpy as np
 
-WAREHOUSE = Path(__file__).resolve().parents[3] / "shared" / "maps" / "warehouse.yaml"
+WAREHOUSE = Path(__file__).resolve().parents[2] / "shared" / "maps" / "warehouse.yaml"
 # A tour between the warehouse's shelves (map frame, origin [-15.1, -25]).
 WAREHOUSE_TOURS = [((-5.4, -19.0, math.pi / 2), (1.9, -3.0)),
                    ((1.9, -19.0, math.pi / 2), (-5.4, -3.0)),
                    ((-12.0, -3.0, 0.0), (8.5, -15.0))]
+# Revisiting tours of the warehouse (slam_revisit): the goals in turn, the last one back home.
+WAREHOUSE_REVISITS = [((-5.4, -19.0, math.pi / 2), [(1.9, -3.0), (1.9, -19.0), (-5.4, -19.0)]),
+                      ((1.9, -19.0, math.pi / 2), [(-5.4, -3.0), (-5.4, -19.0), (1.9, -19.0)]),
+                      ((-12.0, -3.0, 0.0), [(8.5, -15.0), (-12.0, -3.0)])]
 PROFILES: dict[str, dict[str, float]] = {
     "perfect": {},
     "typical": {"scale": 0.005, "track": 0.01, "noise": 0.005},
@@ -44,13 +53,17 @@ SAMPLE_RATE = 10.0  # [Hz] error samples
 TRACK_RMSE = 0.10  # [m] success bound of a tracking run
 GLOBAL_POSITION, GLOBAL_HEADING, GLOBAL_TIME = 0.3, math.radians(10.0), 20.0  # [m, rad, s]
 MAX_TIME = 90.0  # [s] per run
-LOCALIZERS = ("mcl", "ekf", "mcl_global", "mcl_kidnap", "slam")
+REVISIT_MAX_TIME = 240.0  # [s] per revisiting run
+LOCALIZERS = ("mcl", "ekf", "mcl_global", "mcl_kidnap", "slam", "slam_revisit")
+SLAM_RUNS = ("slam", "slam_revisit")
+SLAM_PROFILES = ("typical", "uncalibrated")
 KIDNAP_TIME = 3.0  # [s] mcl_kidnap: when the robot is teleported
 KIDNAP_CLEARANCE = 0.6  # [m] mcl_kidnap: the least distance of the drop point to the map's obstacles
 KIDNAP_NOTICE = 1.0  # [s] after a kidnapping, time the filter has to notice it (see wrong_localized)
 KIDNAP_GOAL_DISTANCE = 2.0  # [m] mcl_kidnap: the least distance of the drop point to the goal
 MAX_KIDNAP_DRAWS = 100  # drop points drawn until one is far enough from the goal
 SLAM_ATE, SLAM_PRECISION = 0.05, 0.9  # [m], fraction: the issue's bounds for SLAM
+SLAM_SHARE = {"typical": 0.95, "uncalibrated": 0.85}  # of seeds within them (19/20, 17/20)
 QUICK_SEEDS = 2  # seeds per world and profile in quick mode (a few minutes)
 MAX_SEEDS = 1000
 
@@ -73,6 +86,10 @@ class Outcome:
     collisions: int = 0
     goal_reached: bool = False
     map_precision: float = math.nan  # slam: share of its occupied cells on the true map
+    ate: float = math.nan  # [m] slam: RMSE of its final (optimized) keyframe poses vs the truth
+    closures: int = 0  # slam: loop closures accepted
+    closures_rejected: int = 0  # slam: candidates whose verification failed
+    false_closures: int = 0  # slam: accepted closures off the truth (metrics.false_closures)
     lidar: dict = field(default_factory=dict)
     error: str = ""
 
@@ -82,8 +99,10 @@ class Outcome:
             return False
         if self.localizer in ("mcl_global", "mcl_kidnap"):
             return self.converged_at <= GLOBAL_TIME
-        if self.localizer == "slam":
-            return self.rmse <= SLAM_ATE and self.map_precision >= SLAM_PRECISION
+        if self.localizer in SLAM_RUNS:
+            return (self.ate <= SLAM_ATE and self.map_precision >= SLAM_PRECISION
+                    and self.false_closures == 0
+                    and (self.closures > 0 or self.localizer == "slam"))
         return self.rmse <= TRACK_RMSE
 
     def line(self) -> str:
@@ -91,8 +110,10 @@ class Outcome:
                 else f"re-converged {self.converged_at:.1f} s after the kidnapping"
                 if self.localizer == "mcl_kidnap"
                 else f"rmse {100 * self.rmse:.1f} cm, heading {math.degrees(self.heading_rmse):.2f} deg")
-        if self.localizer == "slam":
-            what += f", map precision {self.map_precision:.3f}"
+        if self.localizer in SLAM_RUNS:
+            what = (f"ATE {100 * self.ate:.1f} cm (online: {what})"
+                    f", map precision {self.map_precision:.3f}, loop closures {self.closures} "
+                     f"({self.false_closures} false, {self.closures_rejected} rejected)")
         if self.localizer in ("mcl_global", "mcl_kidnap"):
             what += (f", localized at {self.localized_at:.1f} s, {self.wrong_localized:.1f} s "
                      f"localized on a wrong pose")
@@ -120,8 +141,9 @@ def odometry_for(profile: str, seed: int) -> dict:
             "track_width_error": sign[1] * p["track"], "wheel_noise_std": p["noise"]}
 
 
-def world_for(family: str, seed: int) -> dict | None:
-    """A scenario of ``family`` (None: the warehouse map is absent)."""
+def world_for(family: str, seed: int, revisit: bool = False) -> dict | None:
+    """A scenario of ``family`` (None: the warehouse map is absent). ``revisit``: the robot's
+    ``goal`` is the first of the tour's; ``tour_goals`` gives them all."""
     if family in ("office", "clutter"):
         from pymunk_bot.maps.generate import generate
         data = generate(family, seed)
@@ -129,12 +151,24 @@ def world_for(family: str, seed: int) -> dict | None:
         return data
     if not WAREHOUSE.exists():
         return None
-    start, goal = WAREHOUSE_TOURS[seed % len(WAREHOUSE_TOURS)]
+    if revisit:
+        start, goals = WAREHOUSE_REVISITS[seed % len(WAREHOUSE_REVISITS)]
+        goal = goals[0]
+    else:
+        start, goal = WAREHOUSE_TOURS[seed % len(WAREHOUSE_TOURS)]
     return {"name": f"warehouse_{seed}", "seed": seed,
             "world": {"map": str(WAREHOUSE), "duration": MAX_TIME},
             "robots": [{"name": "r1", "pose": list(start), "radius": 0.2,
                         "controller": {"type": "navigate"},
                         "goal": {"position": list(goal), "tolerance": 0.25}}]}
+
+
+def tour_goals(family: str, seed: int, data: dict) -> list[tuple[float, float]]:
+    """The goals of ``family``'s revisiting tour for ``seed`` in turn (``data``: its world)."""
+    if family == "warehouse":
+        return list(WAREHOUSE_REVISITS[seed % len(WAREHOUSE_REVISITS)][1])
+    robot = data["robots"][0]
+    return [tuple(robot["goal"]["position"]), tuple(robot["pose"][:2])]  # there and back
 
 
 def run_one(localizer: str, family: str, profile: str, seed: int,
@@ -146,9 +180,12 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     ``settings``: extra localization keys (for experiments; the benchmark uses none)."""
     from pymunk_bot.engine.simulation import Simulation
 
-    data = world_for(family, seed)
+    revisit = localizer == "slam_revisit"
+    data = world_for(family, seed, revisit)
     if data is None:
         return None
+    goals = tour_goals(family, seed, data)[1:] if revisit else []
+    max_time = REVISIT_MAX_TIME if revisit else MAX_TIME
     lidar = lidar_for(seed)
     out = Outcome(localizer, family, profile, seed, lidar=lidar)
     robot = data["robots"][0]
@@ -156,10 +193,10 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     robot["odometry"] = odometry_for(profile, seed)
     robot["localization"] = ({"type": "mcl", "initial": "global"} if localizer == "mcl_global"
                              else {"type": "mcl"} if localizer == "mcl_kidnap"
-                             else {"type": localizer})
+                             else {"type": "slam"} if revisit else {"type": localizer})
     robot["localization"].update(settings or {})
     data["seed"] = seed
-    data.setdefault("world", {})["duration"] = MAX_TIME
+    data.setdefault("world", {})["duration"] = max_time
     try:
         sim = Simulation.from_dict(data)
     except Exception as exc:  # a world that cannot be built is a failure line, not a crash
@@ -173,12 +210,16 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     kidnap = _kidnap_target(r.localizer, seed, r.goal) if localizer == "mcl_kidnap" else None
     localized: list[bool] = []
     kidnapped_at = 0.0  # [s]
-    while sim.time < MAX_TIME:
+    keyframe_truth: list[np.ndarray] = []  # slam: the true pose at each keyframe
+    while sim.time < max_time:
         if kidnap is not None and sim.time + 1e-9 >= KIDNAP_TIME:
             r.teleport(*kidnap)
             kidnap, kidnapped_at = None, sim.time
             times, errors, headings, localized = [], [], [], []  # scored from the kidnapping on
         sim.step()
+        if localizer in SLAM_RUNS:
+            while len(keyframe_truth) < len(r.localizer.keyframe_times):
+                keyframe_truth.append(np.array(r.pose, dtype=float))
         if sim.time + 1e-9 >= next_sample:
             next_sample += 1.0 / SAMPLE_RATE
             est, truth = np.asarray(r.localizer.pose), r.pose
@@ -187,7 +228,9 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
             headings.append(abs(math.remainder(float(est[2] - truth[2]), math.tau)))
             localized.append(bool(getattr(r.localizer, "localized", True)))
         if r.goal_reached:
-            break
+            if not goals:
+                break
+            r.set_goal(goals.pop(0))
     e, h = np.asarray(errors), np.asarray(headings)
     out.rmse = float(np.sqrt(np.mean(e ** 2)))
     out.heading_rmse = float(np.sqrt(np.mean(h ** 2)))
@@ -205,9 +248,19 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     out.wrong_localized = float(wrong.sum()) / SAMPLE_RATE
     out.collisions = int(r.collisions)
     out.goal_reached = bool(r.goal_reached)
-    if localizer == "slam":  # the map it built against the scenario's, at its resolution
-        from pymunk_bot.localization.metrics import map_scores
+    if localizer in SLAM_RUNS:  # the map it built against the scenario's, at its resolution
+        from pymunk_bot.localization.metrics import false_closures, map_scores
         from pymunk_bot.maps.rasterize import scenario_grid
+
+        slam = r.localizer
+        truth = np.asarray(keyframe_truth)
+        final = np.asarray(slam.keyframes)[:truth.shape[0]]
+        out.ate = float(np.sqrt(np.mean(np.sum((final[:, :2] - truth[:, :2]) ** 2, axis=1))))
+        out.closures, out.closures_rejected = len(slam.closures), slam.closures_rejected
+        if slam.closures:
+            out.false_closures = false_closures(
+                [c.old for c in slam.closures], [c.new for c in slam.closures],
+                [c.relative for c in slam.closures], truth)
 
         built = r.mapper.grid
         out.map_precision = map_scores(built, scenario_grid(sim.config, built.resolution))["precision"]
@@ -234,8 +287,9 @@ def run(localizers=LOCALIZERS, families=FAMILIES, profiles=tuple(PROFILES),
     outcomes = []
     for localizer in localizers:
         for family in families:
-            for profile in (("typical",) if localizer in ("mcl_global", "mcl_kidnap", "slam")
-                            else profiles):
+            for profile in (("typical",) if localizer in ("mcl_global", "mcl_kidnap")
+                            else [p for p in profiles if p in SLAM_PROFILES]
+                            if localizer in SLAM_RUNS else profiles):
                 for seed in range(seeds):
                     o = run_one(localizer, family, profile, seed, settings)
                     if o is None:
@@ -258,6 +312,11 @@ def summary(outcomes: list[Outcome]) -> dict[str, Any]:
                        "rmse_median": float(np.median(rmse)), "rmse_worst": float(np.max(rmse)),
                        "heading_rmse_deg_median": math.degrees(float(np.median([o.heading_rmse for o in group]))),
                        "converged_at_median": float(np.median([o.converged_at for o in group]))}
+        if group[0].localizer in SLAM_RUNS:
+            result[key]["loop_closures"] = sum(o.closures for o in group)
+            result[key]["closures_rejected"] = sum(o.closures_rejected for o in group)
+            result[key]["false_closures"] = sum(o.false_closures for o in group)
+            result[key]["runs_without_closure"] = sum(o.closures == 0 for o in group)
         if group[0].localizer in ("mcl_global", "mcl_kidnap"):
             # a failure is a wrong mode (the filter said "localized" on a wrong estimate) or
             # slow (it never did, or only once right, but after GLOBAL_TIME)
@@ -289,13 +348,18 @@ def verdicts(outcomes: list[Outcome]) -> list[tuple[str, bool | None]]:
             heading = math.degrees(float(np.median([o.heading_rmse for o in group])))
             out.append((f"{localizer}: median heading RMSE <= 2 deg (got {heading:.2f} deg)",
                         heading <= 2.0))
-    slam = [o for o in outcomes if o.localizer == "slam"]
-    for family in sorted({o.family for o in slam}):
-        group = [o for o in slam if o.family == family]
+    slam = [o for o in outcomes if o.localizer in SLAM_RUNS]
+    for (run, family, profile) in sorted({(o.localizer, o.family, o.profile) for o in slam}):
+        group = [o for o in slam if (o.localizer, o.family, o.profile) == (run, family, profile)]
         ok = sum(o.success for o in group)
-        out.append((f"slam, {family}, typical odometry: ATE <= {100 * SLAM_ATE:g} cm and map "
-                    f"precision >= {SLAM_PRECISION:g}, no collision (got {ok}/{len(group)})",
-                    ok == len(group)))
+        share = SLAM_SHARE[profile]
+        needs = " and at least one loop closure" if run == "slam_revisit" else ""
+        out.append((f"{run}, {family}, {profile} odometry: ATE <= {100 * SLAM_ATE:g} cm, map "
+                    f"precision >= {SLAM_PRECISION:g}, no false closure{needs}, no collision, in "
+                    f">= {100 * share:g} % of seeds (got {ok}/{len(group)})", ok >= share * len(group)))
+    if slam:
+        false = sum(o.false_closures for o in slam)
+        out.append((f"slam: no accepted false loop closure in any run (got {false})", false == 0))
     for name, what in (("mcl_global", "global localization driving a tour"),
                        ("mcl_kidnap", "re-localization after a kidnapping")):
         out.extend(_convergence_verdicts([o for o in outcomes if o.localizer == name], what))

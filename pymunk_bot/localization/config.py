@@ -111,9 +111,10 @@ class SlamConfig(Section):
     resolution: Annotated[Float, Field(ge=0.01, le=1.0)] = 0.05  # [m] map cell size
     keyframe_d: Annotated[Float, Field(gt=0.0, le=10.0)] = 0.2  # [m] travel between keyframes
     keyframe_a: Annotated[Float, Field(gt=0.0, le=math.pi)] = 0.2  # [rad] turn between keyframes
-    loop_radius: Distance = 1.5  # [m] search radius for loop-closure candidates
+    loop_radius: Distance = 1.5  # [m] candidates: keyframes the robot could be this near
     loop_min_travel: Distance = 5.0  # [m] travelled since a keyframe before it can close a loop
     loop_min_inliers: Weight = 0.7  # fraction of scan points that must match a loop closure
+    loop_kernel: Annotated[Float, Field(gt=0.0, le=1e6)] = 3.0  # Cauchy scale of loop edges [chi]
     max_pair: Distance = 0.3  # [m] ICP pairs a point with a reference point at most this far
     huber: Distance = 0.05  # [m] scale of the ICP's robust (Cauchy) kernel
     iterations: Annotated[Int, Field(ge=1, le=100)] = 20  # ICP iterations per match

@@ -168,3 +168,26 @@ def map_scores(built, truth, tolerance: float | None = None) -> dict[str, float]
     counted = seen_near[br, bc]
     recall = float((to_built[br, bc][counted] <= tol + 1e-9).mean()) if counted.any() else 0.0
     return {"precision": precision, "recall": recall, "occupied_cells": int(rows.size)}
+
+
+FALSE_CLOSURE_OFFSET = 0.2  # [m] a loop closure off the truth by more than this is false
+FALSE_CLOSURE_ANGLE = np.deg2rad(3.0)  # [rad] ... or by more than this
+
+
+def closure_errors(old: np.ndarray, new: np.ndarray, relative: np.ndarray,
+                   truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """How far each loop closure's measured pose of keyframe ``new`` in keyframe ``old``'s frame
+    (``relative``, (k, 3)) is off the true one, from ``truth`` (n, 3: each keyframe's true
+    pose): position [m] and heading [rad] errors, (k,) each."""
+    old, new = np.asarray(old, dtype=np.intp), np.asarray(new, dtype=np.intp)
+    if old.size == 0:
+        return np.zeros(0), np.zeros(0)
+    err = between(between(truth[old], truth[new]), np.asarray(relative, dtype=float).reshape(-1, 3))
+    return np.hypot(err[:, 0], err[:, 1]), np.abs(wrap(err[:, 2]))
+
+
+def false_closures(old: np.ndarray, new: np.ndarray, relative: np.ndarray,
+                   truth: np.ndarray) -> int:
+    """Loop closures off the truth by more than FALSE_CLOSURE_OFFSET or FALSE_CLOSURE_ANGLE."""
+    position, heading = closure_errors(old, new, relative, truth)
+    return int(np.count_nonzero((position > FALSE_CLOSURE_OFFSET) | (heading > FALSE_CLOSURE_ANGLE)))

@@ -9,17 +9,26 @@
   over hundreds of keyframes.) The matched pose becomes a
   keyframe, joined to the previous one by an edge with the match's covariance, and its scan
   is folded into the map (mapping.py).
-- **Loop closures.** A keyframe within ``loop_radius`` of one passed at least
-  ``loop_min_travel`` metres of driving earlier is aligned (ICP) with that old keyframe and
-  its neighbours; a match with at least ``loop_min_inliers`` of its points on them adds a
-  loop edge.
+- **Loop closures.** Candidates come from the graph's uncertainty (loopsearch.py): the
+  keyframes passed at least ``loop_min_travel`` of driving ago that the newest keyframe could
+  be within ``loop_radius`` of, at LOOP_GATE standard deviations of the chain's accumulated
+  covariance between them. The nearest is verified by aligning the new scan (ICP) with that
+  old keyframe's submap (it and SUBMAP_NEIGHBOURS either side): a closure needs
+  ``loop_min_inliers`` of its points on the submap, a well-constrained match (position std
+  <= LOOP_MAX_STD, heading std <= LOOP_MAX_HEADING_STD) and a correction the accumulated
+  covariance explains (chi^2 <= LOOP_CONSISTENCY). A verified closure is a robust edge
+  (Cauchy's kernel of scale ``loop_kernel``, posegraph.py): a wrong one the rest of the graph
+  contradicts weighs next to nothing. ``closures`` records each accepted one,
+  ``closures_rejected`` counts candidates that failed verification.
 - **Back end.** After a loop closure the graph is optimized (posegraph.py, sparse Gauss-Newton)
-  and the map is rebuilt from every keyframe's scan at its optimized pose.
+  and the map is rebuilt from every keyframe's scan at its optimized pose, when it is next read.
 The estimate starts at the true start pose, so the map and the pose live in the world frame.
 Between keyframes the pose is the last keyframe's composed with the odometry since.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,17 +36,36 @@ import numpy as np
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
 from pymunk_bot.localization.config import MappingConfig, SlamConfig
+from pymunk_bot.localization.loopsearch import ChainUncertainty, candidates
 from pymunk_bot.localization.mapping import OccupancyMapper
 from pymunk_bot.localization.odometry_trust import OdometryTrust
-from pymunk_bot.localization.posegraph import Edge, optimize
+from pymunk_bot.localization.posegraph import Edge, final_weights, optimize
 from pymunk_bot.localization.icp import Reference, icp
-from pymunk_bot.localization.scanmatch import subsample
-from pymunk_bot.localization.se2 import between, scan_points, transform_points
+from pymunk_bot.localization.scanmatch import Match, subsample
+from pymunk_bot.localization.se2 import between, scan_points, transform_points, wrap
 
 EDGE_FLOOR = np.diag([0.01, 0.01, 0.005]) ** 2  # [m^2, m^2, rad^2] added to every edge covariance
 LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes
 SUBMAP_NEIGHBOURS = 10  # keyframes either side of a loop candidate in its submap
 MIN_KEYFRAMES_BETWEEN_CLOSURES = 10
+KEYFRAMES_BETWEEN_ATTEMPTS = 2  # a failed verification waits this long (bounds the cost)
+LOOP_GATE = 3.0  # [std] how far the accumulated uncertainty widens the candidate search
+MAX_SEARCH_STD = 0.5  # [m] the uncertainty counted at most (the ICP cannot reach farther)
+LOOP_MAX_PAIR = 1.0  # [m] the loop match's first pairing radius, at most
+LOOP_MAX_STD = 0.05  # [m] a closure's match: largest position std at most
+LOOP_MAX_HEADING_STD = math.radians(1.0)  # [rad] its heading std at most
+LOOP_CONSISTENCY = 16.27  # chi^2_3 (99.9 %) of the correction against the accumulated covariance
+OVERRULED_WEIGHT = 0.1  # a closure whose kernel weight falls below this is overruled
+
+
+@dataclass(frozen=True)
+class LoopClosure:
+    """An accepted loop closure: keyframe ``new`` seen from keyframe ``old`` at ``relative``."""
+
+    old: int
+    new: int
+    relative: np.ndarray  # [x, y, theta] of new in old's frame, as the scan match measured it
+    correction: float  # [m] how far the match moved the new keyframe from its estimate
 
 
 class SlamLocalizer(Localizer):
@@ -53,21 +81,38 @@ class SlamLocalizer(Localizer):
             context.origin)
         self.covariance = np.zeros((3, 3))
         self.keyframes: list[np.ndarray] = []  # estimated poses
+        self.keyframe_times: list[float] = []  # [s] when each keyframe's scan was taken
         self._scans: list = []  # the LaserScan of each keyframe
         self._points: list[np.ndarray] = []  # its subsampled end points, robot frame
         self._odom: list[np.ndarray] = []  # odometry at each keyframe
         self._local: list[np.ndarray] = []  # all end points of each keyframe's scan, robot frame
         self._travel: list[float] = []  # odometry distance driven up to each keyframe [m]
         self.edges: list[Edge] = []
-        self.loop_closures: list[tuple[int, int]] = []
+        self.loop_closures: list[tuple[int, int]] = []  # (old, new) of each accepted closure
+        self.closures: list[LoopClosure] = []
+        self.closures_rejected = 0  # candidates whose verification failed
         self.keyframe_limit_reached = False  # past max_keyframes the estimate is odometry only
         self._last_closure = -MIN_KEYFRAMES_BETWEEN_CLOSURES
+        self._last_attempt = -KEYFRAMES_BETWEEN_ATTEMPTS
+        self._map_stale = False  # the graph moved since the map was built
+        self.uncertainty = ChainUncertainty()
         self.odometry_trust = OdometryTrust()  # the front end's odometry prior, learned
 
     @property
     def grid(self) -> OccupancyGrid:
         """The occupancy grid built from the keyframes at their (optimized) poses."""
+        if self._map_stale:
+            self.mapper.reset()
+            for pose, scan in zip(self.keyframes, self._scans):
+                self.mapper.integrate(pose, scan)
+            self._map_stale = False
         return self.mapper.grid
+
+    def closures_overruled(self) -> int:
+        """Accepted closures the optimized graph has all but switched off (kernel weight below
+        OVERRULED_WEIGHT): the rest of the graph contradicts them."""
+        loops = [e for e in self.edges if e.robust > 0.0]
+        return int(np.count_nonzero(final_weights(np.asarray(self.keyframes), loops) < OVERRULED_WEIGHT))
 
     def due(self, time: float) -> bool:
         """Never: when SLAM stands as the robot's mapper (``localization: slam`` without a
@@ -78,6 +123,7 @@ class SlamLocalizer(Localizer):
     def debug(self) -> dict[str, Any]:
         return {"keyframes": np.array(self.keyframes).reshape(-1, 3),
                 "loop_closures": list(self.loop_closures),
+                "closures_rejected": self.closures_rejected,
                 "keyframe_limit_reached": self.keyframe_limit_reached}
 
     # ------------------------------------------------------------------ update
@@ -88,7 +134,7 @@ class SlamLocalizer(Localizer):
         if not self.keyframes:
             if fresh:
                 self._add_keyframe(np.asarray(self.context.start_pose, dtype=float), odom, scan,
-                                   0.0, None)
+                                   0.0, None, inputs.time)
             return
         moved = between(self._odom[-1], odom)
         predicted, prior = self.odometry_trust.predict(self.keyframes[-1], moved)
@@ -108,13 +154,14 @@ class SlamLocalizer(Localizer):
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
             else:
                 pose, cov = predicted, np.diag([0.05, 0.05, 0.05]) ** 2
-            self._add_keyframe(pose, odom, scan, travel, cov)
+            self._add_keyframe(pose, odom, scan, travel, cov, inputs.time)
             self.pose = pose
             self.covariance = cov
 
-    def _add_keyframe(self, pose, odom, scan, travel, cov) -> None:
+    def _add_keyframe(self, pose, odom, scan, travel, cov, time: float) -> None:
         index = len(self.keyframes)
         self.keyframes.append(np.array(pose, dtype=float))
+        self.keyframe_times.append(float(time))
         self._scans.append(scan)
         points, _ = scan_points(scan)
         self._points.append(subsample(points, self.config.max_beams))
@@ -124,7 +171,9 @@ class SlamLocalizer(Localizer):
         if cov is not None:
             z = between(self.keyframes[index - 1], self.keyframes[index])
             self.edges.append(Edge(index - 1, index, z, np.linalg.inv(cov + EDGE_FLOOR)))
-        self.mapper.integrate(self.keyframes[index], scan)
+        self.uncertainty.add(self.keyframes[index], np.zeros((3, 3)) if cov is None else cov + EDGE_FLOOR)
+        if not self._map_stale:  # else the next read rebuilds it from every keyframe
+            self.mapper.integrate(self.keyframes[index], scan)
         self._close_loop(index)
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
@@ -135,35 +184,59 @@ class SlamLocalizer(Localizer):
 
     # ------------------------------------------------------------------ loops
     def _close_loop(self, index: int) -> bool:
+        """Look for a loop closure of keyframe ``index`` (module docstring); True if one was
+        accepted."""
         c = self.config
-        if index - self._last_closure < MIN_KEYFRAMES_BETWEEN_CLOSURES:
+        if (index - self._last_closure < MIN_KEYFRAMES_BETWEEN_CLOSURES
+                or index - self._last_attempt < KEYFRAMES_BETWEEN_ATTEMPTS):
+            return False
+        position_cov, heading_var = self.uncertainty.relative(index)
+        found = candidates(np.asarray(self.keyframes), np.asarray(self._travel), position_cov,
+                           c.loop_radius, c.loop_min_travel, LOOP_GATE, MAX_SEARCH_STD)
+        if found.size == 0:
+            return False
+        self._last_attempt = index
+        old = int(found[0])
+        accumulated = np.zeros((3, 3))
+        accumulated[:2, :2], accumulated[2, 2] = position_cov[old], heading_var[old]
+        match = self._loop_match(old, index, accumulated)
+        if match is None:
+            self.closures_rejected += 1
             return False
         here = self.keyframes[index]
-        travel = np.asarray(self._travel)
-        poses = np.asarray(self.keyframes)
-        far_back = np.flatnonzero(travel[index] - travel >= c.loop_min_travel)
-        if far_back.size == 0:
-            return False
-        dist = np.hypot(*(poses[far_back, :2] - here[:2]).T)
-        if dist.min() > c.loop_radius:
-            return False
-        old = int(far_back[np.argmin(dist)])
-        lo, hi = max(0, old - SUBMAP_NEIGHBOURS), min(index, old + SUBMAP_NEIGHBOURS + 1)
-        match = icp(self._reference(range(lo, hi)), self._points[index], here, c.iterations,
-                    c.max_pair, c.huber)
-        if not (match.ok and match.inliers >= c.loop_min_inliers):
-            return False
         z = between(self.keyframes[old], match.pose)
-        self.edges.append(Edge(old, index, z, np.linalg.inv(match.covariance + EDGE_FLOOR)))
+        self.edges.append(Edge(old, index, z, np.linalg.inv(match.covariance + EDGE_FLOOR),
+                               robust=c.loop_kernel))
         self.loop_closures.append((old, index))
+        self.closures.append(LoopClosure(old, index, z, float(np.hypot(*(match.pose[:2] - here[:2])))))
         self._last_closure = index
         if len(self.loop_closures) % c.optimize_every == 0:
             self._optimize()
         return True
 
+    def _loop_match(self, old: int, index: int, accumulated: np.ndarray) -> Match | None:
+        """The scan of keyframe ``index`` aligned with the submap around keyframe ``old``, if
+        the match verifies a closure: enough inliers, well constrained, and a correction that
+        the ``accumulated`` covariance (3x3, index relative to old) explains."""
+        c = self.config
+        here = self.keyframes[index]
+        lo, hi = max(0, old - SUBMAP_NEIGHBOURS), min(index, old + SUBMAP_NEIGHBOURS + 1)
+        reach = LOOP_GATE * math.sqrt(max(float(np.linalg.eigvalsh(accumulated[:2, :2])[-1]), 0.0))
+        match = icp(self._reference(range(lo, hi)), self._points[index], here, c.iterations,
+                    min(max(c.max_pair, reach), LOOP_MAX_PAIR), c.huber)
+        if not (match.ok and match.inliers >= c.loop_min_inliers):
+            return None
+        cov = match.covariance
+        if (float(np.linalg.eigvalsh(cov[:2, :2])[-1]) > LOOP_MAX_STD ** 2
+                or float(cov[2, 2]) > LOOP_MAX_HEADING_STD ** 2):
+            return None  # a corridor's length, or too few surfaces: not pinned down
+        correction = match.pose - here
+        correction[2] = float(wrap(correction[2]))
+        chi2 = float(correction @ np.linalg.solve(accumulated + cov + EDGE_FLOOR, correction))
+        return match if chi2 <= LOOP_CONSISTENCY else None
+
     def _optimize(self) -> None:
         poses, _ = optimize(np.asarray(self.keyframes), self.edges)
         self.keyframes = [p for p in poses]
-        self.mapper.reset()
-        for pose, scan in zip(self.keyframes, self._scans):
-            self.mapper.integrate(pose, scan)
+        self.uncertainty.move(poses)
+        self._map_stale = True
