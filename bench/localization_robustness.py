@@ -1,9 +1,9 @@
 """Localization on worlds nobody tuned it on, with its defaults (issue 20's benchmark).
 
-    python -m bench.localization_robustness [--seeds 10 | --quick] [--verbose]
+    python -m bench.localization_robustness [--seeds 10 | --quick] [--verbose] [--long-tour LAPS]
         [--localizers mcl,ekf,mcl_global,mcl_kidnap,slam,slam_revisit]
         [--families office,clutter,warehouse]
-        [--profiles perfect,typical,uncalibrated] [--out summary.json]
+        [--profiles perfect,typical,uncalibrated] [--settings JSON] [--out summary.json]
     pymunk-bot bench --only localization_robustness [--quick]
     python -m bench.localization --robustness [--quick]
 
@@ -66,6 +66,7 @@ SLAM_ATE, SLAM_PRECISION = 0.05, 0.9  # [m], fraction: the issue's bounds for SL
 SLAM_SHARE = {"typical": 0.95, "uncalibrated": 0.85}  # of seeds within them (19/20, 17/20)
 QUICK_SEEDS = 2  # seeds per world and profile in quick mode (a few minutes)
 MAX_SEEDS = 1000
+MAX_LAPS = 100  # --long-tour: about 2 hours of simulated driving
 
 
 @dataclass
@@ -172,20 +173,24 @@ def tour_goals(family: str, seed: int, data: dict) -> list[tuple[float, float]]:
 
 
 def run_one(localizer: str, family: str, profile: str, seed: int,
-            settings: dict | None = None) -> Outcome | None:
+            settings: dict | None = None, on_finish=None, laps: int = 1) -> Outcome | None:
     """One run (``localizer``: mcl, ekf, mcl_global, mcl_kidnap or slam); None when the world is
     unavailable. ``mcl_kidnap``: default MCL, the robot teleported at KIDNAP_TIME to a free
     point (at least KIDNAP_CLEARANCE from the map's obstacles, drawn from the seed), any heading;
     ``converged_at`` then counts from the kidnapping.
-    ``settings``: extra localization keys (for experiments; the benchmark uses none)."""
+    ``settings``: extra localization keys (for experiments; the benchmark uses none).
+    ``laps``: slam_revisit drives its tour this many times.
+    ``on_finish(sim, keyframe_truth)``: called at the end (slam runs: the true pose at each
+    keyframe, (n, 3); else empty), for figures and tests that look closer."""
     from pymunk_bot.engine.simulation import Simulation
 
     revisit = localizer == "slam_revisit"
     data = world_for(family, seed, revisit)
     if data is None:
         return None
-    goals = tour_goals(family, seed, data)[1:] if revisit else []
-    max_time = REVISIT_MAX_TIME if revisit else MAX_TIME
+    tour = tour_goals(family, seed, data)
+    goals = (tour * laps)[1:] if revisit else []
+    max_time = REVISIT_MAX_TIME * laps if revisit else MAX_TIME
     lidar = lidar_for(seed)
     out = Outcome(localizer, family, profile, seed, lidar=lidar)
     robot = data["robots"][0]
@@ -246,6 +251,8 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
         out.localized_at = float(t[np.argmax(said)]) - (KIDNAP_TIME if localizer == "mcl_kidnap" else 0.0)
     wrong = said & ((e > GLOBAL_POSITION) | (h > GLOBAL_HEADING))
     out.wrong_localized = float(wrong.sum()) / SAMPLE_RATE
+    if on_finish is not None:
+        on_finish(sim, np.asarray(keyframe_truth).reshape(-1, 3))
     out.collisions = int(r.collisions)
     out.goal_reached = bool(r.goal_reached)
     if localizer in SLAM_RUNS:  # the map it built against the scenario's, at its resolution
@@ -279,6 +286,26 @@ def _kidnap_target(mcl, seed: int, goal: tuple[float, float] | None) -> tuple[fl
         if goal is None or math.hypot(x - goal[0], y - goal[1]) >= KIDNAP_GOAL_DISTANCE:
             break
     return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
+
+
+def long_tour(laps: int, seed: int = 0, profile: str = "typical") -> dict[str, float]:
+    """SLAM with loop closures on ``laps`` of a warehouse revisiting tour: simulated and CPU
+    seconds, the real-time factor (physics, sensors and navigation included), ATE and
+    closures."""
+    import time
+
+    cpu = time.process_time()
+    ends: dict[str, float] = {}
+    out = run_one("slam_revisit", "warehouse", profile, seed, laps=laps,
+                  on_finish=lambda sim, truth: ends.update(sim_time=sim.time,
+                                                           keyframes=float(truth.shape[0])))
+    if out is None:
+        return {}
+    spent = time.process_time() - cpu
+    return {"laps": laps, "sim_time_s": ends["sim_time"], "cpu_s": spent,
+            "real_time_factor": ends["sim_time"] / spent, "keyframes": ends["keyframes"],
+            "ate_m": out.ate, "closures": out.closures, "false_closures": out.false_closures,
+            "closures_rejected": out.closures_rejected, "goal_reached": out.goal_reached}
 
 
 def run(localizers=LOCALIZERS, families=FAMILIES, profiles=tuple(PROFILES),
@@ -391,7 +418,18 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--profiles", default=",".join(PROFILES))
     parser.add_argument("--verbose", action="store_true", help="a line for every run")
     parser.add_argument("--out", help="write the summary as JSON here")
+    parser.add_argument("--settings", default="{}", metavar="JSON",
+                        help='extra localization keys for every run, e.g. \'{"loop_min_travel": 100}\' '
+                             "(SLAM without loop closures)")
+    parser.add_argument("--long-tour", type=int, metavar="LAPS", default=0,
+                        help="instead: SLAM's cost on LAPS laps of a warehouse revisiting tour")
     args = parser.parse_args(argv)
+    if args.long_tour:
+        if not 1 <= args.long_tour <= MAX_LAPS:
+            parser.error(f"--long-tour must be 1..{MAX_LAPS} laps (got {args.long_tour})")
+        result = long_tour(args.long_tour)
+        print(json.dumps(result, indent=1))
+        return result
     seeds = QUICK_SEEDS if args.quick else args.seeds
     if not 1 <= seeds <= MAX_SEEDS:
         parser.error(f"--seeds must be 1..{MAX_SEEDS} (got {seeds})")
@@ -404,8 +442,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if bad or not names:
             parser.error(f"{option}: unknown {', '.join(bad) or 'empty list'}; valid: {', '.join(valid)}")
         picked[option] = names
+    try:
+        settings = json.loads(args.settings)
+    except json.JSONDecodeError as exc:
+        parser.error(f"--settings: not JSON ({exc})")
+    if not isinstance(settings, dict):
+        parser.error(f"--settings: need a JSON object of localization keys (got {args.settings})")
     outcomes = run(picked["--localizers"], picked["--families"], picked["--profiles"], seeds,
-                   args.verbose)
+                   args.verbose, settings)
     result = summary(outcomes)
     print(json.dumps(result, indent=1))
     for target, passed in verdicts(outcomes):

@@ -1,6 +1,6 @@
 """Make the figures of docs/localization.md (run from the repository root):
 
-    python docs/localization_plots.py      -> docs/img/localization_*.png
+    python docs/localization_plots.py [mcl global slam_ekf loop]  -> docs/img/localization_*.png
 """
 from __future__ import annotations
 
@@ -137,15 +137,62 @@ def slam_ekf_figure(plt) -> None:
     fig.savefig(OUT / "localization_slam_ekf.png", dpi=70)
 
 
+def loop_closure_figure(plt) -> None:
+    """SLAM in Nav2's warehouse, there and back (robustness bench, slam_revisit seed 2, typical
+    odometry): its keyframes without loop closures and with them, against the truth."""
+    from bench.localization_robustness import run_one
+
+    runs = {}
+    for name, settings in (("without", {"loop_min_travel": 100.0}), ("with", None)):
+        def keep(sim, truth, name=name):
+            runs[name] = (sim.robots["r1"].localizer, truth)
+        out = run_one("slam_revisit", "warehouse", "typical", 2, settings, on_finish=keep)
+        if out is None:
+            print("the warehouse map is not beside the checkout: no loop-closure figure")
+            return
+        runs[name] += (out,)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 5.2), sharex=True, sharey=True)
+    for ax, name in zip(axes, ("without", "with")):
+        slam, truth, out = runs[name]
+        kf = np.asarray(slam.keyframes)
+        _map(ax, slam.grid)
+        ax.plot(truth[:, 0], truth[:, 1], "g-", lw=1.2, label="truth")
+        ax.plot(kf[:, 0], kf[:, 1], "r-", lw=1.0, label="SLAM keyframes (final)")
+        for c in slam.closures:
+            ax.plot(kf[[c.old, c.new], 0], kf[[c.old, c.new], 1], "b-", lw=0.8)
+        if slam.closures:
+            ax.plot([], [], "b-", label=f"loop closures ({len(slam.closures)})")
+        ax.set_title(f"{name} loop closure: ATE {100 * out.ate:.1f} cm, "
+                     f"map precision {out.map_precision:.2f}")
+        ax.set_xlim(-14, 10)
+        ax.set_ylim(-18, 0)
+        ax.legend(loc="lower left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / "localization_loop_closure.png", dpi=70)
+
+
+FIGURES = {"mcl": mcl_figure, "global": global_figure, "slam_ekf": slam_ekf_figure,
+           "loop": loop_closure_figure}
+
+
 def main() -> None:
+    """``python docs/localization_plots.py [mcl global slam_ekf loop]``: those figures (all
+    of them by default)."""
+    import sys
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     OUT.mkdir(exist_ok=True)
-    mcl_figure(plt)
-    global_figure(plt)
-    slam_ekf_figure(plt)
+    names = sys.argv[1:] or list(FIGURES)
+    unknown = [n for n in names if n not in FIGURES]
+    if unknown:
+        print(f"localization_plots.py: unknown figure {', '.join(unknown)}; valid: "
+              f"{', '.join(FIGURES)}", file=sys.stderr)
+        raise SystemExit(2)
+    for name in names:
+        FIGURES[name](plt)
 
 
 if __name__ == "__main__":

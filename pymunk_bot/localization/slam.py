@@ -42,7 +42,7 @@ from pymunk_bot.localization.odometry_trust import OdometryTrust
 from pymunk_bot.localization.posegraph import Edge, final_weights, optimize
 from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.scanmatch import Match, subsample
-from pymunk_bot.localization.se2 import between, scan_points, transform_points, wrap
+from pymunk_bot.localization.se2 import between, compose, scan_points, transform_points, wrap
 
 EDGE_FLOOR = np.diag([0.01, 0.01, 0.005]) ** 2  # [m^2, m^2, rad^2] added to every edge covariance
 LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes
@@ -203,16 +203,23 @@ class SlamLocalizer(Localizer):
         if match is None:
             self.closures_rejected += 1
             return False
-        here = self.keyframes[index]
-        z = between(self.keyframes[old], match.pose)
-        self.edges.append(Edge(old, index, z, np.linalg.inv(match.covariance + EDGE_FLOOR),
-                               robust=c.loop_kernel))
-        self.loop_closures.append((old, index))
-        self.closures.append(LoopClosure(old, index, z, float(np.hypot(*(match.pose[:2] - here[:2])))))
-        self._last_closure = index
-        if len(self.loop_closures) % c.optimize_every == 0:
-            self._optimize()
+        self.add_closure(old, index, between(self.keyframes[old], match.pose), match.covariance)
         return True
+
+    def add_closure(self, old: int, new: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+        """Join keyframes ``old`` and ``new`` by a loop edge (robust: Cauchy's kernel of scale
+        ``loop_kernel``): ``new`` seen from ``old`` at ``relative`` [x, y, theta], with
+        ``covariance`` (3x3); the graph is optimized every ``optimize_every`` closures."""
+        relative = np.asarray(relative, dtype=float)
+        seen = compose(self.keyframes[old], relative)
+        self.edges.append(Edge(old, new, relative, np.linalg.inv(np.asarray(covariance) + EDGE_FLOOR),
+                               robust=self.config.loop_kernel))
+        self.loop_closures.append((old, new))
+        self.closures.append(LoopClosure(old, new, relative,
+                                         float(np.hypot(*(seen[:2] - self.keyframes[new][:2])))))
+        self._last_closure = new
+        if len(self.loop_closures) % self.config.optimize_every == 0:
+            self._optimize()
 
     def _loop_match(self, old: int, index: int, accumulated: np.ndarray) -> Match | None:
         """The scan of keyframe ``index`` aligned with the submap around keyframe ``old``, if
