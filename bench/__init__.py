@@ -135,7 +135,8 @@ def _localization(quick: bool) -> list[Verdict]:
 def _localization_robustness(quick: bool) -> list[Verdict]:
     from bench import localization_robustness as robustness
     seeds = robustness.QUICK_SEEDS if quick else 10
-    print(f"defaults on unseen worlds: mcl, ekf, global mcl, kidnapped mcl, slam; generated "
+    print(f"defaults on unseen worlds: mcl, ekf, global mcl, kidnapped mcl, slam, slam on revisiting "
+          f"tours (loop closures); generated "
           f"offices, clutter, the warehouse map; {seeds} seeds; failures listed")
     outcomes = robustness.run(seeds=seeds, verbose=False)
     for key, row in robustness.summary(outcomes).items():

@@ -49,6 +49,9 @@ LOCAL_KEYFRAMES = 10  # the front end matches against this many latest keyframes
 SUBMAP_NEIGHBOURS = 10  # keyframes either side of a loop candidate in its submap
 MIN_KEYFRAMES_BETWEEN_CLOSURES = 10
 KEYFRAMES_BETWEEN_ATTEMPTS = 2  # a failed verification waits this long (bounds the cost)
+HEADING_RETRY = math.radians(3.0)  # [rad] between the headings a failed front-end match retries
+HEADING_RETRY_STD = 3.0  # ... out to this many standard deviations of the prior's heading
+MAX_HEADING_RETRY = math.radians(15.0)  # [rad] ... and never farther (bounds the cost)
 LOOP_GATE = 3.0  # [std] how far the accumulated uncertainty widens the candidate search
 MAX_SEARCH_STD = 0.5  # [m] the uncertainty counted at most (the ICP cannot reach farther)
 LOOP_MAX_PAIR = 1.0  # [m] the loop match's first pairing radius, at most
@@ -145,10 +148,7 @@ class SlamLocalizer(Localizer):
                       or abs(moved[2]) >= self.config.keyframe_a):
             travel = self._travel[-1] + float(np.hypot(moved[0], moved[1]))
             points = subsample(scan_points(scan)[0], self.config.max_beams)
-            c = self.config
-            match = icp(self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
-                                              len(self.keyframes))), points, predicted,
-                        c.iterations, c.max_pair, c.huber, prior=prior)
+            match = self._front_end_match(points, predicted, prior)
             if match.ok and match.inliers > 0.5:
                 pose, cov = match.pose, match.covariance
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
@@ -157,6 +157,29 @@ class SlamLocalizer(Localizer):
             self._add_keyframe(pose, odom, scan, travel, cov, inputs.time)
             self.pose = pose
             self.covariance = cov
+
+    def _front_end_match(self, points: np.ndarray, predicted: np.ndarray, prior: np.ndarray) -> Match:
+        """The new scan aligned with the latest keyframes' submap, from the odometry's
+        prediction. An uncalibrated robot's odometry can be several degrees off over one step;
+        at 5 m a few degrees put every point beyond ``max_pair`` of its surface and the match
+        fails. Then it is tried again from headings HEADING_RETRY apart, within
+        HEADING_RETRY_STD standard deviations of the prior's heading, and the match with the
+        most inliers wins (the prior stays at the prediction)."""
+        c = self.config
+        reference = self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
+                                          len(self.keyframes)))
+        match = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber, prior=prior)
+        if match.ok and match.inliers > 0.5:
+            return match
+        reach = HEADING_RETRY_STD * math.sqrt(max(float(np.linalg.inv(prior)[2, 2]), 0.0))  # [rad]
+        steps = int(min(reach, MAX_HEADING_RETRY) // HEADING_RETRY)
+        for k in range(1, steps + 1):
+            for sign in (1.0, -1.0):
+                guess = predicted + np.array([0.0, 0.0, sign * k * HEADING_RETRY])
+                retry = icp(reference, points, guess, c.iterations, c.max_pair, c.huber, prior=prior)
+                if retry.ok and (not match.ok or retry.inliers > match.inliers):
+                    match = retry
+        return match
 
     def _add_keyframe(self, pose, odom, scan, travel, cov, time: float) -> None:
         index = len(self.keyframes)
