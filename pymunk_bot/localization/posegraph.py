@@ -66,6 +66,20 @@ def edge_weights(chi2: np.ndarray, robust: np.ndarray) -> np.ndarray:
     return np.where(robust > 0.0, 1.0 / (1.0 + chi2 / scale2), 1.0)
 
 
+def _stacked(edges: list[Edge]):
+    """The edges as arrays: i, j (m,), z (m, 3), information (m, 3, 3), robust scale (m,)."""
+    return (np.array([edge.i for edge in edges], dtype=np.intp),
+            np.array([edge.j for edge in edges], dtype=np.intp),
+            np.array([edge.z for edge in edges], dtype=float).reshape(-1, 3),
+            np.array([edge.information for edge in edges], dtype=float).reshape(-1, 3, 3),
+            np.array([edge.robust for edge in edges], dtype=float))
+
+
+def _chi2(x: np.ndarray, ii, jj, z, omega) -> np.ndarray:
+    e, _, _ = edge_terms(x[ii], x[jj], z)
+    return np.einsum("ma,mab,mb->m", e, omega, e)
+
+
 def optimize(poses: np.ndarray, edges: list[Edge], iterations: int = 10,
              tolerance: float = 1e-6) -> tuple[np.ndarray, float]:
     """Optimized poses (n, 3) and the final robust cost (sum of rho(e^T omega e))."""
@@ -73,18 +87,13 @@ def optimize(poses: np.ndarray, edges: list[Edge], iterations: int = 10,
     n = x.shape[0]
     if not edges:
         return x, 0.0
-    ii = np.array([edge.i for edge in edges], dtype=np.intp)
-    jj = np.array([edge.j for edge in edges], dtype=np.intp)
-    z = np.array([edge.z for edge in edges], dtype=float)
-    omega = np.array([edge.information for edge in edges], dtype=float)
-    robust = np.array([edge.robust for edge in edges], dtype=float)
+    ii, jj, z, omega, robust = _stacked(edges)
     # sparse indices of each edge's four 3x3 blocks (ii, ij, ji, jj), fixed over iterations
     r3, c3 = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
     block_rows = [3 * p[:, None, None] + r3 for p in (ii, ii, jj, jj)]
     block_cols = [3 * q[:, None, None] + c3 for q in (ii, jj, ii, jj)]
     rows = np.concatenate([b.ravel() for b in block_rows] + [np.arange(3)])
     cols = np.concatenate([b.ravel() for b in block_cols] + [np.arange(3)])
-    cost = 0.0
     for _ in range(iterations):
         e, a, b = edge_terms(x[ii], x[jj], z)
         chi2 = np.einsum("ma,mab,mb->m", e, omega, e)
@@ -103,8 +112,7 @@ def optimize(poses: np.ndarray, edges: list[Edge], iterations: int = 10,
         x[:, 2] = wrap(x[:, 2])
         if np.abs(dx).max() < tolerance:
             break
-    e, _, _ = edge_terms(x[ii], x[jj], z)
-    chi2 = np.einsum("ma,mab,mb->m", e, omega, e)
+    chi2 = _chi2(x, ii, jj, z, omega)
     scale2 = np.where(robust > 0.0, robust, 1.0) ** 2
     cost = float(np.sum(np.where(robust > 0.0, scale2 * np.log1p(chi2 / scale2), chi2)))
     return x, cost
@@ -114,13 +122,8 @@ def final_weights(poses: np.ndarray, edges: list[Edge]) -> np.ndarray:
     """Each edge's IRLS weight at ``poses`` (1: fully believed; near 0: overruled)."""
     if not edges:
         return np.zeros(0)
-    ii = np.array([edge.i for edge in edges], dtype=np.intp)
-    jj = np.array([edge.j for edge in edges], dtype=np.intp)
-    z = np.array([edge.z for edge in edges], dtype=float)
-    omega = np.array([edge.information for edge in edges], dtype=float)
-    e, _, _ = edge_terms(poses[ii], poses[jj], z)
-    return edge_weights(np.einsum("ma,mab,mb->m", e, omega, e),
-                        np.array([edge.robust for edge in edges], dtype=float))
+    ii, jj, z, omega, robust = _stacked(edges)
+    return edge_weights(_chi2(np.asarray(poses, dtype=float), ii, jj, z, omega), robust)
 
 
 def relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
