@@ -273,10 +273,15 @@ class Simulation:
             return
         robots, controlled = self._robots, self._controlled
         indices = [controlled[k] for k in due if not robots[controlled[k]].overridden]
-        if indices:
-            for i, observation in zip(indices, self._observer.observe_many(indices, now)):
-                robot = robots[i]
-                robot.follow(robot.controller.compute(observation))
+        if not indices:
+            return
+        # A controller that reads no observation (constant commands) gets None: none is built.
+        watching = [i for i in indices if robots[i].controller.observes]
+        observations = self._observer.observe_many(watching, now) if watching else iter(())
+        for i in indices:
+            robot = robots[i]
+            controller = robot.controller
+            robot.follow(controller.compute(next(observations) if controller.observes else None))
 
     def due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
