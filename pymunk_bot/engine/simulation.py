@@ -170,10 +170,9 @@ class Simulation:
         for actor in self.world.actors:
             actor.before_step(now, self.dt)
 
-    def bookkeep(self, positions: Any) -> float:
+    def bookkeep(self, positions: np.ndarray) -> float:
         """After the physics: the clock, distance and goals from the robots' new positions
-        ((n, 2) [m], an array or a sequence of (x, y)), odometry from the encoders. Returns
-        the time now [s]."""
+        ((n, 2) [m]), odometry from the encoders. Returns the time now [s]."""
         now = self.tick_clock()
         self._built.fleet.advance(positions, now)
         for drive, odometry in self._odometry:
