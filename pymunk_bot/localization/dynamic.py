@@ -27,6 +27,7 @@ from pymunk_bot.localization.se2 import transform_points
 # disagree too much for people alone to explain (a wrong pose seeing a small room as a hall),
 # and the excess counts against the fit (see excused_fit).
 MAX_SHORT_SHARE = 0.6
+TRACE_TOLERANCE = 0.05  # [m] expected ranges are traced to within this (at most margin / 2)
 
 
 def short_returns(field: LikelihoodField, pose: np.ndarray, points: np.ndarray,
@@ -41,7 +42,8 @@ def short_returns(field: LikelihoodField, pose: np.ndarray, points: np.ndarray,
     measured = np.hypot(rel[:, 0], rel[:, 1])
     origin = transform_points(np.asarray(pose, dtype=float), np.asarray([mount], dtype=float))
     heading = float(pose[2]) + np.arctan2(rel[:, 1], rel[:, 0])
-    expected = trace(field, origin, heading[None, :], max_range)[0]
+    tolerance = max(min(TRACE_TOLERANCE, 0.5 * margin), 0.5 * field.resolution)
+    expected = trace(field, origin, heading[None, :], max_range, tolerance)[0]
     return measured < expected - margin
 
 

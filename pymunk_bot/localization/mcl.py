@@ -165,20 +165,17 @@ class MclLocalizer(Localizer):
         return (self.cluster_weight >= LOCALIZED_CLUSTER_WEIGHT
                 and self.scan_fit >= LOCALIZED_SCAN_FIT and self.spread_within_bounds())
 
-    def fit_at(self, pose: np.ndarray, scan, excuse_short: bool = False) -> float:
+    def fit_at(self, pose: np.ndarray, scan) -> float:
         """The fraction of the scan's returns that end within ``sigma_hit`` of an obstacle of
         the map when seen from ``pose``: near 1 where the estimate is right, low where the map
         and the scan disagree (a kidnapping, a wrong global guess). 1.0 with no return.
-        ``excuse_short``: returns short of the map seen from ``pose`` (people) are left out,
-        up to dynamic.MAX_SHORT_SHARE of them (see dynamic.excused_fit)."""
+        (While tracking, ``scan_fit`` is this over the used beams with the returns short of
+        the map excused: dynamic.excused_fit.)"""
         points, _ = scan_points(scan)
         if points.shape[0] == 0:
             return 1.0
-        pose = np.asarray(pose, dtype=float)
-        fits = self.field.distance(transform_points(pose, points)) <= self.config.sigma_hit
-        if not excuse_short:
-            return float(np.mean(fits))
-        return excused_fit(fits, self._short(pose, points, scan))
+        d = self.field.distance(transform_points(np.asarray(pose, dtype=float), points))
+        return float(np.mean(d <= self.config.sigma_hit))
 
     def _short(self, pose: np.ndarray, points: np.ndarray, scan) -> np.ndarray:
         """Which end ``points`` (robot frame) of ``scan`` are short of the map from ``pose``."""
@@ -200,10 +197,12 @@ class MclLocalizer(Localizer):
         # Rejection only while tracking: from a wrong pose it would hide the beams that say so.
         reject = c.reject_short and self.localized
         points = self._used_points(scan)
+        short = np.zeros(points.shape[0], dtype=bool)
         if reject and points.shape[0]:
-            kept = points[~self._short(predicted, points, scan)]
-            points = kept if kept.shape[0] >= MIN_KEPT_RETURNS else points
-        likelihood = self.scan_likelihood(scan, points)
+            short = self._short(predicted, points, scan)
+            if points.shape[0] - np.count_nonzero(short) < MIN_KEPT_RETURNS:
+                short[:] = False
+        likelihood = self.scan_likelihood(scan, points[~short])
         weights = self.weights * likelihood
         total = weights.sum()
         if not (np.isfinite(total) and total > 0):
@@ -223,7 +222,11 @@ class MclLocalizer(Localizer):
         if self.updates % c.resample_interval == 0:
             self._resample()
         self._filter_pose, self.covariance = self._cluster_estimate()
-        self.scan_fit = self.fit_at(self._filter_pose, scan, excuse_short=reject)
+        if reject:  # the used beams, short ones (found from the prediction) excused
+            fits = self.field.distance(transform_points(self._filter_pose, points)) <= c.sigma_hit
+            self.scan_fit = excused_fit(fits, short)
+        else:
+            self.scan_fit = self.fit_at(self._filter_pose, scan)
         self._restart_if_lost()
         if not self.localized:
             self._reseed_from_scan(scan, self._used_points(scan), RESEED_MARGIN)
@@ -232,7 +235,7 @@ class MclLocalizer(Localizer):
         self._explorer.forget()
         if self.scan_fit < SUSPECT_SCAN_FIT and scan.time >= self._suspect_search + SUSPECT_PERIOD:
             self._suspect_search = scan.time
-            self._reseed_from_scan(scan, points, SUSPECT_MARGIN)
+            self._reseed_from_scan(scan, points[~short], SUSPECT_MARGIN)
 
     def _reseed_from_scan(self, scan, points: np.ndarray, margin: float) -> None:
         """Sensor resetting (posesearch.py): put RESEED_FRACTION of the particles on poses
