@@ -160,7 +160,8 @@ class SocialForceControllerConfig(_CrowdConfig):
 
 
 class OrcaControllerConfig(_CrowdConfig):
-    """An ORCA robot (van den Berg et al. 2011) following its global path."""
+    """A LiDAR-based ORCA robot (van den Berg et al. 2011) following its global path; not
+    CrowdNav's ORCA (that is ``crowdnav_orca``)."""
 
     type: Literal["orca"]
     time_horizon: PositiveShort = 3.0  # [s] moving points may not be met within this

@@ -44,7 +44,7 @@ METRICS: tuple[Metric, ...] = (
     Metric("time_to_goal", "s", False, "time the goal was reached (NaN if never)"),
     Metric("path_length", "m", False, "distance travelled by the robot's centre, up to "
                                       "the goal when reached"),
-    Metric("spl", "", True, "success x L* / max(L*, L), L* the shortest collision-free path "
+    Metric("spl", "", True, "reached x L* / max(L*, L), L* the shortest collision-free path "
                             "of the static world, L the path length"),
     Metric("min_distance_to_human", "m", True, "smallest clearance between the robot's "
                                                "footprint and a pedestrian's disc (inf: none)"),
