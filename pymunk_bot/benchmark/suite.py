@@ -104,10 +104,11 @@ def _spec(path: Path, data: dict) -> GeneratorSpec:
                 if world.size is None or world.generate or world.map or world.obstacles:
                     raise ScenarioError(str(path), f"worlds.{world_name}",
                                         f"layout {name} needs an open world (size only)")
-                if min(world.size) < 2 * spec.circle_radius + 4.0:
+                least = 2 * spec.circle_radius + 4.0  # [m] the circle and 2 m beyond it
+                if min(world.size) < least:
                     raise ScenarioError(str(path), f"worlds.{world_name}.size",
-                                        f"layout {name} needs at least {2 * spec.circle_radius + 4:g}"
-                                        " m each way (the circle and 2 m beyond it)")
+                                        f"layout {name} needs at least {least:g} m each way "
+                                        "(the circle and 2 m beyond it)")
     for name, world in spec.worlds.items():
         if (world.generate is not None) + (world.map is not None) + (
                 world.size is not None and world.generate is None) != 1:
