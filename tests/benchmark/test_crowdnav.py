@@ -89,12 +89,18 @@ def test_crowd_state_gives_the_nearest_humans_true_states():
     assert reading.time == pytest.approx(sim.time)
 
 
-def test_crowdnav_orca_without_the_sensor_says_what_is_missing():
-    sim = pb.Simulation.from_dict(crowd_scene())
-    sim.run(0.5)
-    controller = sim.robots["r1"].controller
-    assert controller.status == "failed" and "crowd_state" in controller.message
-    assert sim.robots["r1"].distance < 1e-6
+def test_crowdnav_orca_without_the_sensor_is_bad_input():
+    with pytest.raises(pb.ScenarioError) as raised:
+        pb.Simulation.from_dict(crowd_scene())
+    assert raised.value.path == "robots[0].controller"
+    assert "crowd_state" in raised.value.problem
+
+
+def test_benchmarking_crowdnav_orca_on_a_suite_without_true_states_is_refused():
+    """Not 72 silent timeouts: one line before anything runs."""
+    with pytest.raises(pb.ScenarioError) as raised:
+        run_benchmark(load_suite("crowds"), controller_choices(["crowdnav_orca"]), range(1))
+    assert "crowd_state" in raised.value.problem
 
 
 def test_a_walker_holds_its_velocity_between_decisions():
