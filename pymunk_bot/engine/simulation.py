@@ -275,12 +275,13 @@ class Simulation:
         if not indices:
             return
         # A controller that reads no observation (constant commands) gets None: none is built.
-        watching = [i for i in indices if robots[i].controller.observes]
+        # (A controller of the same shape that is no Controller subclass observes.)
+        observes = [getattr(robots[i].controller, "observes", True) for i in indices]
+        watching = [i for i, looks in zip(indices, observes) if looks]
         observations = self._observer.observe_many(watching, now) if watching else iter(())
-        for i in indices:
+        for i, looks in zip(indices, observes):
             robot = robots[i]
-            controller = robot.controller
-            robot.follow(controller.compute(next(observations) if controller.observes else None))
+            robot.follow(robot.controller.compute(next(observations) if looks else None))
 
     def due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
