@@ -145,3 +145,63 @@ def route_from(route: list, start_xy, index: int) -> tuple[tuple[float, float, f
     here, ahead = tour[i], tour[(i + 1) % len(tour)]
     heading = float(np.arctan2(ahead[1] - here[1], ahead[0] - here[0]))
     return (here[0], here[1], heading), tour[i + 1:] + tour[:i]  # not back to the start itself
+
+
+# ---------------------------------------------------------------------------- people on the route
+WALKER_RADIUS = 0.25  # [m] a pedestrian's default body disc
+WALKER_CLEARANCE = 0.45  # [m] a walker's start and goals this far from the map's obstacles
+WALKER_SPACING = 0.7  # [m] between walkers' starts
+ROBOT_KEEP_OUT = 1.2  # [m] no walker starts this close to the robot
+ON_ROUTE_SHARE = 0.5  # of the walkers pace the robot's route (ahead of it and towards it)
+MAX_WALKER_DRAWS = 100_000  # bounded placement
+GRID_RESOLUTION = 0.1  # [m] of the clearance grid walkers are placed on
+
+
+def with_walkers(data: dict, walkers: int, policy: str, seed: int) -> dict:
+    """``data`` (a one-robot scenario with a goal) plus ``walkers`` pedestrians (``policy``:
+    social_force or orca), from ``seed``: ON_ROUTE_SHARE of them walk back and forth along the
+    robot's planned route (between two of its points: towards the robot and with it, pushing
+    it now and then), the rest between random free points; every start and goal at least
+    WALKER_CLEARANCE from obstacles, starts WALKER_SPACING apart and ROBOT_KEEP_OUT from the
+    robot and its goal. Raises ValueError when they do not fit (bounded draws)."""
+    from pymunk_bot.config import parse_scenario
+    from pymunk_bot.planning.astar import astar
+    from pymunk_bot.planning.grid import ClearanceGrid
+    from pymunk_bot.planning.map import MapInfo
+
+    rng = np.random.default_rng([seed, walkers, 36])
+    config = parse_scenario(data, "localization people")
+    robot = config.robots[0]
+    grid = ClearanceGrid.from_map(MapInfo.from_scenario(config), GRID_RESOLUTION, cap=2.0)
+    rows, cols = np.nonzero(grid.clearance >= WALKER_CLEARANCE)
+    free = np.column_stack([grid.xs[cols], grid.ys[rows]])
+    plan = astar(grid, robot.pose[:2], robot.goal.position, hard=robot.radius + 0.05,
+                 soft=robot.radius + 0.3)
+    route = np.asarray(plan.path if plan.path is not None else [robot.pose[:2]], dtype=float)
+    if route.shape[0] > 1:  # the route's points where a walker fits
+        r, c = np.asarray([grid.cell_of(x, y) for x, y in route]).T
+        route = route[grid.clearance[r, c] >= WALKER_CLEARANCE]
+    home = np.asarray(robot.pose[:2], dtype=float)
+    goal = np.asarray(robot.goal.position, dtype=float)
+    people: list[dict] = []
+    starts: list[np.ndarray] = []
+    for _ in range(MAX_WALKER_DRAWS):
+        if len(people) == walkers:
+            break
+        on_route = len(people) < ON_ROUTE_SHARE * walkers and route.shape[0] >= 2
+        pool = route if on_route else free
+        a, b = pool[rng.integers(pool.shape[0], size=2)]
+        if (np.hypot(*(a - home)) < ROBOT_KEEP_OUT or np.hypot(*(a - goal)) < ROBOT_KEEP_OUT
+                or np.hypot(*(a - b)) < 2.0
+                or any(np.hypot(*(a - s)) < WALKER_SPACING for s in starts)):
+            continue
+        starts.append(a)
+        people.append({"type": "pedestrian", "center": a.round(3).tolist(),
+                       "goals": [b.round(3).tolist(), a.round(3).tolist()], "mode": "loop",
+                       "policy": policy,
+                       "speed": 1.0, "speed_std": 0.2, "radius": WALKER_RADIUS})
+    if len(people) < walkers:
+        raise ValueError(f"only {len(people)} of {walkers} walkers fit in {data.get('name')}")
+    out = dict(data)
+    out["obstacles"] = list(data.get("obstacles", [])) + people
+    return out

@@ -89,6 +89,8 @@ def _register_builtins() -> None:
     # Registration order fixes each sensor's random stream: keep new sensors after these.
     sensors.add("lidar", "pymunk_bot.sensors.attach:make_lidar", s.LidarConfig)
     sensors.add("imu", "pymunk_bot.sensors.attach:make_imu", s.ImuConfig)
+    from pymunk_bot.config.crowd_state import CrowdStateConfig
+    sensors.add("crowd_state", "pymunk_bot.sensors.attach:make_crowd_state", CrowdStateConfig)
     builtin_controllers: tuple[tuple[str, str, type], ...] = (
             ("wheels", "wheels:WheelsController", c.WheelsControllerConfig),
             ("velocity", "velocity:VelocityController", c.VelocityControllerConfig),
@@ -98,6 +100,8 @@ def _register_builtins() -> None:
             ("navigate", "navigate_any:make_navigate", c.NavigateControllerConfig),
             ("social_force", "social_force:SocialForceController", c.SocialForceControllerConfig),
             ("orca", "orca:OrcaController", c.OrcaControllerConfig),
+            ("crowdnav_orca", "crowdnav_orca:CrowdNavOrcaController",
+             c.CrowdNavOrcaControllerConfig),
             ("python", "python:PythonController", c.PythonControllerConfig),
             ("policy", "policy:PolicyController", c.PolicyControllerConfig))
     for name, cls, model in builtin_controllers:

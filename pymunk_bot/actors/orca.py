@@ -10,8 +10,10 @@ the half-plane {v : (v - (v_A + share u)) . n >= 0}. A wall at distance d from A
 (its nearest point, :func:`.surfaces.nearest_hits`) gives
 {v : v . g >= -max(d - r_A, 0) / tau_obst}, g pointing away from it: a hard constraint. A then
 takes the velocity closest to its wish inside all of them (``orca_lp.solve_all``, compiled),
-turned KEEP_RIGHT_ANGLE to its right (see there). The cones are built for all walkers at once
-with numpy.
+the wish turned ``keep_right`` (default KEEP_RIGHT_ANGLE) to its right (see there). A walker's
+``robot_share`` replaces ROBOT_SHARE (CrowdNav's humans that see the robot take half), and its
+``orca_margin`` is added to every radius (CrowdNav's: 0.01 m). The cones are built for all
+walkers at once with numpy.
 """
 from __future__ import annotations
 
@@ -20,10 +22,12 @@ from typing import Any, Sequence
 import numpy as np
 
 MAX_WALL_LINES = 4  # nearest wall points per walker that constrain it
-ROBOT_SHARE = 1.0  # of u a walker takes against a robot
+ROBOT_SHARE = 1.0  # of u a walker takes against a robot (the default of ``robot_share``)
 # [rad] the wished velocity is turned this much to the walker's right. Two walkers that meet
 # exactly head-on from rest get half-planes normal to the line between them, which ORCA alone
-# never leaves (a known degenerate case); people keep right, and so do these.
+# never leaves (a known degenerate case); people keep right, and so do these (the default of
+# a walker's ``keep_right``; config/motion.py holds the defaults, this layer cannot be imported
+# there).
 KEEP_RIGHT_ANGLE = 0.1
 WALKER_SHARE = 0.5  # ... and against another walker
 
@@ -34,11 +38,11 @@ def _det(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def neighbour_lines(pos: np.ndarray, vel: np.ndarray, radius: np.ndarray, opos: np.ndarray,
                     ovel: np.ndarray, orad: np.ndarray, share: np.ndarray, horizon: np.ndarray,
-                    dt: float) -> tuple[np.ndarray, np.ndarray]:
+                    dt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Half-planes (q, n), each (k, K, 2), of k agents against K neighbours each: agent a at
     ``pos[a]`` with ``vel[a]``, ``radius[a]``; its neighbours at ``opos[a, j]`` ... with
     ``share[a, j]`` of the avoidance; ``horizon[a]`` [s]; ``dt`` [s] the step (for a pair
-    already overlapping, which must part within it)."""
+    already overlapping, which must part within it), one for all or one per agent (k,)."""
     p = opos - pos[:, None, :]  # to the neighbour [m]
     v = vel[:, None, :] - ovel  # relative velocity [m/s]
     r = radius[:, None] + orad  # [m]
@@ -47,7 +51,8 @@ def neighbour_lines(pos: np.ndarray, vel: np.ndarray, radius: np.ndarray, opos: 
     r2 = r * r
     apart = dist2 > r2
     # The cutoff disc: centre p / tau (p / dt when overlapping), radius r / tau (r / dt).
-    scale = np.where(apart, tau, dt)
+    step = np.asarray(dt, dtype=float)
+    scale = np.where(apart, tau, step[:, None] if step.ndim else step)
     w = v - p / scale[..., None]
     wl = np.sqrt((w ** 2).sum(axis=-1))
     dot = (w * p).sum(axis=-1)
@@ -81,16 +86,21 @@ class Orca:
         self.wall_horizon = np.array([configs[i].obstacle_time_horizon for i in agents])
         self.reach = np.array([configs[i].neighbor_distance for i in agents], dtype=float)
         self.limit = np.array([configs[i].max_neighbors for i in agents], dtype=np.int64)
+        self.keep_right = np.array([configs[i].keep_right for i in agents], dtype=float)  # [rad]
+        self.robot_share = np.array([configs[i].robot_share for i in agents], dtype=float)
+        self.margin = np.array([configs[i].orca_margin for i in agents], dtype=float)  # [m]
 
     def velocities(self, pos: np.ndarray, vel: np.ndarray, radius: np.ndarray,
                    others: tuple[np.ndarray, np.ndarray, np.ndarray], walkers: int,
-                   visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray, dt: float,
+                   visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray,
+                   dt: float | np.ndarray,
                    walls: tuple[np.ndarray, np.ndarray],
                    nudge: np.ndarray | None = None) -> np.ndarray:
         """New velocities (k, 2) [m/s] of the agents, at ``pos``, ``vel``, ``radius`` (k, ...),
         wishing ``pref`` (k, 2) within ``vmax`` (k,). ``others``: positions, velocities and
         radii of everything avoided (the first ``walkers`` are walkers, the rest robots);
-        ``visible`` (k, m): who each agent takes into account (not itself); ``walls``: per
+        ``visible`` (k, m): who each agent takes into account (not itself); ``dt`` [s]: the
+        step each agent's velocity is held for (one, or (k,)); ``walls``: per
         agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
         nearest first, (k, MAX_WALL_LINES, 3), and how many (k,). ``nudge`` (k, 2) [m/s]: added
         to each agent's answer where the nudged velocity still keeps to every half-plane (an
@@ -98,7 +108,7 @@ class Orca:
         move when the wish does; a nudge outside them could bring a walker into contact)."""
         from pymunk_bot.actors.orca_lp import solve_all
 
-        c, s = np.cos(KEEP_RIGHT_ANGLE), np.sin(KEEP_RIGHT_ANGLE)
+        c, s = np.cos(self.keep_right), np.sin(self.keep_right)
         pref = np.column_stack([c * pref[:, 0] + s * pref[:, 1], -s * pref[:, 0] + c * pref[:, 1]])
         opos, ovel, orad = others
         k, m = len(pos), len(opos)
@@ -108,9 +118,10 @@ class Orca:
         order = np.argsort(d2, axis=1, kind="stable")[:, :width]
         valid = np.isfinite(np.take_along_axis(d2, order, axis=1))
         valid &= np.arange(width)[None, :] < self.limit[:, None]
-        share = np.where(order < walkers, WALKER_SHARE, ROBOT_SHARE)
-        q_n, n_n = neighbour_lines(pos, vel, radius, opos[order], ovel[order], orad[order],
-                                   share, self.horizon, dt)
+        share = np.where(order < walkers, WALKER_SHARE, self.robot_share[:, None])
+        margin = self.margin
+        q_n, n_n = neighbour_lines(pos, vel, radius + margin, opos[order], ovel[order],
+                                   orad[order] + margin[:, None], share, self.horizon, dt)
         hits, count = walls
         wall_valid = np.arange(MAX_WALL_LINES)[None, :] < count[:, None]
         n_w = np.where(wall_valid[..., None], hits[..., 1:], 0.0)

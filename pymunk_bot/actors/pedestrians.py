@@ -13,7 +13,8 @@ Per unit mass, walker a feels
   repulsion U0 / R exp(-d / R) away from its nearest surface (d from the centre, less the
   walker's size beyond NOMINAL_RADIUS);
 - optionally a random fluctuation, from the run's seeded generator;
-- always a tiny perturbation, at most PERTURBATION in a random direction, drawn afresh each
+- a tiny perturbation (by default: a walker's ``perturbation`` sets it, CrowdNav's humans
+  have none), at most PERTURBATION in a random direction, drawn afresh each
   tick from a generator spawned from the crowd's (runs stay deterministic): of the wished
   velocity in the driving term, and of the velocity ORCA chooses (where it keeps to ORCA's
   half-planes). It breaks exact symmetries
@@ -22,7 +23,9 @@ Per unit mass, walker a feels
 - a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
   walker back is turned to its right, so head-on encounters resolve the way people do.
 A walker with ``policy: orca`` takes its velocity from ORCA instead (:mod:`.orca`), toward the
-same wished velocity. One that does not ``react_to_robot`` leaves robots out of both. Walkers
+same wished velocity. A walker with a ``decision_period`` chooses its velocity that often and
+holds it in between (CrowdNav's humans: every 0.25 s); one with ``slow_within`` wishes a speed
+that falls in proportion to the distance within that of its goal (CrowdNav's: 1 m). One that does not ``react_to_robot`` leaves robots out of both. Walkers
 of one ``group`` share its slowest pace, and each is pulled back toward the group's centre
 when it strays farther than GROUP_SPACING per companion (Moussaid et al. 2010's cohesion).
 The forces are compiled (numba: :mod:`.social_forces`, :mod:`.surfaces`); the fixed world's
@@ -140,6 +143,17 @@ class Crowd:
         self._tolerance = np.array([c.goal_tolerance for c in cfg])  # [m]
         self._all_radius = np.concatenate([self.radius, [r.spec.radius for r in self.robots]])
         self._cap = MAX_SPEED_FACTOR * self.desired  # [m/s]
+        for i, c in enumerate(cfg):  # a lower cap, where the scenario names one
+            if c.max_speed is not None:
+                self._cap[i] = min(self._cap[i], c.max_speed)
+        self._period = np.array([c.decision_period for c in cfg])  # [s]; 0: every tick
+        self._holds = bool(self._period.any())
+        self._next_decision = np.zeros(n)  # [s] when each walker chooses anew
+        self._held = np.zeros((n, 2))  # [m/s] the velocity each holds until then
+        self._slow = np.array([c.slow_within for c in cfg])  # [m]
+        self._slows = bool(self._slow.any())
+        self._nudge_size = np.array([PERTURBATION if c.perturbation is None else c.perturbation
+                                     for c in cfg])  # [m/s]
         self._wish = self.desired.copy()  # [m/s] the speed wished: 0 once done
         self._no_pull = np.zeros((n, 2))
         self._fluctuates = bool(self.fluctuation.any())
@@ -188,10 +202,19 @@ class Crowd:
         n = len(self.walkers)
         pos, vel = state[:n, :2], state[:n, 2:]
         self._advance_goals(pos)
+        if self._holds and not (time >= self._next_decision - 1e-9).any() \
+                and (self._period > 0).all():  # nobody chooses this tick
+            self._states.set_velocities(self._held.copy())
+            return
         pull = self._cohesion(pos) if self.groups else self._no_pull
         force, pref = np.empty((n, 2)), np.empty((n, 2))
+        wish = self._wish
+        if self._slows:  # slower within slow_within of the goal
+            gap = np.hypot(*(self._goal_xy - pos).T)
+            near = np.clip(gap / np.where(self._slow > 0, self._slow, 1.0), 0.0, 1.0)
+            wish = np.where(self._slow > 0, wish * near, wish)
         # from everything a walker avoids: walkers, then robots (centres of gravity)
-        social_forces(pos, vel, self._goal_xy, self._wish, pull, self.tau, self.radius,
+        social_forces(pos, vel, self._goal_xy, wish, pull, self.tau, self.radius,
                       state[:, :2], state[:, 2:], self._all_radius, self.v0, self.sigma,
                       self.reacts, force, pref)
         poses = self.moving.poses()
@@ -207,12 +230,23 @@ class Crowd:
             # does not move: the velocity it chooses is nudged instead, within them.
             new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt, nudge)
         cap_speeds(new, self._cap)
+        if self._holds:
+            new = self._hold(time, new)
         self._states.set_velocities(new)
 
+    def _hold(self, time: float, new: np.ndarray) -> np.ndarray:
+        """``new`` [m/s] where a walker's decision is due at ``time`` [s]; elsewhere the
+        velocity it chose last (drift-free: decisions at multiples of its period)."""
+        due = time >= self._next_decision - 1e-9
+        self._held[due] = new[due]
+        self._next_decision[due] += self._period[due]
+        return self._held.copy()
+
     def _perturbation(self, n: int) -> np.ndarray:
-        """Each walker's nudge [m/s], (n, 2): uniform over the disc of radius PERTURBATION."""
+        """Each walker's nudge [m/s], (n, 2): uniform over the disc of radius its
+        ``perturbation`` (PERTURBATION by default)."""
         draws = self._perturbation_rng.random((n, 2))
-        size = PERTURBATION * np.sqrt(draws[:, 0])
+        size = self._nudge_size * np.sqrt(draws[:, 0])
         angle = 2.0 * np.pi * draws[:, 1]
         return np.column_stack([size * np.cos(angle), size * np.sin(angle)])
 
@@ -242,8 +276,10 @@ class Crowd:
         nearest_walls(self.fixed, self._fixed_poses, self._cells, at, self._orca_reach, hits,
                       count)
         nearest_walls(self.moving, poses, None, at, self._orca_reach, hits, count)
+        # an overlap must be undone within the time the velocity is held
+        step = np.where(self._period[agents] > 0, self._period[agents], dt)
         return self.orca.velocities(at, vel[agents], self.radius[agents], others, n, visible,
-                                    pref[agents], self._cap[agents], dt, (hits, count),
+                                    pref[agents], self._cap[agents], step, (hits, count),
                                     nudge[agents])
 
     def _advance_goals(self, pos: np.ndarray) -> None:

@@ -1,11 +1,15 @@
-"""CrowdNav's standard crowd layouts, placed over any static world (open, cluttered, a map).
+"""Crowd layouts after CrowdNav's, placed over any static world (open, cluttered, a map). They
+are not CrowdNav's test cases (those are benchmark/crowdnav.py's ``crowdnav_circle_crossing``).
 
 Each layout is drawn from a seed: a stage (a square of side ``stage`` [m], turned by a random
 angle and centred where the world has room; it shrinks, down to half, in a world with little
 open room), the robot's start and goal on it, and
 ``humans`` pedestrians with their routes:
 
-- ``circle_crossing`` (CrowdNav): everyone starts on a circle and walks to the far side;
+- ``circle_crossing`` (after CrowdNav): everyone starts on a circle of radius stage / 2 - 0.5
+  (3.5 m on an 8 m stage) and walks to the far side, the goal jittered (N(0, 0.25 m) each way),
+  no pedestrian starting within ROBOT_BUFFER of the robot's start or goal beyond the bodies
+  (CrowdNav: the start is jittered, 0.2 m beyond the bodies, and nobody walks back);
 - ``square_crossing`` (CrowdNav): pedestrians cross the stage from one side to the other while
   the robot crosses it the other way;
 - ``corridor_passing``: a 3 m corridor (two walls); people walk both ways along it, most of

@@ -1,7 +1,8 @@
 """Running a benchmark: every suite scenario x controller x seed, one row per episode, on the
 sweep's backends (serial, local processes, Dask, Ray).
 
-An episode runs until the robot reaches its goal or the scenario's duration ends. A row holds
+An episode runs until the robot reaches its goal or the scenario's duration ends, or (a suite
+with ``end_at_collision``, CrowdNav's protocol) until its first collision. A row holds
 ``suite``, ``scenario``, ``controller``, ``seed``, ``signature`` (of the metric thresholds),
 ``status`` ("ok", or "failed" with the ``error`` when the episode raised: a controller that
 throws, say) and every metric of ``navmetrics.METRIC_NAMES``. Rows are plain data and depend on
@@ -18,7 +19,7 @@ from pymunk_bot.config import parse_scenario
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.outcomes.navigation import METRIC_NAMES, Thresholds
 from pymunk_bot.benchmark.controllers import ControllerChoice
-from pymunk_bot.benchmark.suite import Entry, episode_data
+from pymunk_bot.benchmark.suite import Entry, end_at_collision, episode_data
 
 ROW_KEYS = ("run", "suite", "scenario", "controller", "seed", "signature", "status", "error",
             "sim_time") + METRIC_NAMES
@@ -64,9 +65,10 @@ def run_episode(entry: Entry, choice: ControllerChoice, seed: int, thresholds: T
         name = config.robots[0].name
         metrics = track(sim, name, thresholds)
         robot = sim.robots[name]
+        stop_at_collision = end_at_collision(entry)
         for _ in range(round(config.world.duration / config.world.dt)):
             sim.step()
-            if robot.goal_reached:
+            if robot.goal_reached or (stop_at_collision and metrics.collided()):
                 break
         row["sim_time"] = sim.time
         row.update(metrics.values())

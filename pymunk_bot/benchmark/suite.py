@@ -9,16 +9,19 @@ scenario data of one episode.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
+import numpy as np
 from pydantic import Field, ValidationError
 
 from pymunk_bot.config.loader import shipped_scenario_dirs
 from pymunk_bot.config.types import Duration, Name, PositiveFloat, PositiveInt, Section, Vec2
 from pymunk_bot.config.yaml_source import parse_yaml, read_text
 from pymunk_bot.config.errors import ScenarioError
+from pymunk_bot.benchmark.crowdnav import CROWDNAV_LAYOUTS, CrowdNavLayoutError, circle_crossing
 from pymunk_bot.benchmark.layouts import LAYOUTS, LayoutError, draw_layout
 
 MAX_ENTRIES = 10_000  # scenarios per suite at most
@@ -61,6 +64,11 @@ class GeneratorSpec(Section):
     worlds: dict[Name, WorldSpec] = Field(min_length=1)
     layouts: list[str] = Field(min_length=1)
     densities: dict[Name, Annotated[PositiveInt, Field(le=MAX_HUMANS)]] = Field(min_length=1)
+    # [m] the circle of CrowdNav's layouts (crowdnav_circle_crossing), centred in the world
+    circle_radius: Annotated[PositiveFloat, Field(le=50.0)] = 4.0
+    # true: an episode ends at the robot's first collision (CrowdNav's protocol); false: it
+    # goes on to the goal or the duration, and later arrivals count as reached
+    end_at_collision: bool = False
 
 
 def shipped_suites() -> dict[str, Path]:
@@ -86,10 +94,21 @@ def _spec(path: Path, data: dict) -> GeneratorSpec:
         first = exc.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
         raise ScenarioError(str(path), where, first["msg"]) from None
+    known = LAYOUTS + CROWDNAV_LAYOUTS
     for i, name in enumerate(spec.layouts):
-        if name not in LAYOUTS:
+        if name not in known:
             raise ScenarioError(str(path), f"layouts[{i}]", f"unknown layout '{name}' "
-                                                          f"(choose from {', '.join(LAYOUTS)})")
+                                                          f"(choose from {', '.join(known)})")
+        if name in CROWDNAV_LAYOUTS:
+            for world_name, world in spec.worlds.items():
+                if world.size is None or world.generate or world.map or world.obstacles:
+                    raise ScenarioError(str(path), f"worlds.{world_name}",
+                                        f"layout {name} needs an open world (size only)")
+                least = 2 * spec.circle_radius + 4.0  # [m] the circle and 2 m beyond it
+                if min(world.size) < least:
+                    raise ScenarioError(str(path), f"worlds.{world_name}.size",
+                                        f"layout {name} needs at least {least:g} m each way "
+                                        "(the circle and 2 m beyond it)")
     for name, world in spec.worlds.items():
         if (world.generate is not None) + (world.map is not None) + (
                 world.size is not None and world.generate is None) != 1:
@@ -187,12 +206,46 @@ def _generate(entry: Entry, seed: int) -> dict:
         section = {"size": [float(world.size[0]), float(world.size[1])]}
     robot = dict(spec.robot)
     robot.setdefault("name", "r1")
+    if recipe["layout"] in CROWDNAV_LAYOUTS:
+        placed_obstacles, placed_robot = _crowdnav(entry, spec, section, robot, recipe["humans"],
+                                                   seed)
+        return _episode(entry, spec, recipe, seed, section, placed_obstacles, placed_robot)
     try:
         placed_obstacles, placed_robot = draw_layout(
             recipe["layout"], section, obstacles, robot, recipe["humans"], spec.pedestrian,
             spec.stage, seed, geometry)
     except LayoutError as exc:
         raise ScenarioError(entry.source, "", str(exc)) from None
+    return _episode(entry, spec, recipe, seed, section, placed_obstacles, placed_robot)
+
+
+def _crowdnav(entry: Entry, spec: GeneratorSpec, section: dict, robot: dict, humans: int,
+              seed: int) -> tuple[list[dict], dict]:
+    """CrowdNav's test case ``seed`` (benchmark/crowdnav.py), its frame's origin at the
+    world's centre."""
+    centre = np.array(section["size"], dtype=float) / 2
+    pedestrian = dict(spec.pedestrian)
+    try:
+        start, goal, routes = circle_crossing(
+            seed, humans, spec.circle_radius, float(robot.get("radius", 0.2)),
+            float(pedestrian.get("radius", 0.25)), float(pedestrian.get("speed", 1.3)))
+    except CrowdNavLayoutError as exc:
+        raise ScenarioError(entry.source, "", str(exc)) from None
+    walkers = [dict(pedestrian, type="pedestrian", center=(centre + a).tolist(),
+                    goals=[(centre + b).tolist()], mode="once") for a, b in routes]
+    heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+    placed = dict(robot, pose=[*(centre + start).tolist(), heading])
+    placed["goal"] = dict(robot.get("goal", {}), position=(centre + goal).tolist())
+    return walkers, placed
+
+
+def end_at_collision(entry: Entry) -> bool:
+    """Whether ``entry``'s episodes end at the robot's first collision (a suite option)."""
+    return bool(entry.generated and entry.data["spec"].get("end_at_collision", False))
+
+
+def _episode(entry: Entry, spec: GeneratorSpec, recipe: dict, seed: int, section: dict,
+             placed_obstacles: list[dict], placed_robot: dict) -> dict:
     return {"name": entry.scenario.replace("-", "_"), "seed": seed,
             "description": f"{recipe['layout']} with {recipe['humans']} pedestrians in the "
                            f"{recipe['world']} world (suite {spec.suite}, seed {seed})",

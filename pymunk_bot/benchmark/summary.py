@@ -17,9 +17,14 @@ import numpy as np
 from pymunk_bot.outcomes.navigation import BY_NAME, METRIC_NAMES
 
 # Columns of the Markdown table (all metrics are in the JSON).
-TABLE = ("success", "collision", "collision_human", "timeout", "spl", "time_to_goal",
-         "path_length", "min_distance_to_human", "personal_space_time", "human_impulse",
-         "peak_human_force")
+TABLE = ("success", "reached", "collision", "collision_human", "timeout", "spl",
+         "time_to_goal", "path_length", "min_distance_to_human", "personal_space_time",
+         "discomfort", "human_impulse", "peak_human_force")
+# Said under every table: the columns whose meanings overlap, and how.
+OVERLAPS = ("success implies reached (reached also counts arrivals after a collision); "
+            "collision_human is part of collision; where episodes go on after a collision "
+            "(suites without end_at_collision) an episode may count collision and reached, or "
+            "collision and timeout; spl weighs reached, not success")
 
 
 class MixedSignatures(ValueError):
@@ -82,7 +87,8 @@ def markdown(summary: dict[str, Any], columns: tuple[str, ...] = TABLE) -> str:
         cells = [name, f"{block['episodes']}{failed}"] + [
             _cell(block["metrics"][c]) for c in columns]
         lines.append("| " + " | ".join(cells) + " |")
-    lines.append(f"\nMetric thresholds signature: `{summary['signature']}`.")
+    lines.append(f"\nMetric thresholds signature: `{summary['signature']}`. Overlapping "
+                 f"columns: {OVERLAPS}.")
     return "\n".join(lines) + "\n"
 
 

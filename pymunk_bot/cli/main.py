@@ -59,6 +59,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from pymunk_bot.cli.outputs import prepare_outputs
 
         outputs = prepare_outputs(args, sim)  # checks --record/--log paths first, starts the log
+        compiling.release()  # the input was good: now say if numba compiles
         try:
             return _run_with_outputs(args, sim, duration, outputs, compiling)
         finally:
@@ -87,7 +88,7 @@ def _run_with_outputs(args: argparse.Namespace, sim, duration: float, outputs,
         if not args.headless and not _display_available():
             print("note: no display found; running headless (pass --headless to silence this)")
         outputs.run_headless(sim, duration)
-    compiling.report()  # on a terminal, after a first run: how long numba compiled
+    compiling.report()  # after a first run: how long numba compiled
     result = sim.result()
     verdict = sim.verdict()
     unwritten = None

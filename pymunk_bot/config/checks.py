@@ -13,6 +13,7 @@ import numpy as np
 
 from pymunk_bot.config.errors import SemanticError
 from pymunk_bot.config.controllers import (
+    CrowdNavOrcaControllerConfig,
     AvoidControllerConfig, GoToGoalControllerConfig, NavigateControllerConfig,
     PolicyControllerConfig, WaypointsControllerConfig,
 )
@@ -112,10 +113,15 @@ def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) 
                 raise SemanticError(loc + ("points", k),
                                     f"({point[0]:g}, {point[1]:g}) is outside the arena "
                                     f"{_span(extent)}")
-    needs_goal = (GoToGoalControllerConfig, AvoidControllerConfig, NavigateControllerConfig)
+    needs_goal = (GoToGoalControllerConfig, AvoidControllerConfig, NavigateControllerConfig,
+                  CrowdNavOrcaControllerConfig)
     if isinstance(controller, needs_goal) and controller.goal is None and robot.goal is None:
         raise SemanticError(loc, f"{controller.type} needs a goal: set controller.goal or the "
                                  "robot's goal")
+    if isinstance(controller, CrowdNavOrcaControllerConfig) \
+            and getattr(robot, "crowd_state", None) is None:
+        raise SemanticError(loc, "crowdnav_orca reads the pedestrians' true states: add "
+                                 "'crowd_state: {}' to the robot")
     if isinstance(controller, AvoidControllerConfig) and robot.lidar is None:
         raise SemanticError(loc, "avoid steers by the LiDAR: add a 'lidar' to the robot")
     if isinstance(controller, NavigateControllerConfig):

@@ -160,7 +160,8 @@ class SocialForceControllerConfig(_CrowdConfig):
 
 
 class OrcaControllerConfig(_CrowdConfig):
-    """An ORCA robot (van den Berg et al. 2011) following its global path."""
+    """A LiDAR-based ORCA robot (van den Berg et al. 2011) following its global path; not
+    CrowdNav's ORCA (that is ``crowdnav_orca``)."""
 
     type: Literal["orca"]
     time_horizon: PositiveShort = 3.0  # [s] moving points may not be met within this
@@ -276,3 +277,21 @@ class PolicyControllerConfig(Section):
         except PolicyFileError as exc:
             return f"'{self.path}', for a robot with {robot.lidar.beams} LiDAR beams: {exc}"
         return None
+
+
+class CrowdNavOrcaControllerConfig(Section):
+    """CrowdNav's ORCA robot policy (Chen et al. 2019's baseline, crowd_sim/envs/policy/orca.py
+    of vita-epfl/CrowdNav): reciprocal ORCA against the pedestrians' true states, read from the
+    robot's ``crowd_state`` sensor. The defaults are CrowdNav's."""
+
+    type: Literal["crowdnav_orca"]
+    rate: Rate = 4.0  # [Hz]: CrowdNav's time step, 0.25 s
+    max_speed: Speed | None = None  # [m/s]; None = the robot's (CrowdNav's v_pref, 1 m/s)
+    time_horizon: PositiveShort = 5.0  # [s] no pedestrian may be met within this
+    neighbor_distance: Annotated[PositiveFloat, Field(le=100.0)] = 10.0  # [m] who counts
+    max_neighbors: Annotated[PositiveInt, Field(le=64)] = 10  # the nearest this many
+    safety_space: Annotated[NonNegativeFloat, Field(le=1.0)] = 0.0  # [m] added to its radius
+    radius_margin: Annotated[NonNegativeFloat, Field(le=1.0)] = 0.01  # [m] added to every radius
+    share: Annotated[Float, Field(gt=0.0, le=1.0)] = 0.5  # of the avoidance it takes (0.5:
+    # reciprocal, it assumes the pedestrians take the other half, as CrowdNav's does)
+    goal: Vec2 | None = None  # [m]; None = the robot's goal

@@ -26,8 +26,12 @@ class Metric:
 
 # Column order of benchmark rows and of ``robots.<name>.metrics`` in the result JSON.
 METRICS: tuple[Metric, ...] = (
-    Metric("success", "", True, "1 if the goal was reached within the run, else 0"),
-    Metric("collision", "", False, "1 if the robot touched anything (wall, robot or human)"),
+    Metric("success", "", True, "1 if the goal was reached with no collision before it "
+                                "(CrowdNav's success), else 0; implies reached"),
+    Metric("reached", "", True, "1 if the goal was reached at all (after a collision too)"),
+    Metric("collision", "", False, "1 if the robot collided with anything (wall, robot or "
+                                   "human): a contact, or a pedestrian's disc overlapping its "
+                                   "footprint at a tick; the collision_* columns split it"),
     Metric("collision_wall", "", False, "1 if it touched static geometry or a non-human obstacle"),
     Metric("collision_robot", "", False, "1 if it touched another robot"),
     Metric("collision_human", "", False, "1 if it touched a pedestrian (any contact, at any "
@@ -40,13 +44,16 @@ METRICS: tuple[Metric, ...] = (
     Metric("time_to_goal", "s", False, "time the goal was reached (NaN if never)"),
     Metric("path_length", "m", False, "distance travelled by the robot's centre, up to "
                                       "the goal when reached"),
-    Metric("spl", "", True, "success x L* / max(L*, L), L* the shortest collision-free path "
+    Metric("spl", "", True, "reached x L* / max(L*, L), L* the shortest collision-free path "
                             "of the static world, L the path length"),
     Metric("min_distance_to_human", "m", True, "smallest clearance between the robot's "
                                                "footprint and a pedestrian's disc (inf: none)"),
     Metric("personal_space_intrusions", "", False, "entries of pedestrians into a clearance "
                                                    "of personal_space"),
     Metric("personal_space_time", "s", False, "time with some pedestrian within personal_space"),
+    Metric("discomfort", "", False, "fraction of the time before the goal (or the end) with "
+                                    "some pedestrian within discomfort_distance (CrowdNav's "
+                                    "danger frequency, per episode)"),
     Metric("min_time_to_collision", "s", True, "smallest constant-velocity time to contact "
                                                "with a pedestrian (inf: never on course)"),
     Metric("clearing_distance", "m", True, "smallest clearance to static geometry and "
@@ -92,6 +99,7 @@ class MetricBounds(Section):
     keys are ``BOUND_KEYS``'s (a test keeps the two in step)."""
 
     success: Float | None = None  # at least
+    reached: Float | None = None  # at least
     max_collision: Float | None = None  # at most
     max_collision_wall: Float | None = None  # at most
     max_collision_robot: Float | None = None  # at most
@@ -104,6 +112,7 @@ class MetricBounds(Section):
     min_distance_to_human: Float | None = None  # at least [m]
     max_personal_space_intrusions: Float | None = None  # at most
     max_personal_space_time: Float | None = None  # at most [s]
+    max_discomfort: Float | None = None  # at most
     min_time_to_collision: Float | None = None  # at least [s]
     clearing_distance: Float | None = None  # at least [m]
     mean_speed: Float | None = None  # at least [m/s]

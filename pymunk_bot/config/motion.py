@@ -65,3 +65,19 @@ class PedestrianObstacle(Section):
     obstacle_time_horizon: Annotated[PositiveFloat, Field(le=60.0)] = 2.0  # [s] ORCA: walls
     neighbor_distance: Annotated[PositiveFloat, Field(le=100.0)] = 10.0  # [m] ORCA: who counts
     max_neighbors: Annotated[PositiveInt, Field(le=MAX_NEIGHBORS)] = 10  # ORCA: nearest this many
+    # How a walker decides (defaults: this simulator's walkers; CrowdNav's humans in brackets)
+    decision_period: Annotated[NonNegativeFloat, Field(le=10.0)] = 0.0  # [s] a new velocity
+    # this often, held in between; 0: every tick [CrowdNav: 0.25, its time step]
+    max_speed: Annotated[PositiveFloat, Field(le=MAX_WALKING_SPEED)] | None = None  # [m/s]
+    # speed cap; None: MAX_SPEED_FACTOR x the desired speed (never above it) [CrowdNav: 1.0]
+    keep_right: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1  # [rad] the wish turned right
+    # by this (ORCA; see actors/orca.py) [CrowdNav: 0]
+    slow_within: Annotated[NonNegativeFloat, Field(le=10.0)] = 0.0  # [m] within this of its
+    # goal the wished speed falls in proportion to the distance [CrowdNav: 1.0 = v_pref x 1 s]
+    robot_share: Annotated[Float, Field(ge=0.0, le=1.0)] = 1.0  # ORCA: the share of the
+    # avoidance a reacting walker takes against a robot [CrowdNav, robot visible: 0.5]
+    orca_margin: Annotated[NonNegativeFloat, Field(le=1.0)] = 0.0  # [m] ORCA: added to every
+    # radius the walker's ORCA uses [CrowdNav: 0.01]
+    perturbation: Annotated[NonNegativeFloat, Field(le=0.1)] | None = None  # [m/s] the
+    # largest random nudge of the walker's velocity each tick, which breaks exact symmetries;
+    # None: actors/pedestrians.py's PERTURBATION, 0.001 [CrowdNav: 0, none]

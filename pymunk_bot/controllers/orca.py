@@ -1,8 +1,12 @@
-"""A robot driven by ORCA (van den Berg et al. 2011), CrowdNav's baseline: the velocity
-closest to the one toward its look-ahead point that no obstacle point its LiDAR sees can
-collide with within ``time_horizon`` (moving points, at their tracked velocity) or
-``obstacle_time_horizon`` (static points). Unlike a pedestrian it takes all
-of the avoidance: the people it meets may not reciprocate."""
+"""A robot driven by a LiDAR-based ORCA (van den Berg et al. 2011): the velocity closest to
+the one toward its look-ahead point on a global A* path that no obstacle point its LiDAR sees
+can collide with within ``time_horizon`` (moving points, at their tracked velocity) or
+``obstacle_time_horizon`` (static points). It sees people only as LiDAR points (the nearest
+return in each of 36 sectors within 4 m), grows its radius by ``margin`` and takes all of the
+avoidance: the people it meets may not reciprocate.
+
+This is not CrowdNav's ORCA baseline: that one reads every human's true position, velocity and
+radius and assumes they reciprocate (``crowdnav_orca``, controllers/crowdnav_orca.py)."""
 from __future__ import annotations
 
 import numpy as np

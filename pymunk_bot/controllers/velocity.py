@@ -12,5 +12,7 @@ class VelocityController(Controller):
         super().__init__(config)
         self.command = Command(config.v, config.omega, config.vy)
 
-    def compute(self, obs: Observation) -> Command:
+    observes = False  # a constant command: no observation is built for it
+
+    def compute(self, obs: Observation | None) -> Command:
         return self.command

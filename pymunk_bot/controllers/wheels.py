@@ -15,5 +15,7 @@ class WheelsController(Controller):
                              f"use velocity")
         self.speeds = (config.left, config.right)
 
-    def compute(self, obs: Observation) -> tuple[float, float]:
+    observes = False  # a constant command: no observation is built for it
+
+    def compute(self, obs: Observation | None) -> tuple[float, float]:
         return self.speeds  # wheel speeds: the diff drive takes them as they are

@@ -170,10 +170,9 @@ class Simulation:
         for actor in self.world.actors:
             actor.before_step(now, self.dt)
 
-    def bookkeep(self, positions: Any) -> float:
+    def bookkeep(self, positions: np.ndarray) -> float:
         """After the physics: the clock, distance and goals from the robots' new positions
-        ((n, 2) [m], an array or a sequence of (x, y)), odometry from the encoders. Returns
-        the time now [s]."""
+        ((n, 2) [m]), odometry from the encoders. Returns the time now [s]."""
         now = self.tick_clock()
         self._built.fleet.advance(positions, now)
         for drive, odometry in self._odometry:
@@ -273,10 +272,16 @@ class Simulation:
             return
         robots, controlled = self._robots, self._controlled
         indices = [controlled[k] for k in due if not robots[controlled[k]].overridden]
-        if indices:
-            for i, observation in zip(indices, self._observer.observe_many(indices, now)):
-                robot = robots[i]
-                robot.follow(robot.controller.compute(observation))
+        if not indices:
+            return
+        # A controller that reads no observation (constant commands) gets None: none is built.
+        # (A controller of the same shape that is no Controller subclass observes.)
+        observes = [getattr(robots[i].controller, "observes", True) for i in indices]
+        watching = [i for i, looks in zip(indices, observes) if looks]
+        observations = self._observer.observe_many(watching, now) if watching else iter(())
+        for i, looks in zip(indices, observes):
+            robot = robots[i]
+            robot.follow(robot.controller.compute(next(observations) if looks else None))
 
     def due_lidars(self, now: float) -> list[Any]:
         """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""

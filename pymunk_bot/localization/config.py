@@ -62,6 +62,11 @@ class MclConfig(Section):
     lambda_short: Annotated[Float, Field(gt=0.0, le=100.0)] = 0.1  # [1/m], beam model only
     laser_likelihood_max_dist: Distance = 2.0  # [m] distance field cap
     max_beams: Annotated[Int, Field(ge=2, le=10_000)] = 60
+    # Not AMCL's: while localized, returns ending more than short_margin before the map's
+    # surface along their beam (seen from the estimate: people, things the map lacks) are left
+    # out of the likelihood-field models and of the scan fit (localization/dynamic.py).
+    reject_short: bool = True
+    short_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.3  # [m]
     # AMCL's recovery, on (Nav2: 0, off): a kidnapped robot or a wrong global guess needs it;
     # with it on, tracking succeeded as often (robustness benchmark, docs/localization.md).
     recovery_alpha_slow: Weight = 0.001  # 0 (both) disables recovery
@@ -96,6 +101,10 @@ class EkfConfig(Section):
     # widens its covariance by the disagreement (no lock-out).
     gate_patience: Annotated[Int, Field(ge=1, le=1000)] = 5
     max_dist: Distance = 1.0  # [m] distance-field cap for matching
+    # Returns ending more than short_margin before the map's surface seen from the predicted
+    # pose (people, things the map lacks) are left out of the match (localization/dynamic.py).
+    reject_short: bool = True
+    short_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.3  # [m]
     huber: Distance = 0.1  # [m] residuals beyond this count linearly (robust to clutter)
     iterations: Annotated[Int, Field(ge=1, le=100)] = 10  # Gauss-Newton iterations per match
     max_beams: Annotated[Int, Field(ge=3, le=10_000)] = 120
@@ -133,4 +142,7 @@ class MappingConfig(Section):
     min_probability: Annotated[Float, Field(gt=0.0, lt=0.5)] = 0.12  # clamp: a free cell can still
     max_probability: Annotated[Float, Field(gt=0.5, lt=1.0)] = 0.97  # ... turn occupied, and back
     margin: NonNegativeFloat = 1.0  # [m] extent beyond the arena (its walls lie outside it)
+    # A cell held occupied that a beam crosses has its log-odds scaled by this before the miss
+    # (1: plain log-odds): walkers are not burned into the map (mapping.py)
+    clear_decay: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.2
     rate: Annotated[Float, Field(gt=0.0, le=1000.0)] | None = None  # [Hz]; None = every scan

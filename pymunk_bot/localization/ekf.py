@@ -33,7 +33,8 @@ import numpy as np
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
 from pymunk_bot.localization.config import EkfConfig
 from pymunk_bot.localization.likelihood import LikelihoodField
-from pymunk_bot.localization.scanmatch import match_scan, subsample
+from pymunk_bot.localization.dynamic import short_returns
+from pymunk_bot.localization.scanmatch import MIN_POINTS, match_scan, subsample
 from pymunk_bot.localization.se2 import between, compose, scan_points, wrap
 
 MIN_TRACK = 0.1  # [m] the lever for heading drift when the robot has no wheel track (omni)
@@ -105,8 +106,13 @@ class EkfLocalizer(Localizer):
 
     def _correct(self, scan) -> None:
         c = self.config
-        points, _ = scan_points(scan)
-        match = match_scan(self.field, subsample(points, c.max_beams), self.pose, c.iterations,
+        points = subsample(scan_points(scan)[0], c.max_beams)
+        if c.reject_short and points.shape[0]:
+            # returns short of the map from the predicted pose (people) are left out
+            kept = points[~short_returns(self.field, self.pose, points, (scan.offset[0], scan.offset[1]),
+                                         scan.max_range, c.short_margin)]
+            points = kept if kept.shape[0] >= MIN_POINTS else points
+        match = match_scan(self.field, points, self.pose, c.iterations,
                            c.huber, c.match_cov_scale)
         if not match.ok:
             return

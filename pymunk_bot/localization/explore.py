@@ -32,11 +32,13 @@ EXPLORE_RETRY = 1.0  # [s] between searches for a heading while none is worth dr
 EXPLORE_PATIENCE = 15.0
 
 
-def trace(field: LikelihoodField, origin: np.ndarray, heading: np.ndarray, max_range: float) -> np.ndarray:
+def trace(field: LikelihoodField, origin: np.ndarray, heading: np.ndarray, max_range: float,
+          tolerance: float | None = None) -> np.ndarray:
     """Ranges [m] of rays from ``origin`` (n, 2) at world ``heading`` (n, m) to the map's
     obstacles, capped at ``max_range``, by sphere tracing the distance field (steps of the
-    clearance, at least half a field cell)."""
-    eps = field.resolution
+    clearance, at least ``tolerance``: a ray stops within it of a surface; default half a
+    field cell; a coarser one is cheaper where rays graze a wall)."""
+    eps = 2.0 * tolerance if tolerance is not None else field.resolution
     direction = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     t = np.zeros(heading.shape)
     active = np.ones(heading.shape, dtype=bool)

@@ -7,6 +7,13 @@ returned; a beam without a return (it reads max_range) only clears. Each cell is
 once per scan (a cell crossed by many beams near the sensor is not cleared many times over),
 and a hit wins over a miss in the same scan. l is clamped to [logit(min), logit(max)] so the map
 can change its mind when the world does. Vectorised: all beams are sampled at half-cell steps.
+
+Free-space clearing with decay (for people and other things that move): a cell held occupied
+(l > 0) that a beam now crosses first has its log-odds multiplied by ``clear_decay`` and then
+takes the miss. A walker's cells, hit for the second it stood there, end free after two or three
+scans that see through them instead of the seven that the miss alone needed from the clamp,
+while the robot may look elsewhere. A cell hit in the same scan is never cleared (a hit wins),
+so a wall is kept by the beams that end on it.
 """
 from __future__ import annotations
 
@@ -90,6 +97,8 @@ class OccupancyMapper:
         miss_cells = miss_cells[~self._is_hit[miss_cells]]
         self._is_hit[hit_cells] = False
         flat_l, flat_seen = self.log_odds.reshape(-1), self.observed.reshape(-1)
+        held = miss_cells[flat_l[miss_cells] > 0.0]
+        flat_l[held] *= self.config.clear_decay
         flat_l[miss_cells] += self._miss
         flat_l[hit_cells] += self._hit
         np.clip(flat_l, self._lo, self._hi, out=flat_l)

@@ -33,6 +33,7 @@ import numpy as np
 
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
 from pymunk_bot.localization.config import MclConfig
+from pymunk_bot.localization.dynamic import excused_fit, short_returns
 from pymunk_bot.localization.explore import Explorer, trace
 from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.motion import sample_motion
@@ -54,6 +55,9 @@ LOCALIZED_SCAN_FIT = 0.7
 # hypotheses apart (a factor of ~10 per scan); measured on generated offices and clutter rooms
 # (10 seeds each, a global start), 5 converged in 17/20 within 20 s, 10 in 15/20, 20 in 8/20.
 GLOBAL_BEAMS = 5.0
+# Fewer returns than this left after rejecting the short ones (a robot walled in by people):
+# the scan is weighed whole (dynamic.py).
+MIN_KEPT_RETURNS = 10
 # Updates in a row that a tight cloud may disagree with the scan before MCL starts over.
 LOST_UPDATES = 3
 # Reseeding from the scan (posesearch.py): while not localized, poses found on the map that
@@ -130,7 +134,7 @@ class MclLocalizer(Localizer):
         if self._odom_at_update is None:
             if fresh:  # the first scan: weigh the initial cloud before anything moves
                 self._odom_at_update = odom.copy()
-                self._measure_and_resample(scan)
+                self._measure_and_resample(scan, self._filter_pose)
         else:
             moved = between(self._odom_at_update, odom)
             if fresh and (np.hypot(moved[0], moved[1]) >= self.config.update_min_d
@@ -140,8 +144,9 @@ class MclLocalizer(Localizer):
                     self.particles, self._odom_at_update, odom,
                     (c.alpha1, c.alpha2, c.alpha3, c.alpha4, c.alpha5), self.rng,
                     c.robot_model_type)
+                predicted = compose(self._filter_pose, moved)
                 self._odom_at_update = odom.copy()
-                self._measure_and_resample(scan)
+                self._measure_and_resample(scan, predicted)
         since = (np.zeros(3) if self._odom_at_update is None
                  else between(self._odom_at_update, odom))
         self.pose = compose(self._filter_pose, since)
@@ -163,12 +168,19 @@ class MclLocalizer(Localizer):
     def fit_at(self, pose: np.ndarray, scan) -> float:
         """The fraction of the scan's returns that end within ``sigma_hit`` of an obstacle of
         the map when seen from ``pose``: near 1 where the estimate is right, low where the map
-        and the scan disagree (a kidnapping, a wrong global guess). 1.0 with no return."""
+        and the scan disagree (a kidnapping, a wrong global guess). 1.0 with no return.
+        (While tracking, ``scan_fit`` is this over the used beams with the returns short of
+        the map excused: dynamic.excused_fit.)"""
         points, _ = scan_points(scan)
         if points.shape[0] == 0:
             return 1.0
         d = self.field.distance(transform_points(np.asarray(pose, dtype=float), points))
         return float(np.mean(d <= self.config.sigma_hit))
+
+    def _short(self, pose: np.ndarray, points: np.ndarray, scan) -> np.ndarray:
+        """Which end ``points`` (robot frame) of ``scan`` are short of the map from ``pose``."""
+        return short_returns(self.field, pose, points, (scan.offset[0], scan.offset[1]),
+                             scan.max_range, self.config.short_margin)
 
     def random_poses(self, count: int) -> np.ndarray:
         """Poses drawn uniformly over the map's free cells, any heading."""
@@ -178,15 +190,25 @@ class MclLocalizer(Localizer):
         return np.column_stack([xy, self.rng.uniform(-np.pi, np.pi, count)])
 
     # ------------------------------------------------------------------ filter steps
-    def _measure_and_resample(self, scan) -> None:
-        likelihood = self.scan_likelihood(scan)
+    def _measure_and_resample(self, scan, predicted: np.ndarray) -> None:
+        """Weigh by ``scan``, resample, estimate. ``predicted``: the estimate moved by the
+        odometry, from which returns short of the map are found (while localized)."""
+        c = self.config
+        # Rejection only while tracking: from a wrong pose it would hide the beams that say so.
+        reject = c.reject_short and self.localized
+        points = self._used_points(scan)
+        short = np.zeros(points.shape[0], dtype=bool)
+        if reject and points.shape[0]:
+            short = self._short(predicted, points, scan)
+            if points.shape[0] - np.count_nonzero(short) < MIN_KEPT_RETURNS:
+                short[:] = False
+        likelihood = self.scan_likelihood(scan, points[~short])
         weights = self.weights * likelihood
         total = weights.sum()
         if not (np.isfinite(total) and total > 0):
             weights = np.full(weights.size, 1.0)
             total = float(weights.size)
         w_avg = total / weights.size
-        c = self.config
         if self._beam_mean is not None:
             # The likelihood field's weights change scale with the model (the product while
             # localized, the sum until then): the recovery compares averages across scans, so
@@ -200,25 +222,28 @@ class MclLocalizer(Localizer):
         if self.updates % c.resample_interval == 0:
             self._resample()
         self._filter_pose, self.covariance = self._cluster_estimate()
-        self.scan_fit = self.fit_at(self._filter_pose, scan)
+        if reject:  # the used beams, short ones (found from the prediction) excused
+            fits = self.field.distance(transform_points(self._filter_pose, points)) <= c.sigma_hit
+            self.scan_fit = excused_fit(fits, short)
+        else:
+            self.scan_fit = self.fit_at(self._filter_pose, scan)
         self._restart_if_lost()
         if not self.localized:
-            self._reseed_from_scan(scan, RESEED_MARGIN)
+            self._reseed_from_scan(scan, self._used_points(scan), RESEED_MARGIN)
             self._explore(scan)
             return
         self._explorer.forget()
         if self.scan_fit < SUSPECT_SCAN_FIT and scan.time >= self._suspect_search + SUSPECT_PERIOD:
             self._suspect_search = scan.time
-            self._reseed_from_scan(scan, SUSPECT_MARGIN)
+            self._reseed_from_scan(scan, points[~short], SUSPECT_MARGIN)
 
-    def _reseed_from_scan(self, scan, margin: float) -> None:
+    def _reseed_from_scan(self, scan, points: np.ndarray, margin: float) -> None:
         """Sensor resetting (posesearch.py): put RESEED_FRACTION of the particles on poses
         that explain this scan better than the estimate, found anywhere on the map. A cloud
         settles only where it has particles; a global start or a kidnapping seldom has one
         near the truth (instrumented: none within 0.3 m / 10 deg in every failed run), and
         the cloud then settled on a look-alike room or aisle."""
         c = self.config
-        points = self._used_points(scan)
         z_rand = c.z_rand / scan.max_range
         found, score = search(self.field, points, self._places, self.rng, c.sigma_hit, c.z_hit, z_rand)
         if found.shape[0] == 0:
@@ -273,15 +298,18 @@ class MclLocalizer(Localizer):
             self._contradicted = 0
             self.restarts += 1
 
-    def scan_likelihood(self, scan) -> np.ndarray:
+    def scan_likelihood(self, scan, points: np.ndarray | None = None) -> np.ndarray:
         """The per-particle weight factor for this scan: AMCL's 1 + sum of pz^3 over the used
         beams (``likelihood_field``); for ``likelihood_field_prob`` their product while
-        localized, tempered to GLOBAL_BEAMS beams until then; ``beam``: _beam_likelihood."""
+        localized, tempered to GLOBAL_BEAMS beams until then; ``beam``: _beam_likelihood
+        (whose z_short handles returns short of the map per particle). ``points``: the
+        robot-frame end points to weigh (default: the ``max_beams`` used ones)."""
         c = self.config
         if c.laser_model_type == "beam":
             n_beams = np.asarray(scan.ranges).size
             return self._beam_likelihood(scan, np.arange(0, n_beams, max(1, (n_beams - 1) // (c.max_beams - 1))))
-        points = self._used_points(scan)
+        if points is None:
+            points = self._used_points(scan)
         p = np.ones(self.particles.shape[0])
         self._beam_mean = None
         if points.shape[0] == 0:

@@ -39,7 +39,8 @@ import pymunk
 from scipy.spatial import cKDTree
 
 from pymunk_bot.physics.propulsion import Propulsion
-from pymunk_bot.physics.substeps import MARGIN, Mover, SubstepGate, origin_speed
+from pymunk_bot.physics.substeps import (MARGIN, Mover, SubstepGate, motions, origin_speeds,
+                                         pair_gaps)
 from pymunk_bot.physics.world import World
 
 PLAN_TICKS = 4  # ticks between two decisions
@@ -186,11 +187,11 @@ class SplitPlanner:
         n = self.n
         origins = np.empty((self._reach.shape[0], 2))
         origins[:n] = xy
-        now = np.empty(self._reach.shape[0])  # [m/s] how fast each origin moves now
-        now[:n] = np.hypot(motion[:, 1], motion[:, 2]) + np.abs(motion[:, 3]) * self._offset[:n]
-        for k, mover in enumerate(self._others, start=n):  # few: crates, moving obstacles
-            origins[k] = tuple(mover.body.position)
-            now[k] = origin_speed(mover.body, float(self._offset[k]))
+        others = [mover.body for mover in self._others]  # few: crates, moving obstacles
+        for k, body in enumerate(others, start=n):
+            origins[k] = tuple(body.position)
+        moving = np.concatenate([motion[:, 1:4], motions(others)])  # (vx, vy, omega) each
+        now = origin_speeds(moving[:, 0], moving[:, 1], moving[:, 2], self._offset)
         speeds = np.maximum(self._top, now)
         if not (np.isfinite(origins).all() and np.isfinite(speeds).all()):
             return np.zeros(n, dtype=bool)  # a body thrown out of the world: no telling
@@ -201,7 +202,7 @@ class SplitPlanner:
                                              output_type="ndarray")
         if pairs.size:
             i, j = pairs[:, 0], pairs[:, 1]
-            gap = np.hypot(*(origins[i] - origins[j]).T) - reach[i] - reach[j] - MARGIN
+            gap = pair_gaps(origins, reach, i, j)
             meet = gap <= travel[i] + travel[j]
             clear[i[meet]] = False
             clear[j[meet]] = False

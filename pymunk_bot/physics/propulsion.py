@@ -107,6 +107,7 @@ class Propulsion:
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
         self._spins = [(group, spin[idx]) for group, idx in self.groups]  # each group's rows
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
+        self._xy = np.zeros((self.n, 2))  # [m] positions read one by one (positions)
         self._holding = False  # the fleet is held as a whole (batched)
         self._held_twists = np.full((self.n, 3), np.nan)  # the twists held (batched; NaN: none)
         self._changed = np.zeros(self.n, dtype=np.bool_)  # whose twist the last hold changed
@@ -358,11 +359,15 @@ class Propulsion:
                  after, self.cog, self.rows.out)
         self.rows.write(_WRITE, spaces=spaces)
 
-    def positions(self) -> Any:
-        """Every robot body's position now, (n, 2) [m]: an array, or a list of (x, y) when few."""
-        if not self.batched:
-            return [b.position for b in self.bodies]
-        return self.position_array()
+    def positions(self) -> np.ndarray:
+        """Every robot body's position now, (n, 2) [m] (a few robots' read one by one into a
+        buffer that the next call overwrites)."""
+        if self.batched:
+            return self.position_array()
+        xy = self._xy
+        for k, body in enumerate(self.bodies):
+            xy[k] = body.position
+        return xy
 
     def motion_array(self) -> np.ndarray:
         """Every robot body's (angle [rad], vx, vy [m/s], omega [rad/s]) now, (n, 4), read in

@@ -116,11 +116,28 @@ def spin_reach(body: pymunk.Body) -> float:
     return far + math.hypot(cx, cy)
 
 
-def origin_speed(body: pymunk.Body, offset: float) -> float:
-    """How fast ``body``'s origin moves now [m/s]: its centre of gravity's speed plus the
-    turn of the ``offset`` [m] between the two."""
-    vx, vy = body.velocity
-    return math.hypot(vx, vy) + abs(body.angular_velocity) * offset
+def origin_speeds(vx: np.ndarray, vy: np.ndarray, omega: np.ndarray,
+                  offset: np.ndarray) -> np.ndarray:
+    """How fast each body's origin moves now [m/s]: its centre of gravity's speed (``vx``,
+    ``vy`` [m/s]) plus the turn (``omega`` [rad/s]) of the ``offset`` [m] between the two."""
+    return np.hypot(vx, vy) + np.abs(omega) * offset
+
+
+def motions(bodies: Sequence[pymunk.Body]) -> np.ndarray:
+    """(vx, vy, omega) of a few bodies, read one by one: (n, 3) [m/s, m/s, rad/s]."""
+    return np.array([(*b.velocity, b.angular_velocity) for b in bodies]).reshape(-1, 3)
+
+
+@numba.njit(cache=True)
+def pair_gaps(xy: np.ndarray, reach: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """The clearance [m] of each pair (i, j) of discs (centres ``xy`` [m], radii ``reach``
+    [m]), MARGIN kept: negative when they may touch now."""
+    gaps = np.empty(i.shape[0])
+    for k in range(i.shape[0]):
+        a, b = i[k], j[k]
+        gaps[k] = (math.hypot(xy[a, 0] - xy[b, 0], xy[a, 1] - xy[b, 1]) - reach[a] - reach[b]
+                   - MARGIN)
+    return gaps
 
 
 class SubstepGate:
@@ -291,19 +308,18 @@ class SubstepGate:
 
     def _origins_and_speeds(self) -> tuple[np.ndarray, np.ndarray]:
         """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
-        (see origin_speed), or its top speed if that is more."""
+        (see origin_speeds), or its top speed if that is more."""
         movers = self.movers
         if len(movers) < _IN_ONE_READ:
             xy = np.array([tuple(m.body.position) for m in movers]).reshape(-1, 2)
-            now = np.array([origin_speed(m.body, offset)
-                            for m, offset in zip(movers, self._offset.tolist())])
+            motion = motions([m.body for m in movers])
         else:  # the movers' rows of every body's state
             state = self._space_state()
             if state.shape[0] != self._space_rows:
                 self._index(state.shape[0])
             rows = state[self._rows]
-            xy = rows[:, :2]
-            now = np.hypot(rows[:, 2], rows[:, 3]) + np.abs(rows[:, 4]) * self._offset
+            xy, motion = rows[:, :2], rows[:, 2:]
+        now = origin_speeds(motion[:, 0], motion[:, 1], motion[:, 2], self._offset)
         return xy, np.maximum(now, self._top)
 
     def _space_state(self) -> np.ndarray:
@@ -342,9 +358,10 @@ def _pairs_clear(xy: np.ndarray, reach: np.ndarray, speeds: np.ndarray, i: np.nd
     """How long [s] (at most HORIZON) none of the pairs (i, j) of discs (centres ``xy`` [m],
     radii ``reach`` [m], moving at most ``speeds`` [m/s]) can touch, MARGIN kept."""
     clear = HORIZON
+    gaps = pair_gaps(xy, reach, i, j)
     for k in range(i.shape[0]):
         a, b = i[k], j[k]
-        gap = math.hypot(xy[a, 0] - xy[b, 0], xy[a, 1] - xy[b, 1]) - reach[a] - reach[b] - MARGIN
+        gap = gaps[k]
         closing = speeds[a] + speeds[b]
         t = gap / closing if closing > 0.0 else (HORIZON if gap > 0.0 else 0.0)
         if not t > 0.0:  # touching now (or NaN: a body thrown out of the world): not clear

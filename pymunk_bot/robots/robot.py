@@ -111,11 +111,9 @@ class Fleet:
         self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
         self._reached = np.empty(p.shape[0], dtype=np.bool_)  # advance_rows' flags
 
-    def advance(self, xy: Any, time: Any) -> None:
+    def advance(self, xy: np.ndarray, time: Any) -> None:
         """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
-        from every robot's new position [m]: an (n, 2) array, or a sequence of (x, y)."""
-        if not isinstance(xy, np.ndarray):  # a few robots' Vec2d, read one by one
-            xy = np.array([c for p in xy for c in p], dtype=float).reshape(-1, 2)
+        from every robot's new position, (n, 2) [m] (copied: the caller may reuse it)."""
         if isinstance(time, np.ndarray):
             times = time
         else:

@@ -7,6 +7,7 @@ import numpy as np
 
 from pymunk_bot.plugins import sensors as sensor_kinds
 from pymunk_bot.sensors.bumper import Bumper
+from pymunk_bot.sensors.crowd_state import CrowdStateSensor
 from pymunk_bot.sensors.imu import Imu
 from pymunk_bot.sensors.lidar import Lidar
 
@@ -26,6 +27,17 @@ def make_imu(config: Any, robot: "Robot", world: "World", rng: np.random.Generat
     imu = Imu(config, robot.body, rng, substep=lambda: world.substep_for(robot.body))
     robot.fit("imu", imu)
     return imu
+
+
+def make_crowd_state(config: Any, robot: "Robot", world: "World",
+                     rng: np.random.Generator) -> CrowdStateSensor:
+    """The pedestrians' true states (no noise: ``rng`` is unused)."""
+    def walkers() -> list[Any]:
+        return [o for o in world.obstacles if getattr(o.config, "type", "") == "pedestrian"]
+
+    sensor = CrowdStateSensor(config, robot.body, walkers, clock=lambda: world.time)
+    robot.fit("crowd_state", sensor)
+    return sensor
 
 
 def attach_sensors(robot: "Robot", world: "World", rng: np.random.Generator) -> None:

@@ -123,3 +123,22 @@ def test_a_tracker_follows_the_run_through_resets():
     assert metrics.values()["path_length"] == 0.0  # a new episode, measured from its start
     sim.run(1.0)
     assert metrics.values()["path_length"] == pytest.approx(0.5, abs=0.05)
+
+
+def test_an_arrival_after_a_collision_is_reached_not_success():
+    """The robot grazes a person standing 0.4 m off its line, then drives on to the goal."""
+    sim = pb.Simulation.from_dict(scene(person_y=2.4))
+    sim.run(13.0)
+    m = sim.result()["robots"]["r1"]["metrics"]
+    assert m["collision"] == 1.0 and m["collision_human"] == 1.0
+    assert m["reached"] == 1.0 and m["success"] == 0.0
+
+
+def test_discomfort_is_the_share_of_time_within_0_2_m():
+    """A person 0.6 m off the line: clearance 0.6 - 0.45 = 0.15 m at the closest, below 0.2 m
+    while |x - 4| < sqrt(0.65^2 - 0.6^2) = 0.25 m, 1 s at 0.5 m/s, of the 11.6 s to the goal."""
+    sim = pb.Simulation.from_dict(scene(person_y=2.6))
+    sim.run(13.0)
+    m = sim.result()["robots"]["r1"]["metrics"]
+    assert m["success"] == 1.0 and m["reached"] == 1.0 and m["collision"] == 0.0
+    assert m["discomfort"] == pytest.approx(1.0 / m["time_to_goal"], abs=0.005)

@@ -52,6 +52,12 @@ class MetricsTracker:
         if self._own and self.recorder is not None:
             self.recorder.update(sim.time)
 
+    def collided(self) -> bool:
+        """Whether the robot has collided in this episode (``collision``'s test)."""
+        if self.recorder is None:
+            raise RuntimeError("attach the tracker to a simulation first (use track())")
+        return self.recorder.collided
+
     def values(self) -> dict[str, float]:
         """The metrics of the episode so far (see ``METRIC_NAMES``)."""
         if self.recorder is None:

@@ -17,7 +17,7 @@ from pymunk_bot.config.metric_bounds import BY_NAME, METRIC_NAMES, METRICS, Metr
 __all__ = ["BY_NAME", "FORMULA_VERSION", "METRICS", "METRIC_NAMES", "Metric", "Thresholds"]
 
 # Bump when a formula changes: the signature then changes, so old rows are never mixed in.
-FORMULA_VERSION = 1
+FORMULA_VERSION = 2  # 2: success excludes collisions (reached keeps arrival), discomfort
 
 
 @dataclass(frozen=True)
@@ -25,6 +25,7 @@ class Thresholds:
     """Every setting a metric depends on (documented defaults, tuned to no scenario)."""
 
     personal_space: float = 0.5  # [m] clearance that counts as an intrusion
+    discomfort_distance: float = 0.2  # [m] clearance that counts as discomfort (CrowdNav's)
     stall_speed: float = 0.05  # [m/s] slower than this is stalled
     progress_window: float = 10.0  # [s] failure to progress: no gain over this long ...
     progress_distance: float = 0.1  # [m] ... of at least this toward the goal

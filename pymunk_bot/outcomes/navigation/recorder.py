@@ -33,6 +33,10 @@ class ContactTally:
         self.impulse = dict.fromkeys(CONTACT_KINDS, 0.0)  # [N s]
         self.peak_force = dict.fromkeys(CONTACT_KINDS, 0.0)  # [N]
 
+    def any(self) -> bool:
+        """Whether any contact episode began."""
+        return sum(self.episodes.values()) > 0
+
     def add(self, kind: str, first: bool, impulse: float, step: float) -> None:
         """One solved contact: ``impulse`` [N s] over a pymunk step of ``step`` [s]."""
         self.episodes[kind] += int(first)
@@ -76,6 +80,9 @@ class NavMetrics:
         self.personal_space_intrusions = 0
         self.personal_space_time = 0.0  # [s]
         self.stalled_time = 0.0  # [s]
+        self.discomfort_time = 0.0  # [s] before the goal with a pedestrian within discomfort
+        self.first_collision: float | None = None  # [s] the tick of the first collision
+        self.human_overlap = False  # a pedestrian overlapped the robot at some tick
         self._inside = np.zeros(len(self._humans), dtype=bool)
         self._clear = np.zeros(len(self._humans))  # [m] to each human, this tick
         self._samples: list[tuple[float, float, float, float]] = []  # t, vx, vy, best [s, m/s, m]
@@ -91,8 +98,12 @@ class NavMetrics:
         reached = self._robot.goal_reached
         if not reached and math.hypot(vx, vy) < self.thresholds.stall_speed:
             self.stalled_time += step
-        if self._humans:
-            self._measure_humans(step, vx, vy)
+        closest = self._measure_humans(step, vx, vy) if self._humans else math.inf
+        if not reached and closest < self.thresholds.discomfort_distance:
+            self.discomfort_time += step
+        self.human_overlap = self.human_overlap or closest < 0.0
+        if self.first_collision is None and (closest < 0.0 or self.contacts.any()):
+            self.first_collision = now
         self._clearing.update(now)
         if not reached and now >= self._next_sample - 1e-9:
             self._sample(now, vx, vy)
@@ -105,7 +116,14 @@ class NavMetrics:
         self._samples.append((now, vx, vy, self._best))
         self._next_sample += self.thresholds.sample_period
 
-    def _measure_humans(self, step: float, vx: float, vy: float) -> None:
+    @property
+    def collided(self) -> bool:
+        """Whether the robot has collided (a contact, or a pedestrian overlapping it at a
+        tick) since the episode began."""
+        return self.first_collision is not None
+
+    def _measure_humans(self, step: float, vx: float, vy: float) -> float:
+        """Fold this tick into the human metrics; the least clearance [m] now."""
         state = self._human_states.read()
         hxy, hv = state[:, :2], state[:, 2:]
         x, y = self._body.position
@@ -122,6 +140,7 @@ class NavMetrics:
         if inside:
             self.personal_space_time += step
         self.min_time_to_collision = min(self.min_time_to_collision, ttc)
+        return float(closest)
 
     def _on_contact(self, arbiter: pymunk.Arbiter) -> None:
         a, b = arbiter.bodies
@@ -170,12 +189,16 @@ class NavMetrics:
             path = float(robot.distance)
             speed = formulas.mean_speed(path, now - self.start)
         nan = math.nan
+        first = self.first_collision
+        clean = first is None or (ttg is not None and first > ttg)  # none before the goal
+        elapsed = (ttg if reached and ttg is not None else now) - self.start
         out: dict[str, float] = {
-            "success": float(reached) if has_goal else nan,
-            "collision": float(sum(c.episodes.values()) > 0),
+            "success": float(reached and clean) if has_goal else nan,
+            "reached": float(reached) if has_goal else nan,
+            "collision": float(first is not None),
             "collision_wall": float(c.episodes["wall"] + c.episodes["object"] > 0),
             "collision_robot": float(c.episodes["robot"] > 0),
-            "collision_human": float(c.episodes["human"] > 0),
+            "collision_human": float(c.episodes["human"] > 0 or self.human_overlap),
             "timeout": float(not reached and ended) if has_goal else nan,
             "failure_to_progress": float(formulas.failed_to_progress(
                 samples[:, 0], samples[:, 3], t.progress_window, t.progress_distance))
@@ -187,6 +210,7 @@ class NavMetrics:
             "min_distance_to_human": self.min_distance_to_human,
             "personal_space_intrusions": float(self.personal_space_intrusions),
             "personal_space_time": self.personal_space_time,
+            "discomfort": self.discomfort_time / elapsed if elapsed > 0 else 0.0,
             "min_time_to_collision": self.min_time_to_collision,
             "clearing_distance": float(self._clearing.min_clearance or 0.0),
             "mean_speed": speed,

@@ -1,0 +1,59 @@
+"""CrowdNav's test layouts, drawn exactly as its released code draws them (vita-epfl/CrowdNav,
+crowd_sim/envs/crowd_sim.py; facts taken from it, the code written anew).
+
+``crowdnav_circle_crossing``, in CrowdNav's own frame (origin at the circle's centre):
+- the robot starts at (0, -R) and its goal is (0, R) (R the circle radius, 4 m);
+- each human in turn draws an angle a uniform in [0, 2 pi) and a start
+  R (cos a, sin a) + (u_x - 0.5, u_y - 0.5) v_pref (u uniform in [0, 1): the noise is on the
+  start, up to half a metre each way at 1 m/s); its goal is the start mirrored through the
+  centre, -start;
+- a draw is kept when the start is at least r_human + r_other + 0.2 m (the discomfort
+  distance) from the start and from the goal of the robot and of every human placed before
+  (0.8 m with radii 0.3); else it is drawn again;
+- the draws come from numpy's legacy Mersenne Twister seeded with 1000 + i for test case i
+  (CrowdNav seeds ``np.random.seed(1000 + i)``: its validation cases take the first 1000), so
+  seed i here is CrowdNav's test case i, start for start.
+
+The legacy generator is used only here, to give CrowdNav's episodes; everything else in a run
+draws from the run's own seeded Generator.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+CROWDNAV_LAYOUTS = ("crowdnav_circle_crossing",)
+TEST_CASE_OFFSET = 1000  # CrowdNav's test case i is seeded with 1000 + i
+DISCOMFORT_DISTANCE = 0.2  # [m] kept between bodies at the start, beyond touching
+MAX_DRAWS = 100_000  # per human; a crowd too dense for the circle fails instead of hanging
+
+
+class CrowdNavLayoutError(ValueError):
+    """No room for the humans (one line)."""
+
+
+def circle_crossing(seed: int, humans: int, circle_radius: float, robot_radius: float,
+                    human_radius: float, human_speed: float
+                    ) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """(robot start, robot goal, [(human start, human goal), ...]) of CrowdNav's circle
+    crossing test case ``seed``, in CrowdNav's frame [m] (see the module doc)."""
+    draw = np.random.RandomState(TEST_CASE_OFFSET + seed).random_sample
+    start, goal = np.array([0.0, -circle_radius]), np.array([0.0, circle_radius])
+    placed: list[tuple[np.ndarray, np.ndarray, float]] = [(start, goal, robot_radius)]
+    for h in range(humans):
+        for _ in range(MAX_DRAWS):
+            angle = draw() * 2.0 * math.pi
+            noise_x = (draw() - 0.5) * human_speed
+            noise_y = (draw() - 0.5) * human_speed
+            p = np.array([circle_radius * math.cos(angle) + noise_x,
+                          circle_radius * math.sin(angle) + noise_y])
+            if all(math.hypot(*(p - s)) >= human_radius + r + DISCOMFORT_DISTANCE
+                   and math.hypot(*(p - g)) >= human_radius + r + DISCOMFORT_DISTANCE
+                   for s, g, r in placed):
+                break
+        else:
+            raise CrowdNavLayoutError(f"no room for human {h + 1} of {humans} on a circle of "
+                                      f"radius {circle_radius} m after {MAX_DRAWS} draws")
+        placed.append((p, -p, human_radius))
+    return start, goal, [(s, g) for s, g, _ in placed[1:]]
