@@ -134,6 +134,8 @@ class Lidar:
         self.keep(time, ranges)
 
     def keep(self, time: float, ranges: np.ndarray) -> None:
+        """Make ``ranges`` [m] (the error model applied) the latest periodic scan, taken at
+        ``time`` [s]."""
         c = self.config
         self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
                                 max_range=c.max_range, offset=self.offset, time=time)
