@@ -13,7 +13,7 @@ MAX_MAP_CELLS = 64_000_000  # cells in a written map (as maps.ros.MAX_CELLS)
 
 def add_parser(sub) -> None:
     """Add the `map` and `generate` subcommands to an argparse subparsers object."""
-    from pymunk_bot.maps.generate import KINDS
+    from pymunk_bot.maps import WORLD_KINDS as KINDS
 
     map_cmd = sub.add_parser("map", help="write a scenario's static geometry as a ROS map "
                                          "(YAML + PGM, for Nav2's map_server)")

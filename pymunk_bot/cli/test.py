@@ -8,9 +8,13 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 from pymunk_bot.config.errors import ControllerError
-from pymunk_bot.cli.scenario_tests import Outcome, discover, format_table, run_scenario
 from pymunk_bot.cli.arguments import jobs_count, seed_number
+
+if TYPE_CHECKING:  # the runner (and the simulation) loads when `test` runs, not with the parser
+    from pymunk_bot.cli.scenario_tests import Outcome
 
 
 def command(args: argparse.Namespace) -> int:
@@ -20,6 +24,8 @@ def command(args: argparse.Namespace) -> int:
         print("error: test: no ./scenarios folder here; name scenario files or folders "
               "(pymunk-bot test PATH...)", file=sys.stderr)
         return 2
+    from pymunk_bot.cli.scenario_tests import discover, format_table
+
     paths = discover(specs)
     if not paths:
         print(f"no scenario files with an 'expect' block under {', '.join(map(str, specs))}")
@@ -66,8 +72,12 @@ def _run_guarded(path: str, seed: int | None) -> Outcome:
     """:func:`run_scenario`, with a controller's bug (or overrun) as the scenario's failure."""
     started = time.perf_counter()
     try:
+        from pymunk_bot.cli.scenario_tests import run_scenario
+
         return run_scenario(path, seed=seed)
     except ControllerError as exc:
+        from pymunk_bot.cli.scenario_tests import Outcome
+
         return Outcome(path, status="failed", failures=[f"controller {exc}"],
                        wall_time=time.perf_counter() - started)
 

@@ -14,10 +14,13 @@ import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pymunk_bot.config.errors import ScenarioError
-from pymunk_bot.localization.tum import KINDS, TrajectoryRecorder
 from pymunk_bot.outcomes.results import temp_folder_beside, writable_problem
+
+if TYPE_CHECKING:  # the localization package loads only when a run records trajectories
+    from pymunk_bot.localization.tum import TrajectoryRecorder
 
 OPTION = "--trajectory-out"
 
@@ -74,6 +77,8 @@ def _check_directory(directory: Path, robots) -> Path:
         if problem is not None:
             raise ScenarioError(OPTION, "", problem)
         return directory
+    from pymunk_bot.localization.tum import KINDS
+
     for name in robots:
         for kind in KINDS:
             problem = writable_problem(directory / f"{name}.{kind}.tum")
@@ -87,5 +92,7 @@ def prepare_trajectory_output(args: argparse.Namespace, sim) -> TrajectoryOutput
     directory = getattr(args, "trajectory_out", None)
     if directory is None:
         return None
+    from pymunk_bot.localization.tum import TrajectoryRecorder
+
     directory = _check_directory(Path(directory), sim.robots)
     return TrajectoryOutput(directory, TrajectoryRecorder().attach(sim))

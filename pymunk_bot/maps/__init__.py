@@ -1,6 +1,10 @@
 """Maps: occupancy grids (ROS map_server convention), map files, and geometry built from them."""
 from pymunk_bot.maps.grid import OccupancyGrid
 
+# The kinds of world `pymunk-bot generate` makes (maps/generate.py): here, so the command line
+# can offer them without loading the generator and its planner.
+WORLD_KINDS = ("maze", "clutter", "office")
+
 __all__ = ["OccupancyGrid", "MapGeometry", "add_to_space", "free_disc", "geometry_from_grid",
            "load_world_map", "read_ros_map", "read_svg_map", "write_ros_map"]
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from pymunk_bot.maps import WORLD_KINDS
 from pymunk_bot.config import parse_scenario
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.planning.astar import astar
@@ -21,7 +22,7 @@ from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.planning.layouts import clutter, maze_walls
 from pymunk_bot.planning.paths import path_length
 
-KINDS = ("maze", "clutter", "office")
+KINDS = WORLD_KINDS
 DEFAULT_SIZE = {"maze": (8.4, 8.4), "clutter": (12.0, 8.0), "office": (16.0, 10.0)}
 MIN_SIDE, MAX_SIDE = 4.0, 100.0  # [m] arena side limits
 ROBOT_RADIUS = 0.2  # [m]
