@@ -53,7 +53,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     with CompileWatch() as compiling:  # the first run after installing compiles numba's kernels
         sim = Simulation(config, seed=args.seed, source=args.scenario)
-        sim.attach(_interrupts.raise_if_seen)  # a Ctrl-C that a C callback swallowed stops it
+        sim.attach(_interrupts.raise_if_seen)  # a signal that a C callback swallowed stops it
         sim.attach(compiling)  # ticks that compiled are left out of the real-time factor
         duration = args.duration if args.duration is not None else config.world.duration
         from pymunk_bot.cli.outputs import prepare_outputs
@@ -299,13 +299,10 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
         sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
 
 
-def _terminate(signum, frame) -> None:
-    # Turn SIGTERM into an exception so `finally` blocks run (no .part files left behind).
-    raise SystemExit(128 + signum)
-
-
 class _Interrupts:
-    """Ctrl-C, raised as KeyboardInterrupt as by default, and remembered.
+    """Ctrl-C (raised as KeyboardInterrupt, as by default) and SIGTERM (raised as
+    ``SystemExit(128 + signum)``, so ``finally`` blocks run and no .part file is left behind),
+    each remembered.
 
     Raised inside a callback from C (numba's compiler, a pymunk collision handler) the exception
     is "ignored" there; inside a compiled extension's initialisation (pydantic-core's) it can come
@@ -314,24 +311,41 @@ class _Interrupts:
     """
 
     def __init__(self) -> None:
+        self.seen = False  # a Ctrl-C
+        self.terminated: int | None = None  # the exit status a SIGTERM asked for
+
+    def reset(self) -> None:
+        """Forget earlier signals (``main`` may be called again in one process: tests)."""
         self.seen = False
+        self.terminated = None
 
     def __call__(self, signum, frame) -> None:
         self.seen = True
         raise KeyboardInterrupt
 
+    def terminate(self, signum, frame) -> None:
+        """The SIGTERM handler."""
+        self.terminated = 128 + signum
+        raise SystemExit(self.terminated)
+
     def raise_if_seen(self, sim: object = None) -> None:
-        """Raise the interrupt that a C callback swallowed (a ``Simulation`` observer too)."""
+        """Raise the signal's exception that a C callback swallowed (a ``Simulation`` observer
+        too)."""
+        if self.terminated is not None:
+            raise SystemExit(self.terminated)
         if self.seen:
             raise KeyboardInterrupt
 
     def unraisable_hook(self, previous):
-        """A ``sys.unraisablehook``: an interrupt swallowed by a C callback is remembered, not
-        printed with a traceback; everything else goes to ``previous``."""
+        """A ``sys.unraisablehook``: a signal's exception swallowed by a C callback is
+        remembered, not printed with a traceback; everything else goes to ``previous``."""
         def hook(info) -> None:
             if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
                 self.seen = True
                 return
+            if (info.exc_type is not None and issubclass(info.exc_type, SystemExit)
+                    and self.terminated is not None):
+                return  # remembered by terminate: raised again at the next safe point
             previous(info)
 
         return hook
@@ -343,9 +357,9 @@ _interrupts = _Interrupts()
 def main(argv: list[str] | None = None) -> int:
     """The `pymunk-bot` entry point; returns the exit status (see docs/cli.md)."""
     previous = None
-    _interrupts.seen = False
+    _interrupts.reset()
     try:
-        previous = signal.signal(signal.SIGTERM, _terminate)
+        previous = signal.signal(signal.SIGTERM, _interrupts.terminate)
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not if ignored
             signal.signal(signal.SIGINT, _interrupts)
     except ValueError:  # not the main thread: leave signals alone

@@ -90,6 +90,32 @@ def test_sigterm_during_record_leaves_no_part_file(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+
+SIGTERM_IN_A_CALLBACK = """
+import signal, sys
+from pymunk_bot.cli import main
+from pymunk_bot.physics.world import World
+
+begin = World._begin
+def begin_then_terminated(self, *args):
+    signal.raise_signal(signal.SIGTERM)  # its handler runs inside pymunk's C callback
+    begin(self, *args)
+World._begin = begin_then_terminated
+sys.exit(main(["run", "push_crate", "--headless"]))
+"""
+
+
+def test_sigterm_inside_a_pymunk_callback_still_ends_the_run(tmp_path):
+    # A SystemExit raised inside a callback from C is printed and dropped there; the run must
+    # still stop at the next tick with SIGTERM's status, not run on to its end.
+    script = tmp_path / "terminated.py"
+    script.write_text(SIGTERM_IN_A_CALLBACK)
+    done = subprocess.run([sys.executable, str(script)], cwd=REPO, capture_output=True,
+                          text=True, timeout=HANG_GUARD,
+                          env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert done.returncode == 128 + signal.SIGTERM, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
+
 USER_MODULE = '''
 from pathlib import Path
 from pymunk_bot.controllers import Controller, wheel_speeds
