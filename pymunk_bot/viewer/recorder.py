@@ -156,19 +156,36 @@ def _progress(frames, enabled: bool, name: str):
 class _Background:
     """A GIF or MP4 writer fed from a thread of its own through a queue of QUEUE_FRAMES frames:
     ``append`` returns at once unless the encoder is that far behind. An error in the writer
-    comes out of the next ``append`` or ``close``."""
+    comes out of the next ``append`` or ``close``.
+
+    ``abort`` does not rely on the queue: it runs after an interrupt (Ctrl-C, SIGTERM), which
+    may have struck inside the queue's own locking and left it unable to wake the thread (seen
+    once: the thread waited for ever on a ``get`` that the end mark never woke). The thread polls
+    a stop flag instead, and an abort waits for it at most ABORT_WAIT (it is a daemon).
+    """
 
     _END = None
+    POLL = 0.05  # [s] how often the idle thread looks at the stop flag
+    ABORT_WAIT = 2.0  # [s] at most, for the thread to stop after an abort
 
     def __init__(self, writer: _GifWriter | _Mp4Writer) -> None:
         self._writer = writer
         self._frames: queue.Queue = queue.Queue(maxsize=QUEUE_FRAMES)
         self._error: BaseException | None = None
+        self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._work, name="video writer", daemon=True)
         self._thread.start()
 
     def _work(self) -> None:
-        while (frame := self._frames.get()) is not self._END:
+        while True:
+            try:
+                frame = self._frames.get(timeout=self.POLL)
+            except queue.Empty:
+                if self._stopping.is_set():
+                    return
+                continue
+            if frame is self._END or self._stopping.is_set():
+                return
             if self._error is None:  # after an error, drain so that no put blocks
                 try:
                     self._writer.append(frame)
@@ -200,13 +217,10 @@ class _Background:
         self._writer.close()
 
     def abort(self) -> None:
-        """Stop the encoder and the thread (idempotent)."""
+        """Stop the encoder and the thread (idempotent; at most ABORT_WAIT)."""
+        self._stopping.set()
         self._writer.abort()  # a write blocked on ffmpeg's pipe fails at once
-        with contextlib.suppress(queue.Empty):
-            while True:  # room for the end mark
-                self._frames.get_nowait()
-        self._put(self._END)
-        self._thread.join()
+        self._thread.join(timeout=self.ABORT_WAIT)
 
 
 class _GifWriter:
