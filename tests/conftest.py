@@ -5,6 +5,8 @@ import os
 
 import pytest
 
+pytest_plugins = ["pytester"]  # tests of the scenario plugin run pytest in-process
+
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 

@@ -1,4 +1,5 @@
-"""The command line as a user runs it: list, validate, run with --out, determinism across processes."""
+"""The command line as a user runs it: list, validate, run with --out (in this process:
+tests/command.py), determinism across processes (in two)."""
 from __future__ import annotations
 
 import json
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from bounds import HANG_GUARD
+from command import pymunk_bot
 
 REPO = Path(__file__).resolve().parent.parent
 SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
@@ -21,7 +23,7 @@ def cli(*args: str, cwd: Path = REPO, env_extra: dict | None = None) -> subproce
 
 
 def test_list_shows_every_shipped_scenario_with_its_description():
-    proc = cli("list")
+    proc = pymunk_bot("list")
     assert proc.returncode == 0
     lines = proc.stdout.splitlines()
     assert lines[0].startswith("default ")
@@ -31,13 +33,13 @@ def test_list_shows_every_shipped_scenario_with_its_description():
 
 
 def test_validate_all_shipped():
-    proc = cli("validate", *map(str, SCENARIOS))
+    proc = pymunk_bot("validate", *SCENARIOS)
     assert proc.returncode == 0, proc.stderr
 
 
 def test_default_scenario_runs_from_any_directory(tmp_path):
     out = tmp_path / "r.json"
-    proc = cli("run", "--headless", "--out", str(out), cwd=tmp_path)
+    proc = pymunk_bot("run", "--headless", "--out", out, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     result = json.loads(out.read_text())
     assert result["scenario"] == "default" and result["passed"]
@@ -45,7 +47,7 @@ def test_default_scenario_runs_from_any_directory(tmp_path):
 
 def test_run_writes_the_contract_result_shape(tmp_path):
     out = tmp_path / "r.json"
-    proc = cli("run", "push_crate", "--headless", "--out", str(out), "--seed", "3", "--duration", "5")
+    proc = pymunk_bot("run", "push_crate", "--headless", "--out", out, "--seed", "3", "--duration", "5")
     result = json.loads(out.read_text())
     assert {"scenario", "seed", "sim_time", "steps", "wall_time", "real_time_factor", "passed",
             "robots"} <= result.keys()

@@ -1,13 +1,11 @@
 """Every kind of bad scenario input gets exit status 2 and one precise line, never a traceback."""
 from __future__ import annotations
 
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
 import pytest
-from bounds import HANG_GUARD
+from command import pymunk_bot
 
 GOOD = """\
 name: good
@@ -25,11 +23,6 @@ robots:
 expect:
   r1: {goal_reached: true}
 """
-
-
-def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pymunk_bot", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=HANG_GUARD)
 
 
 def validate(tmp_path: Path, text: str) -> tuple[int, str]:
@@ -126,17 +119,17 @@ def test_empty_file_and_non_mapping(tmp_path):
 
 
 def test_missing_file_via_run_is_exit_2_without_traceback(tmp_path):
-    proc = run_cli("run", str(tmp_path / "nope.yaml"), "--headless")
+    proc = pymunk_bot("run", str(tmp_path / "nope.yaml"), "--headless")
     assert proc.returncode == 2
     assert proc.stderr.strip() == f"error: {tmp_path / 'nope.yaml'}: file not found"
     assert "Traceback" not in proc.stderr + proc.stdout
 
 
 def test_unknown_shipped_name_suggests_one():
-    proc = run_cli("run", "push_crat", "--headless")
+    proc = pymunk_bot("run", "push_crat", "--headless")
     assert proc.returncode == 2 and "did you mean 'push_crate'" in proc.stderr
 
 
 def test_bad_command_line_option_is_exit_2():
-    proc = run_cli("run", "--duration", "abc")
+    proc = pymunk_bot("run", "--duration", "abc")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr

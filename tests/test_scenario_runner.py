@@ -1,10 +1,7 @@
 """Every shipped scenario holds its expectations; `pymunk-bot test` and the pytest plugin."""
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from bounds import HANG_GUARD
 
 from pymunk_bot.cli import main
 from pymunk_bot.cli.scenario_tests import discover
@@ -50,24 +47,24 @@ def test_command_exit_status_and_table(suite, capsys):
     assert "world.size[1]: must be >= 0.001" in capsys.readouterr().out
 
 
-def test_pytest_plugin_collects_only_what_it_is_pointed_at(suite):
+def test_pytest_plugin_collects_only_what_it_is_pointed_at(suite, pytester, monkeypatch):
     (suite / "failing.yaml").write_text(FAILING)
     (suite / "tests").mkdir()
     (suite / "tests" / "fixture.yaml").write_text(FAILING)
     (suite / "tests" / "test_nothing.py").write_text("def test_ok():\n    pass\n")
+    monkeypatch.chdir(suite)
 
-    def pytest_run(*args):
-        return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                               *args], cwd=suite, capture_output=True, text=True, timeout=HANG_GUARD)
+    def pytest_run(*args):  # in this process: the plugin loads from its entry point as there
+        return pytester.runpytest_inprocess("-q", "-p", "no:cacheprovider", *args)
 
     explicit = pytest_run("good.yaml", "failing.yaml")
-    assert "1 failed, 1 passed" in explicit.stdout
-    assert "expected <= 1 m" in explicit.stdout
+    assert "1 failed, 1 passed" in explicit.stdout.str()
+    assert "expected <= 1 m" in explicit.stdout.str()
     # A bare `pytest` (testpaths from the ini) never runs YAML fixtures lying beside tests.
     (suite / "pytest.ini").write_text("[pytest]\ntestpaths = tests\n")
     plain = pytest_run()
-    assert "1 passed" in plain.stdout and "failed" not in plain.stdout
+    assert "1 passed" in plain.stdout.str() and "failed" not in plain.stdout.str()
     # ...unless the project asks for them with the ini glob.
     (suite / "pytest.ini").write_text("[pytest]\ntestpaths = tests\n"
                                       "pymunk_bot_scenarios = tests/*.yaml\n")
-    assert "1 failed, 1 passed" in pytest_run().stdout
+    assert "1 failed, 1 passed" in pytest_run().stdout.str()

@@ -4,7 +4,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from pymunk_bot.geometry import plane as geo
 from pymunk_bot.config.errors import SemanticError
@@ -53,6 +52,8 @@ def _start_neighbours(scenario: ScenarioConfig, feet: list) -> tuple[list[list[i
     if valid.shape[0] == 0:
         return obstacles, robots
     centres, radii = centres[valid], radii[valid]
+    from scipy.spatial import cKDTree  # here: every command checks scenarios, few have swarms
+
     tree = cKDTree(centres)
     for a, b in sorted(tree.query_pairs(2.0 * float(radii.max()) + 1e-6)):
         if math.dist(centres[a], centres[b]) <= radii[a] + radii[b] + 1e-6:

@@ -8,7 +8,6 @@ from __future__ import annotations
 from typing import Any
 
 from pymunk_bot.config import parse_scenario
-from pymunk_bot.engine.simulation import Simulation
 from pymunk_bot.sweep.grid import Run, scenario_with
 
 # Result keys left out of rows: they measure the machine, not the run, and would make the
@@ -51,6 +50,8 @@ def run_one(base: dict, source: str, run: Run, duration: float | None,
     """Build the run's scenario (Python controllers looked for in ``base_dir`` first, as for
     the scenario file), simulate it headless and return its row."""
     config = parse_scenario(scenario_with(base, run.values), source, base_dir=base_dir)
+    from pymunk_bot.engine.simulation import Simulation  # here: the CLI's parser imports sweep
+
     sim = Simulation(config, seed=run.seed, source=source)
     sim.run(config.world.duration if duration is None else duration)
     return result_row(run, sim.result())

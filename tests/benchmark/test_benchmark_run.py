@@ -79,7 +79,7 @@ def test_rows_are_the_same_on_serial_and_process_backends(suite, tmp_path):
     entries = load_suite(str(suite))
     serial = run_benchmark(entries, choices, [0, 1], backend="serial",
                            out=tmp_path / "serial.csv")
-    process = run_benchmark(entries, choices, [0, 1], backend="process", workers=2)
+    process = run_benchmark(entries, choices, [0, 1], backend="process", workers=1)
     assert len(serial) == 4
     assert [r["controller"] for r in serial] == ["go_to_goal", "go_to_goal", "avoid", "avoid"]
     assert_same_rows(serial, process)

@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy.stats import binom
 
 import pymunk_bot as pb
 from pymunk_bot.benchmark.controllers import controller_choices
@@ -40,6 +39,8 @@ def test_the_layout_is_crowdnavs_test_case():
 
 def test_crowdnav_orca_reproduces_its_row_on_40_test_cases():
     """Each rate within the binomial 99 % interval of 40 draws at the 500-episode rate."""
+    from scipy.stats import binom  # here: scipy.stats costs every test worker 0.4 s to import
+
     rows = run_benchmark(load_suite("crowdnav"), controller_choices(["crowdnav_orca"]),
                          range(EPISODES))
     assert all(r["status"] == "ok" for r in rows)

@@ -35,7 +35,8 @@ def test_waypoints_pressed_against_a_wall_fail_with_a_message_instead_of_pushing
 
 
 def test_sampled_overrides_end_in_arrival_or_a_stated_failure():
-    bad = [describe(o) for o in map(run_trial, draw_trials(24, seed=35)) if not o.ok]
+    # A quick sample for every run of the suite; the slow test below draws the 200.
+    bad = [describe(o) for o in map(run_trial, draw_trials(8, seed=35)) if not o.ok]
     assert not bad, "\n".join(bad)
 
 

@@ -5,12 +5,11 @@ check as a process per file, at an eighth of the CPU (issue 35: the suite's cost
 from __future__ import annotations
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import yaml
-from bounds import HANG_GUARD
+from command import pymunk_bot
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -46,8 +45,7 @@ def validated(tmp_path_factory) -> tuple[subprocess.CompletedProcess, list[Path]
     for i, (robot, obstacles, _) in enumerate(BAD):
         paths.append(folder / f"case{i}.yaml")
         paths[-1].write_text(yaml.safe_dump(base(robot, obstacles)))
-    proc = subprocess.run([sys.executable, "-m", "pymunk_bot", "validate", *map(str, paths)],
-                          capture_output=True, text=True, cwd=REPO, timeout=HANG_GUARD)
+    proc = pymunk_bot("validate", *paths, cwd=REPO)
     return proc, paths
 
 

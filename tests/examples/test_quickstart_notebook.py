@@ -8,12 +8,12 @@ from pathlib import Path
 import pytest
 from bounds import HANG_GUARD
 
-nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
 NOTEBOOK = Path(__file__).resolve().parents[2] / "examples" / "quickstart.ipynb"
 
 
 def test_the_quickstart_notebook_runs_and_shows_a_plot_and_a_frame(tmp_path, monkeypatch):
+    nbformat = pytest.importorskip("nbformat")  # here, not at collection: 0.2 s to import
+    nbclient = pytest.importorskip("nbclient")
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # the kernel inherits the environment
     notebook = nbformat.read(NOTEBOOK, as_version=4)
     assert all(not c.get("outputs") for c in notebook.cells if c.cell_type == "code"), \

@@ -3,8 +3,6 @@ logs and the `map` command all see it)."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +18,7 @@ from pymunk_bot.maps.files import load_world_map
 from pymunk_bot.maps.rasterize import scenario_grid
 from pymunk_bot.planning.grid import ClearanceGrid
 from pymunk_bot.planning.map import MapInfo
-from bounds import HANG_GUARD
+from command import pymunk_bot
 
 REPO = Path(__file__).resolve().parents[2]
 RES = 0.05  # [m] per cell of the test map
@@ -136,8 +134,7 @@ def test_a_robot_starting_on_a_solid_cell_is_refused(tmp_path, pose, what):
 
 def test_cli_reports_a_start_in_a_wall_in_one_line_with_exit_2(tmp_path):
     path = room_scenario(tmp_path, pose=(-0.65, 1.0, 0.0))
-    done = subprocess.run([sys.executable, "-m", "pymunk_bot", "validate", str(path)],
-                          capture_output=True, text=True, cwd=REPO, timeout=HANG_GUARD)
+    done = pymunk_bot("validate", path, cwd=REPO)
     assert done.returncode == 2
     line = done.stderr.strip()
     assert line.startswith("error: ") and "\n" not in line

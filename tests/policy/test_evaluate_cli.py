@@ -3,9 +3,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +13,7 @@ pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs.evaluation import EpisodeOutcome, summarize, wilson  # noqa: E402
 from pymunk_bot.policy.files import MlpPolicy  # noqa: E402
-from bounds import HANG_GUARD
+from command import pymunk_bot
 
 BEAMS = 12
 
@@ -38,15 +35,9 @@ def homing(tmp_path, beams=BEAMS):
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "pymunk_bot", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=HANG_GUARD,
-                          env={**os.environ, "PYTHONPATH": str(ROOT)})
-
-
 def test_evaluate_prints_rates_with_intervals_and_writes_episodes(tmp_path):
     policy, scenario = homing(tmp_path)
-    out = run_cli("evaluate", policy, scenario, "--episodes", "6", "--random-goal",
+    out = pymunk_bot("evaluate", policy, scenario, "--episodes", "6", "--random-goal",
                   "--random-start", "--out", tmp_path / "e.csv", "--json")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
@@ -56,7 +47,7 @@ def test_evaluate_prints_rates_with_intervals_and_writes_episodes(tmp_path):
     rows = list(csv.DictReader((tmp_path / "e.csv").open()))
     assert [int(r["seed"]) for r in rows] == list(range(6))
     assert sum(r["success"] == "True" for r in rows) == round(6 * summary["success"]["rate"])
-    again = run_cli("evaluate", policy, scenario, "--episodes", "6", "--random-goal",
+    again = pymunk_bot("evaluate", policy, scenario, "--episodes", "6", "--random-goal",
                     "--random-start", "--json", "--workers", "2")
     assert json.loads(again.stdout) == summary  # the same episodes on two processes
 
@@ -64,10 +55,10 @@ def test_evaluate_prints_rates_with_intervals_and_writes_episodes(tmp_path):
 def test_a_policy_for_another_lidar_is_one_line_exit_2(tmp_path):
     policy, scenario = homing(tmp_path, beams=20)
     scenario.write_text(scenario.read_text().replace("beams: 20", "beams: 12"))
-    out = run_cli("evaluate", policy, scenario, "--episodes", "2")
+    out = pymunk_bot("evaluate", policy, scenario, "--episodes", "2")
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and "takes 28 inputs" in out.stderr
-    out = run_cli("evaluate", tmp_path / "missing.npz", scenario)
+    out = pymunk_bot("evaluate", tmp_path / "missing.npz", scenario)
     assert out.returncode == 2 and "no such file" in out.stderr
 
 
@@ -83,7 +74,7 @@ def test_summary_intervals():
 
 def test_the_shipped_policy_on_its_shipped_scenario_from_another_folder(tmp_path):
     # The scenario names its policy relative to its own folder, not the current one.
-    out = run_cli("evaluate", ROOT / "scenarios" / "policies" / "clutter_es.npz", "policy_clutter",
+    out = pymunk_bot("evaluate", ROOT / "scenarios" / "policies" / "clutter_es.npz", "policy_clutter",
                   "--episodes", "2", "--json", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["reached"]["rate"] == 1.0
@@ -106,7 +97,7 @@ def test_generated_worlds_take_the_size_asked_for():
 
 def test_size_without_generate_is_one_line_exit_2(tmp_path):
     policy, scenario = homing(tmp_path)
-    out = run_cli("evaluate", policy, scenario, "--size", "8", "6")
+    out = pymunk_bot("evaluate", policy, scenario, "--size", "8", "6")
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
         "error: --size: applies to generated worlds: add --generate KIND"]

@@ -2,7 +2,6 @@
 policy files refused with one line."""
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
@@ -16,7 +15,7 @@ from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy
 gym = pytest.importorskip("gymnasium")
 
 from pymunk_bot.envs import NavigationEnv  # noqa: E402
-from bounds import HANG_GUARD
+from command import pymunk_bot
 
 BEAMS = 16
 
@@ -88,11 +87,6 @@ def test_the_controller_stops_at_the_goal(tmp_path):
     assert np.hypot(*(sim.robots["r1"].pose[:2] - [5.0, 2.1])) < 0.3  # stopped there
 
 
-def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "pymunk_bot", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=HANG_GUARD)
-
-
 def write_scenario(tmp_path, data) -> Path:
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(data))
@@ -110,7 +104,7 @@ def write_scenario(tmp_path, data) -> Path:
 def test_bad_policy_files_are_one_line_exit_2(tmp_path, make, words):
     make(tmp_path)
     path = write_scenario(tmp_path, scenario("p.npz"))  # relative to the scenario's folder
-    out = run_cli("validate", path)
+    out = pymunk_bot("validate", path)
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "robots[0].controller" in lines[0] and words in lines[0]
@@ -118,7 +112,7 @@ def test_bad_policy_files_are_one_line_exit_2(tmp_path, make, words):
 
 
 def test_shipped_policy_scenario_runs_from_the_cli(tmp_path):
-    out = run_cli("run", "policy_clutter", "--headless", "--out", tmp_path / "r.json")
+    out = pymunk_bot("run", "policy_clutter", "--headless", "--out", tmp_path / "r.json")
     assert out.returncode == 0, out.stderr
     result = yaml.safe_load((tmp_path / "r.json").read_text())
     assert result["robots"]["r1"]["goal_reached"] and result["robots"]["r1"]["collisions"] == 0
@@ -179,7 +173,7 @@ def test_nan_output_fails_the_run_with_the_reason(tmp_path):
     pytest.importorskip("onnxruntime")
     onnx_mlp(random_mlp(np.random.default_rng(2)), tmp_path / "p.onnx", nan=True)
     path = write_scenario(tmp_path, scenario("p.onnx"))
-    out = run_cli("run", path, "--headless", "--duration", "1", "--out", tmp_path / "r.json")
+    out = pymunk_bot("run", path, "--headless", "--duration", "1", "--out", tmp_path / "r.json")
     assert out.returncode == 1, out.stderr
     robot = yaml.safe_load((tmp_path / "r.json").read_text())["robots"]["r1"]
     assert robot["controller_status"] == "failed" and "not 2 finite numbers" in \

@@ -139,7 +139,7 @@ def test_cli_prints_the_summary_writes_csv_and_plot(tmp_path, capsys):
     out = tmp_path / "rows.csv"
     status = cli_main(["sweep", str(scenario), "--seeds", "0:2", "--set",
                        "robots[0].max_wheel_speed=0.5,1.0", "--out", str(out), "--plot",
-                       "--no-progress"])
+                       "--backend", "serial", "--no-progress"])  # processes: tested below
     printed = capsys.readouterr().out
     assert status == 1  # the 0.5 m/s runs miss the 2.75 s expectation
     assert "robots[0].max_wheel_speed" in printed and "100%" in printed and "2/4 runs passed" \
@@ -347,7 +347,7 @@ def test_a_python_controller_beside_the_scenario_is_found_from_any_folder(
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
     status = cli_main(["sweep", str(scenario), "--seeds", "0:2", "--backend", backend,
-                       "--workers", "2", "--out", str(tmp_path / "rows.csv"), "--no-progress"])
+                       "--workers", "1", "--out", str(tmp_path / "rows.csv"), "--no-progress"])
     out, err = capsys.readouterr()
     assert status == 0, err
     assert "2/2 runs passed" in out
