@@ -14,6 +14,14 @@ crowd_sim/envs/crowd_sim.py; facts taken from it, the code written anew).
   (CrowdNav seeds ``np.random.seed(1000 + i)``: its validation cases take the first 1000), so
   seed i here is CrowdNav's test case i, start for start.
 
+``crowdnav_square_crossing`` (CrowdNav's other test rule), the robot as above:
+- each human in turn draws a side (u > 0.5: left, x < 0; else right), then a start with x
+  uniform over that half of a square of side W (10 m) and y uniform in [-W/2, W/2), redrawn
+  until it is at least r_human + r_other + 0.2 m from every earlier agent's start (the robot's
+  too); then a goal the same way on the other half, redrawn until as far from every earlier
+  agent's goal;
+- the same seeds as above.
+
 The legacy generator is used only here, to give CrowdNav's episodes; everything else in a run
 draws from the run's own seeded Generator.
 """
@@ -23,9 +31,10 @@ import math
 
 import numpy as np
 
-CROWDNAV_LAYOUTS = ("crowdnav_circle_crossing",)
+CROWDNAV_LAYOUTS = ("crowdnav_circle_crossing", "crowdnav_square_crossing")
 TEST_CASE_OFFSET = 1000  # CrowdNav's test case i is seeded with 1000 + i
 DISCOMFORT_DISTANCE = 0.2  # [m] kept between bodies at the start, beyond touching
+SQUARE_WIDTH = 10.0  # [m] CrowdNav's square_width (configs/env.config)
 MAX_DRAWS = 100_000  # per human; a crowd too dense for the circle fails instead of hanging
 
 
@@ -56,4 +65,33 @@ def circle_crossing(seed: int, humans: int, circle_radius: float, robot_radius: 
             raise CrowdNavLayoutError(f"no room for human {h + 1} of {humans} on a circle of "
                                       f"radius {circle_radius} m after {MAX_DRAWS} draws")
         placed.append((p, -p, human_radius))
+    return start, goal, [(s, g) for s, g, _ in placed[1:]]
+
+
+def square_crossing(seed: int, humans: int, circle_radius: float, square_width: float,
+                    robot_radius: float, human_radius: float
+                    ) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """(robot start, robot goal, [(human start, human goal), ...]) of CrowdNav's square
+    crossing test case ``seed``, in CrowdNav's frame [m] (see the module doc)."""
+    draw = np.random.RandomState(TEST_CASE_OFFSET + seed).random_sample
+    start, goal = np.array([0.0, -circle_radius]), np.array([0.0, circle_radius])
+    placed: list[tuple[np.ndarray, np.ndarray, float]] = [(start, goal, robot_radius)]
+    half = 0.5 * square_width
+
+    def clear_point(sign: float, of: int, h: int, what: str) -> np.ndarray:
+        """A point on the ``sign`` half, clear of every earlier agent's ``of`` (0: start,
+        1: goal)."""
+        for _ in range(MAX_DRAWS):
+            p = np.array([draw() * half * sign, (draw() - 0.5) * square_width])
+            if all(math.hypot(*(p - agent[of])) >= human_radius + agent[2] + DISCOMFORT_DISTANCE
+                   for agent in placed):
+                return p
+        raise CrowdNavLayoutError(f"no room for the {what} of human {h + 1} of {humans} in a "
+                                  f"square of side {square_width} m after {MAX_DRAWS} draws")
+
+    for h in range(humans):
+        sign = -1.0 if draw() > 0.5 else 1.0
+        p = clear_point(sign, 0, h, "start")
+        g = clear_point(-sign, 1, h, "goal")
+        placed.append((p, g, human_radius))
     return start, goal, [(s, g) for s, g, _ in placed[1:]]

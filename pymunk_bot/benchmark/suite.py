@@ -21,7 +21,8 @@ from pymunk_bot.config.loader import shipped_scenario_dirs
 from pymunk_bot.config.types import Duration, Name, PositiveFloat, PositiveInt, Section, Vec2
 from pymunk_bot.config.yaml_source import parse_yaml, read_text
 from pymunk_bot.config.errors import ScenarioError
-from pymunk_bot.benchmark.crowdnav import CROWDNAV_LAYOUTS, CrowdNavLayoutError, circle_crossing
+from pymunk_bot.benchmark.crowdnav import CROWDNAV_LAYOUTS, SQUARE_WIDTH, CrowdNavLayoutError, \
+    circle_crossing, square_crossing
 from pymunk_bot.benchmark.layouts import LAYOUTS, LayoutError, draw_layout
 
 MAX_ENTRIES = 10_000  # scenarios per suite at most
@@ -64,8 +65,11 @@ class GeneratorSpec(Section):
     worlds: dict[Name, WorldSpec] = Field(min_length=1)
     layouts: list[str] = Field(min_length=1)
     densities: dict[Name, Annotated[PositiveInt, Field(le=MAX_HUMANS)]] = Field(min_length=1)
-    # [m] the circle of CrowdNav's layouts (crowdnav_circle_crossing), centred in the world
+    # [m] the circle of CrowdNav's layouts (the robot crosses it; crowdnav_circle_crossing's
+    # humans start on it), centred in the world
     circle_radius: Annotated[PositiveFloat, Field(le=50.0)] = 4.0
+    # [m] the side of crowdnav_square_crossing's square, centred in the world
+    square_width: Annotated[PositiveFloat, Field(le=100.0)] = SQUARE_WIDTH
     # true: an episode ends at the robot's first collision (CrowdNav's protocol); false: it
     # goes on to the goal or the duration, and later arrivals count as reached
     end_at_collision: bool = False
@@ -104,11 +108,13 @@ def _spec(path: Path, data: dict) -> GeneratorSpec:
                 if world.size is None or world.generate or world.map or world.obstacles:
                     raise ScenarioError(str(path), f"worlds.{world_name}",
                                         f"layout {name} needs an open world (size only)")
-                least = 2 * spec.circle_radius + 4.0  # [m] the circle and 2 m beyond it
+                # [m] the circle (and the square) and 2 m beyond
+                least = max(2 * spec.circle_radius, spec.square_width
+                            if name == "crowdnav_square_crossing" else 0.0) + 4.0
                 if min(world.size) < least:
                     raise ScenarioError(str(path), f"worlds.{world_name}.size",
                                         f"layout {name} needs at least {least:g} m each way "
-                                        "(the circle and 2 m beyond it)")
+                                        "(its circle or square and 2 m beyond it)")
     for name, world in spec.worlds.items():
         if (world.generate is not None) + (world.map is not None) + (
                 world.size is not None and world.generate is None) != 1:
@@ -207,8 +213,8 @@ def _generate(entry: Entry, seed: int) -> dict:
     robot = dict(spec.robot)
     robot.setdefault("name", "r1")
     if recipe["layout"] in CROWDNAV_LAYOUTS:
-        placed_obstacles, placed_robot = _crowdnav(entry, spec, section, robot, recipe["humans"],
-                                                   seed)
+        placed_obstacles, placed_robot = _crowdnav(entry, spec, recipe["layout"], section, robot,
+                                                   recipe["humans"], seed)
         return _episode(entry, spec, recipe, seed, section, placed_obstacles, placed_robot)
     try:
         placed_obstacles, placed_robot = draw_layout(
@@ -219,16 +225,22 @@ def _generate(entry: Entry, seed: int) -> dict:
     return _episode(entry, spec, recipe, seed, section, placed_obstacles, placed_robot)
 
 
-def _crowdnav(entry: Entry, spec: GeneratorSpec, section: dict, robot: dict, humans: int,
-              seed: int) -> tuple[list[dict], dict]:
-    """CrowdNav's test case ``seed`` (benchmark/crowdnav.py), its frame's origin at the
-    world's centre."""
+def _crowdnav(entry: Entry, spec: GeneratorSpec, layout: str, section: dict, robot: dict,
+              humans: int, seed: int) -> tuple[list[dict], dict]:
+    """CrowdNav's test case ``seed`` of ``layout`` (benchmark/crowdnav.py), its frame's origin
+    at the world's centre."""
     centre = np.array(section["size"], dtype=float) / 2
     pedestrian = dict(spec.pedestrian)
+    robot_radius = float(robot.get("radius", 0.2))
+    human_radius = float(pedestrian.get("radius", 0.25))
     try:
-        start, goal, routes = circle_crossing(
-            seed, humans, spec.circle_radius, float(robot.get("radius", 0.2)),
-            float(pedestrian.get("radius", 0.25)), float(pedestrian.get("speed", 1.3)))
+        if layout == "crowdnav_square_crossing":
+            start, goal, routes = square_crossing(seed, humans, spec.circle_radius,
+                                                  spec.square_width, robot_radius, human_radius)
+        else:
+            start, goal, routes = circle_crossing(seed, humans, spec.circle_radius, robot_radius,
+                                                  human_radius,
+                                                  float(pedestrian.get("speed", 1.3)))
     except CrowdNavLayoutError as exc:
         raise ScenarioError(entry.source, "", str(exc)) from None
     walkers = [dict(pedestrian, type="pedestrian", center=(centre + a).tolist(),

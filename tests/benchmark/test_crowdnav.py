@@ -8,7 +8,7 @@ import pytest
 
 import pymunk_bot as pb
 from pymunk_bot.benchmark.controllers import controller_choices
-from pymunk_bot.benchmark.crowdnav import circle_crossing
+from pymunk_bot.benchmark.crowdnav import circle_crossing, square_crossing
 from pymunk_bot.benchmark.runner import run_benchmark
 from pymunk_bot.benchmark.suite import load_suite
 
@@ -130,3 +130,44 @@ def test_crowdnavs_layout_needs_an_open_room_around_its_circle(tmp_path, world, 
     with pytest.raises(pb.ScenarioError) as raised:
         load_suite(str(spec))
     assert raised.value.path == key and "crowdnav_circle_crossing" in raised.value.problem
+
+
+# Test case 0 of CrowdNav's square crossing as its own code draws it: crowd_sim.py's
+# generate_random_human_position(5, "square_crossing") after np.random.seed(1000), run here on
+# the fetched vita-epfl/CrowdNav (its 500 test cases agreed to the bit) -- (px, py, gx, gy).
+CROWDNAV_SQUARE_CASE_0 = [
+    (-0.5750347156220287, 4.502828643490245, 2.410957007139991, 3.7247453518203533),
+    (0.20354812384544563, -1.028055386542942, -1.1656609867418999, 3.417407242530616),
+    (3.7123476679120433, -1.078458721911587, -0.9112825997619217, 2.4353941459214),
+    (4.426686021903754, 4.526443992215418, -4.655717173387554, -0.8456904695509215),
+    (4.910137422990989, -1.6036231636471143, -3.533435969444019, -1.3812293239243822)]
+
+
+def test_the_square_layout_is_crowdnavs_test_case():
+    start, goal, routes = square_crossing(0, 5, 4.0, 10.0, 0.3, 0.3)
+    assert start.tolist() == [0.0, -4.0] and goal.tolist() == [0.0, 4.0]
+    assert [(*s, *g) for s, g in routes] == CROWDNAV_SQUARE_CASE_0
+    for case in range(50):  # every human crosses to the other half, clear of those before
+        start, goal, routes = square_crossing(case, 5, 4.0, 10.0, 0.3, 0.3)
+        agents = [(start, goal, 0.3)]
+        for s, g in routes:
+            assert s[0] * g[0] < 0 and max(abs(s).max(), abs(g).max()) <= 5.0
+            for s0, g0, r in agents:
+                assert math.hypot(*(s - s0)) >= 0.5 + r and math.hypot(*(g - g0)) >= 0.5 + r
+            agents.append((s, g, 0.3))
+
+
+def test_the_square_suite_runs_crowdnavs_square_episodes():
+    entries = load_suite("crowdnav_square")
+    rows = run_benchmark(entries, controller_choices(["crowdnav_orca"]), range(4))
+    assert [r["status"] for r in rows] == ["ok"] * 4
+    assert sum(r["success"] for r in rows) >= 2  # 0.85 over its first 40 cases
+
+
+def test_the_square_needs_its_side_and_2_m_beyond(tmp_path):
+    spec = tmp_path / "cn.yaml"
+    spec.write_text("suite: cn\nrobot: {name: r1}\nlayouts: [crowdnav_square_crossing]\n"
+                    "densities: {five: 5}\nsquare_width: 12\nworlds:\n  small: {size: [15, 15]}\n")
+    with pytest.raises(pb.ScenarioError) as raised:
+        load_suite(str(spec))
+    assert raised.value.path == "worlds.small.size" and "16 m" in raised.value.problem
