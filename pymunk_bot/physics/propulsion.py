@@ -185,7 +185,13 @@ class Propulsion:
         steady: list[tuple[int, tuple[float, float, float]]] = []
         for drives, units in held:
             rows, members, _ = drives.rows(units)
-            for k, twist in zip(members, zip(*_floats(drives.coast(h, substeps, rows)))):
+            twists = drives.coast(h, substeps, rows)
+            if len(members) == 1:  # one robot: its twist's floats, without the lists
+                ux, uy, omega = twists
+                pairs: Any = ((members[0], (float(ux[0]), float(uy[0]), float(omega[0]))),)
+            else:
+                pairs = zip(members, zip(*_floats(twists)))
+            for k, twist in pairs:
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
         return steady
@@ -366,7 +372,9 @@ class Propulsion:
             return self.position_array()
         xy = self._xy
         for k, body in enumerate(self.bodies):
-            xy[k] = body.position
+            x, y = body.position  # two float writes: a third of a Vec2d row assignment's time
+            xy[k, 0] = x
+            xy[k, 1] = y
         return xy
 
     def motion_array(self) -> np.ndarray:
