@@ -1,7 +1,6 @@
 """Navigation-v0: spaces, what the observation means, reward, termination, seeding, rendering."""
 from __future__ import annotations
 
-import math
 import os
 import subprocess
 import sys
@@ -241,12 +240,3 @@ def test_human_mode_draws_into_a_window_headless_safe():
     assert env.render() is None
     env.step(np.zeros(2, np.float32))
     env.close()
-
-
-def test_registered_by_module_prefix_without_import():
-    code = ("import gymnasium as gym; env = gym.make('pymunk_bot.envs:pymunk_bot/Navigation-v0');"
-            "print(env.reset(seed=0)[0].shape)")
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
-                         env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=HANG_GUARD)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "(368,)"  # 360 beams + 8

@@ -55,4 +55,4 @@ def fresh_python(code: str) -> subprocess.CompletedProcess:
 def test_a_fresh_interpreter_makes_navigation_v0(code):
     out = fresh_python(code)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.startswith("pymunk_bot/Navigation-v0 (")
+    assert out.stdout.strip() == "pymunk_bot/Navigation-v0 (368,)"  # 360 beams + 8
