@@ -200,7 +200,10 @@ class Crowd:
     def before_step(self, time: float, dt: float) -> None:
         state = self._states.read()
         n = len(self.walkers)
-        pos, vel = state[:n, :2], state[:n, 2:]
+        # Contiguous copies: the kernels see one array layout whatever the count, so numba
+        # compiles each of them once (column slices are 'A' arrays, a single row's are 'C').
+        pos, vel = np.ascontiguousarray(state[:n, :2]), np.ascontiguousarray(state[:n, 2:])
+        every_xy, every_v = np.ascontiguousarray(state[:, :2]), np.ascontiguousarray(state[:, 2:])
         self._advance_goals(pos)
         if self._holds and not (time >= self._next_decision - 1e-9).any() \
                 and (self._period > 0).all():  # nobody chooses this tick
@@ -215,7 +218,7 @@ class Crowd:
             wish = np.where(self._slow > 0, wish * near, wish)
         # from everything a walker avoids: walkers, then robots (centres of gravity)
         social_forces(pos, vel, self._goal_xy, wish, pull, self.tau, self.radius,
-                      state[:, :2], state[:, 2:], self._all_radius, self.v0, self.sigma,
+                      every_xy, every_v, self._all_radius, self.v0, self.sigma,
                       self.reacts, force, pref)
         poses = self.moving.poses()
         wall_forces(self.fixed, self._fixed_poses, self._cells, pos, self._walls, self.reacts,

@@ -248,7 +248,8 @@ class NavigateController(Controller):
         bearing = np.arctan2(pts[:, 1] - oy, pts[:, 0] - ox) - theta
         angles = np.asarray(scan.angles)
         ranges = np.asarray(scan.ranges)
-        beam, off = nearest_beams(bearing, np.ascontiguousarray(angles, dtype=float))
+        # a writeable copy: one array type for the kernel (a scan's may be read-only)
+        beam, off = nearest_beams(bearing, np.array(angles, dtype=float))
         # Beam spacing from the beams themselves: a 90-degree LiDAR is not a full circle.
         step = float(np.median(np.abs(np.diff(angles)))) if len(angles) > 1 else np.inf
         covered = off <= step

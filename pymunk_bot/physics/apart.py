@@ -201,8 +201,8 @@ class SplitPlanner:
         pairs = cKDTree(origins).query_pairs(2.0 * float(reach.max() + travel.max()) + MARGIN,
                                              output_type="ndarray")
         if pairs.size:
-            i, j = pairs[:, 0], pairs[:, 1]
-            gap = pair_gaps(origins, reach, i, j)
+            i, j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+            gap = pair_gaps(np.ascontiguousarray(origins), reach, i, j)  # one layout: one compile
             meet = gap <= travel[i] + travel[j]
             clear[i[meet]] = False
             clear[j[meet]] = False

@@ -349,7 +349,9 @@ class SubstepGate:
             near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
             found = cKDTree(xy).query_pairs(near, output_type="ndarray")
             i, j = self._meeting(found[:, 0], found[:, 1])
-        return _pairs_clear(xy, reach, speeds, i.astype(np.intp), j.astype(np.intp))
+        # contiguous: one array layout for the kernel (numba compiles it once)
+        return _pairs_clear(np.ascontiguousarray(xy), reach, speeds, i.astype(np.intp),
+                            j.astype(np.intp))
 
 
 @numba.njit(cache=True)

@@ -130,7 +130,9 @@ class ObservationBuilder:
         """Write one observation per row of ``out`` (n x size, float32) from each robot's
         ranges [m] (n x beams), :func:`goal_features` and previous clipped action (n x A);
         compiled (``observation_rows``: the proximity (s/R) (R - r) / (s + r) of each range)."""
-        self._fill_rows(out, np.asarray(ranges, dtype=np.float64),
+        # a writeable copy of the ranges: one array type for the kernel (a scan's may be
+        # read-only), so numba compiles it once
+        self._fill_rows(out, np.array(ranges, dtype=np.float64),
                         np.asarray(goals, dtype=np.float64).reshape(-1, 3),
                         np.asarray(previous, dtype=np.float64).reshape(len(goals), -1),
                         self.max_range, PROXIMITY_SCALE, self._factor, GOAL_SCALE, self._cos,

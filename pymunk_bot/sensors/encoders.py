@@ -83,6 +83,8 @@ def integrate_twist(pose: np.ndarray, dx: np.ndarray, dy: np.ndarray,
     (cos, sin) of the mid-step heading and the chord factor, for covariance propagation."""
     n = pose.shape[0]
     c, s, chord = np.empty(n), np.empty(n), np.empty(n)
-    integrate_arcs(pose, np.asarray(dx, dtype=np.float64), np.asarray(dy, dtype=np.float64),
-                   np.asarray(dtheta, dtype=np.float64), c, s, chord)
+    # contiguous: one array layout for the kernel (numba compiles it once)
+    integrate_arcs(pose, np.ascontiguousarray(dx, dtype=np.float64),
+                   np.ascontiguousarray(dy, dtype=np.float64),
+                   np.ascontiguousarray(dtheta, dtype=np.float64), c, s, chord)
     return c, s, chord

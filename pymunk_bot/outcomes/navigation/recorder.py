@@ -125,7 +125,8 @@ class NavMetrics:
     def _measure_humans(self, step: float, vx: float, vy: float) -> float:
         """Fold this tick into the human metrics; the least clearance [m] now."""
         state = self._human_states.read()
-        hxy, hv = state[:, :2], state[:, 2:]
+        # contiguous: one array layout for the kernel (numba compiles it once)
+        hxy, hv = np.ascontiguousarray(state[:, :2]), np.ascontiguousarray(state[:, 2:])
         x, y = self._body.position
         clear = self._clear
         if not self._disc:  # exact distance to the footprint's pieces, less the pedestrian's
