@@ -49,7 +49,8 @@ def transforms(bodies: list[pymunk.Body]) -> np.ndarray:
     for body in bodies:
         rot, pos = body.rotation_vector, body.position
         add((rot.x, rot.y, pos.x, pos.y))
-    return np.array(out).reshape(-1, 4).T
+    # C order, as BodyReader.read gives: one array layout for the kernels that move tables
+    return np.ascontiguousarray(np.array(out).reshape(-1, 4).T)
 
 
 class BodyReader:
