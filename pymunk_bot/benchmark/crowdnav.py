@@ -28,6 +28,7 @@ draws from the run's own seeded Generator.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -42,56 +43,68 @@ class CrowdNavLayoutError(ValueError):
     """No room for the humans (one line)."""
 
 
+Layout = tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]
+Agent = tuple[np.ndarray, np.ndarray, float]  # start, goal [m] and radius [m]
+
+
+def _drawn_clear(propose: Callable[[], np.ndarray], clear_of: Callable[[np.ndarray], bool],
+                 problem: str) -> np.ndarray:
+    """``propose()`` drawn again until ``clear_of`` the point, as CrowdNav redraws; at most
+    MAX_DRAWS times, then CrowdNavLayoutError ("no room for ``problem``")."""
+    for _ in range(MAX_DRAWS):
+        p = propose()
+        if clear_of(p):
+            return p
+    raise CrowdNavLayoutError(f"no room for {problem} after {MAX_DRAWS} draws")
+
+
+def _apart(p: np.ndarray, radius: float, agent: Agent, of: int) -> bool:
+    """``p`` (a body of ``radius``) is the discomfort distance beyond touching ``agent``'s
+    start (``of`` 0) or goal (1)."""
+    return math.hypot(*(p - agent[of])) >= radius + agent[2] + DISCOMFORT_DISTANCE
+
+
 def circle_crossing(seed: int, humans: int, circle_radius: float, robot_radius: float,
-                    human_radius: float, human_speed: float
-                    ) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+                    human_radius: float, human_speed: float) -> Layout:
     """(robot start, robot goal, [(human start, human goal), ...]) of CrowdNav's circle
     crossing test case ``seed``, in CrowdNav's frame [m] (see the module doc)."""
     draw = np.random.RandomState(TEST_CASE_OFFSET + seed).random_sample
     start, goal = np.array([0.0, -circle_radius]), np.array([0.0, circle_radius])
-    placed: list[tuple[np.ndarray, np.ndarray, float]] = [(start, goal, robot_radius)]
+    placed: list[Agent] = [(start, goal, robot_radius)]
+
+    def on_circle() -> np.ndarray:
+        angle = draw() * 2.0 * math.pi
+        noise_x = (draw() - 0.5) * human_speed
+        noise_y = (draw() - 0.5) * human_speed
+        return np.array([circle_radius * math.cos(angle) + noise_x,
+                         circle_radius * math.sin(angle) + noise_y])
+
     for h in range(humans):
-        for _ in range(MAX_DRAWS):
-            angle = draw() * 2.0 * math.pi
-            noise_x = (draw() - 0.5) * human_speed
-            noise_y = (draw() - 0.5) * human_speed
-            p = np.array([circle_radius * math.cos(angle) + noise_x,
-                          circle_radius * math.sin(angle) + noise_y])
-            if all(math.hypot(*(p - s)) >= human_radius + r + DISCOMFORT_DISTANCE
-                   and math.hypot(*(p - g)) >= human_radius + r + DISCOMFORT_DISTANCE
-                   for s, g, r in placed):
-                break
-        else:
-            raise CrowdNavLayoutError(f"no room for human {h + 1} of {humans} on a circle of "
-                                      f"radius {circle_radius} m after {MAX_DRAWS} draws")
+        p = _drawn_clear(on_circle, lambda p: all(
+            _apart(p, human_radius, a, 0) and _apart(p, human_radius, a, 1) for a in placed),
+            f"human {h + 1} of {humans} on a circle of radius {circle_radius} m")
         placed.append((p, -p, human_radius))
     return start, goal, [(s, g) for s, g, _ in placed[1:]]
 
 
 def square_crossing(seed: int, humans: int, circle_radius: float, square_width: float,
-                    robot_radius: float, human_radius: float
-                    ) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+                    robot_radius: float, human_radius: float) -> Layout:
     """(robot start, robot goal, [(human start, human goal), ...]) of CrowdNav's square
     crossing test case ``seed``, in CrowdNav's frame [m] (see the module doc)."""
     draw = np.random.RandomState(TEST_CASE_OFFSET + seed).random_sample
     start, goal = np.array([0.0, -circle_radius]), np.array([0.0, circle_radius])
-    placed: list[tuple[np.ndarray, np.ndarray, float]] = [(start, goal, robot_radius)]
-    half = 0.5 * square_width
+    placed: list[Agent] = [(start, goal, robot_radius)]
 
-    def clear_point(sign: float, of: int, h: int, what: str) -> np.ndarray:
-        """A point on the ``sign`` half, clear of every earlier agent's ``of`` (0: start,
-        1: goal)."""
-        for _ in range(MAX_DRAWS):
-            p = np.array([draw() * half * sign, (draw() - 0.5) * square_width])
-            if all(math.hypot(*(p - agent[of])) >= human_radius + agent[2] + DISCOMFORT_DISTANCE
-                   for agent in placed):
-                return p
-        raise CrowdNavLayoutError(f"no room for the {what} of human {h + 1} of {humans} in a "
-                                  f"square of side {square_width} m after {MAX_DRAWS} draws")
+    def on_half(sign: float) -> Callable[[], np.ndarray]:
+        return lambda: np.array([draw() * 0.5 * square_width * sign,
+                                 (draw() - 0.5) * square_width])
 
     for h in range(humans):
         sign = -1.0 if draw() > 0.5 else 1.0
-        p = clear_point(sign, 0, h, "start")
-        g = clear_point(-sign, 1, h, "goal")
+        where = f"human {h + 1} of {humans} in a square of side {square_width} m"
+        p = _drawn_clear(on_half(sign), lambda p: all(
+            _apart(p, human_radius, a, 0) for a in placed), f"the start of {where}")
+        g = _drawn_clear(on_half(-sign), lambda g: all(
+            _apart(g, human_radius, a, 1) for a in placed), f"the goal of {where}")
         placed.append((p, g, human_radius))
     return start, goal, [(s, g) for s, g, _ in placed[1:]]
