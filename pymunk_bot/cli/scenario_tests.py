@@ -17,7 +17,6 @@ from typing import Sequence
 import yaml
 
 from pymunk_bot.config.errors import ScenarioError
-from pymunk_bot.outcomes.expectations import unexpected_failures
 
 YAML_SUFFIXES = (".yaml", ".yml")
 
@@ -81,8 +80,10 @@ def discover(paths: Sequence[str | Path]) -> list[Path]:
 def run_scenario(path: str | Path, seed: int | None = None,
                  duration: float | None = None) -> Outcome:
     """Load, run for the scenario's duration and check the expectations of one file."""
+    # Here, not at the top: the pytest plugin imports this module in every pytest process.
     from pymunk_bot.config import load_scenario
     from pymunk_bot.engine.simulation import Simulation
+    from pymunk_bot.outcomes.expectations import unexpected_failures
 
     outcome = Outcome(str(path))
     started = time.perf_counter()
