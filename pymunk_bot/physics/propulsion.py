@@ -22,7 +22,7 @@ its heading by a contact within a step follows the held heading for the rest of 
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 import pymunk
@@ -63,12 +63,16 @@ def _partition(units: list[int], settled: list[bool]) -> tuple[list[int], list[i
     return calm, ([u for u in units if not settled[u]] if len(calm) < len(units) else [])
 
 
-def _floats(twists: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
-    """Twists as lists of floats (robot by robot, numpy's scalars cost more than floats)."""
+def _each_twist(members: list[int], twists: tuple[Any, Any, Any]
+                ) -> Iterable[tuple[int, tuple[float, float, float]]]:
+    """Each robot of ``members`` with its twist as floats (robot by robot, numpy's scalars
+    cost more than floats; one robot's without building lists)."""
     ux, uy, omega = twists
+    if len(members) == 1:
+        return ((members[0], (float(ux[0]), float(uy[0]), float(omega[0]))),)
     if isinstance(ux, np.ndarray):
-        return ux.tolist(), uy.tolist(), omega.tolist()
-    return twists
+        ux, uy, omega = ux.tolist(), uy.tolist(), omega.tolist()
+    return zip(members, zip(ux, uy, omega))
 
 
 class Propulsion:
@@ -185,13 +189,7 @@ class Propulsion:
         steady: list[tuple[int, tuple[float, float, float]]] = []
         for drives, units in held:
             rows, members, _ = drives.rows(units)
-            twists = drives.coast(h, substeps, rows)
-            if len(members) == 1:  # one robot: its twist's floats, without the lists
-                ux, uy, omega = twists
-                pairs: Any = ((members[0], (float(ux[0]), float(uy[0]), float(omega[0]))),)
-            else:
-                pairs = zip(members, zip(*_floats(twists)))
-            for k, twist in pairs:
+            for k, twist in _each_twist(members, drives.coast(h, substeps, rows)):
                 if not self._hold(k, twist, h):
                     steady.append((k, twist))
         return steady
@@ -201,12 +199,8 @@ class Propulsion:
         """:meth:`_aim` for these robots (twists in their order; ``member_rows``: ``members``
         as an array): one by one when few, else as rows (the same compiled formula: the same
         floats)."""
-        if len(members) == 1:  # one robot: its twist's floats, without the lists
-            ux, uy, omega = twists
-            self._aim(members[0], (float(ux[0]), float(uy[0]), float(omega[0])), h, h_next)
-            return
         if len(members) < ROWS_AIM:
-            for k, twist in zip(members, zip(*_floats(twists))):
+            for k, twist in _each_twist(members, twists):
                 self._aim(k, twist, h, h_next)
             return
         if any(self._anchored):  # from holding: the anchors back to the centres
