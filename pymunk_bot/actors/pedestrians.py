@@ -201,9 +201,10 @@ class Crowd:
         state = self._states.read()
         n = len(self.walkers)
         # Contiguous copies: the kernels see one array layout whatever the count, so numba
-        # compiles each of them once (column slices are 'A' arrays, a single row's are 'C').
-        pos, vel = np.ascontiguousarray(state[:n, :2]), np.ascontiguousarray(state[:n, 2:])
+        # compiles each of them once (column slices are 'A' arrays, a single row's are 'C');
+        # the walkers' are their leading rows, contiguous too.
         every_xy, every_v = np.ascontiguousarray(state[:, :2]), np.ascontiguousarray(state[:, 2:])
+        pos, vel = every_xy[:n], every_v[:n]
         self._advance_goals(pos)
         if self._holds and not (time >= self._next_decision - 1e-9).any() \
                 and (self._period > 0).all():  # nobody chooses this tick
