@@ -54,15 +54,6 @@ ROWS_AIM = 6
 _UNKNOWN = (math.nan,) * 3  # a control body's last written twist, when it was written as rows
 
 
-def _partition(units: list[int], settled: list[bool]) -> tuple[list[int], list[int]]:
-    """These units of a drive group split by their motors' state (``settled``: per unit of
-    the group): (settled, still moving). Random commands leave most units moving every tick."""
-    if not any(settled):
-        return [], units
-    calm = [u for u in units if settled[u]]
-    return calm, ([u for u in units if not settled[u]] if len(calm) < len(units) else [])
-
-
 def _each_twist(members: list[int], twists: tuple[Any, Any, Any]
                 ) -> Iterable[tuple[int, tuple[float, float, float]]]:
     """Each robot of ``members`` with its twist as floats (robot by robot, numpy's scalars
@@ -145,18 +136,16 @@ class Propulsion:
             return
         # Groups (copies' parts) settled before the step keep their twists through it: held,
         # and coasted (not in a tick before another substep length: every substep is aimed).
-        held: list[tuple[DriveUnits, list[int]]] = []
+        steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed each substep
         loose: list[tuple[DriveUnits, list[int]]] = []
         for drives in self._drives:
+            moving = drives.every_unit
             if h_last == h:
-                calm, moving = _partition(drives.every_unit, drives.settled())
-            else:
-                calm, moving = [], drives.every_unit
-            if calm:
-                held.append((drives, calm))
+                members, twists, moving = drives.coast_settled(moving, h, substeps)
+                if members:
+                    self._hold_each(members, twists, h, steady)
             if moving:
                 loose.append((drives, moving))
-        steady = self._hold_units(held, h, substeps) if held else []  # held, yet aimed each substep
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
                 space.step(h)
@@ -174,25 +163,21 @@ class Propulsion:
             if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
                 still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
-                    calm, moving = _partition(units, drives.settled())
-                    if calm:
-                        steady += self._hold_units([(drives, calm)], h, left)
+                    members, twists, moving = drives.coast_settled(units, h, left)
+                    if members:
+                        self._hold_each(members, twists, h, steady)
                     if moving:
                         still.append((drives, moving))
                 loose = still
 
-    def _hold_units(self, held: list[tuple[DriveUnits, list[int]]], h: float, substeps: int
-                    ) -> list[tuple[int, tuple[float, float, float]]]:
-        """Hold every robot of these settled groups (or copies' parts) for ``substeps``
-        substeps (their motors coast through them); the robots that must be aimed every
-        substep instead, with their twists."""
-        steady: list[tuple[int, tuple[float, float, float]]] = []
-        for drives, units in held:
-            rows, members, _ = drives.rows(units)
-            for k, twist in _each_twist(members, drives.coast(h, substeps, rows)):
-                if not self._hold(k, twist, h):
-                    steady.append((k, twist))
-        return steady
+    def _hold_each(self, members: list[int], twists: Any, h: float,
+                   steady: list[tuple[int, tuple[float, float, float]]]) -> None:
+        """Hold each of these robots (settled, coasting: ``twists`` in their order) for the
+        step; those that must be aimed every substep instead go into ``steady`` with their
+        twists."""
+        for k, twist in _each_twist(members, twists):
+            if not self._hold(k, twist, h):
+                steady.append((k, twist))
 
     def _aim_members(self, members: list[int], member_rows: np.ndarray,
                      twists: tuple[Any, Any, Any], h: float, h_next: float) -> None:

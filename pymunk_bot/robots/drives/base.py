@@ -87,6 +87,11 @@ class DriveGroup:
         the same for every substep, are returned as :meth:`advance` returns them."""
         raise NotImplementedError
 
+    def coast_if_settled(self, h: float, substeps: int) -> tuple[Any, Any, Any] | None:
+        """:meth:`coast` if the group has :meth:`settled` (one call for both): its twists, or
+        None (nothing changed) while some motor is still reaching its command."""
+        return self.coast(h, substeps) if self.settled() else None
+
     def take_travel(self) -> Any:
         """Encoder input accumulated since the last call (rows per robot, drive-specific columns),
         then reset."""

@@ -102,6 +102,15 @@ class DiffDriveGroup(DriveGroup):
                     self._travel, self.track, h * substeps, ux, omega)
         return ux, uy, omega
 
+    def coast_if_settled(self, h: float, substeps: int
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """See :meth:`DriveGroup.coast_if_settled`: one compiled call."""
+        ux, uy, omega = self._twists
+        if _coast_settled(self.commanded, self.target, self.turning, self._travel, self.track,
+                          h * substeps, ux, omega):
+            return self._twists
+        return None
+
     def _twists_for(self, rows: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Arrays for the twists of these rows; every robot's (None) are the same arrays each
         call, valid until the next ``advance`` or ``coast`` (the tick uses them at once)."""
@@ -239,6 +248,20 @@ def _coast_rows(rows: np.ndarray, commanded: np.ndarray, turning: np.ndarray,
         i = rows[j]
         _turn_wheels(i, commanded, turning, travel, span)
         _twist(i, j, commanded, track, ux, omega)
+
+
+@numba.njit(cache=True)
+def _coast_settled(commanded: np.ndarray, target: np.ndarray, turning: np.ndarray,
+                   travel: np.ndarray, track: np.ndarray, span: float, ux: np.ndarray,
+                   omega: np.ndarray) -> bool:
+    """:func:`_coast_rows` of every robot over ``span`` [s] if every motor has reached its
+    target (True), else nothing (False)."""
+    if not _equal_rows(commanded, target):
+        return False
+    for i in range(commanded.shape[0]):
+        _turn_wheels(i, commanded, turning, travel, span)
+        _twist(i, i, commanded, track, ux, omega)
+    return True
 
 
 @numba.njit(cache=True)
