@@ -7,8 +7,10 @@ and localizers), so adding a sensor to one robot never changes another's draws.
 """
 from __future__ import annotations
 
+import gc
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 import pymunk
@@ -81,6 +83,27 @@ def build(config: ScenarioConfig, seed: int, source: str,
           handles: dict[str, Robot] | None = None, world: World | None = None) -> Built:
     """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew.
     ``world``: a world already made for it (a copy on a shared ground), else a new one."""
+    with _collector_paused():
+        return _build(config, seed, source, handles, world)
+
+
+@contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Python's cyclic garbage collector off while a run is built: building 10,000 robots makes
+    millions of objects that all live on, and the collector would scan the growing heap again
+    and again (a third of the build's CPU time). What the build drops is collected after."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Robot] | None,
+           world: World | None) -> Built:
+    """:func:`build`, the collector paused."""
     rng = np.random.default_rng(seed)
     world_rng, sensor_rng = rng.spawn(2)
     (mind_rng,) = rng.spawn(1)  # controllers and localizers
