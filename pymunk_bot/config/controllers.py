@@ -8,7 +8,8 @@ import re
 from typing import Annotated, Any, Literal
 
 from pydantic import (
-    AfterValidator, Field, PrivateAttr, ValidationInfo, field_serializer, model_validator,
+    AfterValidator, Field, PrivateAttr, ValidationError, ValidationInfo, field_serializer,
+    model_validator,
 )
 
 from pymunk_bot.config.class_path import check_class_path
@@ -221,6 +222,52 @@ def resolve_policy_path(path: str, base_dir: str | None) -> str:
     return str(file if file.is_absolute() or base_dir is None else Path(base_dir) / file)
 
 
+class PlanGuidanceConfig(Section):
+    """Plan-guided goal features (``plan_guidance`` of the ``policy`` controller and of the
+    envs; docs/learning.md): the goal a policy sees is a point ``lookahead`` metres along an
+    A* path on the map the robot knows instead of the final goal."""
+
+    lookahead: Annotated[PositiveShort, Field(le=20)] = 1.5  # [m] along the path
+    replan_period: Annotated[Duration, Field(le=60)] = 1.0  # [s] between checks for a replan
+    off_path: Annotated[PositiveShort, Field(le=20)] = 1.0  # [m] farther than this: replan
+    resolution: Annotated[Distance, Field(ge=0.02, le=1)] = 0.1  # [m] planning grid cell
+
+    def as_array(self) -> list[float]:
+        """The settings as numbers, in field order (what a policy file records)."""
+        return [float(getattr(self, name)) for name in type(self).model_fields]
+
+    @classmethod
+    def from_array(cls, values: Any) -> "PlanGuidanceConfig":
+        """Settings from :meth:`as_array`'s numbers; ValueError if they are not."""
+        numbers = [float(v) for v in values]
+        names = list(cls.model_fields)
+        if len(numbers) != len(names):
+            raise ValueError(f"plan_guidance holds {len(numbers)} numbers, not "
+                             f"{len(names)} ({', '.join(names)})")
+        return cls(**dict(zip(names, numbers)))
+
+    @classmethod
+    def of(cls, value: Any) -> "PlanGuidanceConfig | None":
+        """Settings from what a user passes: None or False (off), True (the defaults), a
+        mapping of some keys, or settings; ValueError in one line naming the key if bad."""
+        if value is None or value is False:
+            return None
+        if value is True:
+            return cls()
+        if isinstance(value, cls):
+            return value
+        if not isinstance(value, dict):
+            raise ValueError(f"plan_guidance must be true, false or a mapping of "
+                             f"{', '.join(cls.model_fields)} (got {value!r:.80})")
+        try:
+            return cls(**value)
+        except ValidationError as exc:
+            error = exc.errors()[0]
+            key = ".".join(str(part) for part in error["loc"])
+            raise ValueError(f"plan_guidance.{key}: {error['msg']} "
+                             f"(got {error.get('input')!r:.40})") from None
+
+
 class PolicyControllerConfig(Section):
     """A trained policy (``.npz`` MLP or ``.onnx``) seeing what ``pymunk_bot/Navigation-v0``
     shows it (pymunk_bot/policy/io.py) and driving as the env scales its action."""
@@ -231,6 +278,9 @@ class PolicyControllerConfig(Section):
     goal: Vec2 | None = None  # [m]; None = the robot's goal
     tolerance: Distance | None = None  # [m] stop radius; None = the goal's tolerance
     give_up_after: Duration = 20.0  # [s] without getting closer to the goal: fail
+    # None: as the policy file records; true: on (the file's settings, or the defaults);
+    # false: off; a mapping: on with these settings (PlanGuidanceConfig)
+    plan_guidance: PlanGuidanceConfig | bool | None = None
     _base_dir: str | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -252,7 +302,9 @@ class PolicyControllerConfig(Section):
     def misfit(self, robot) -> str | None:
         """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
         and a goal, takes the observation of the robot's beams and gives its action."""
-        from pymunk_bot.policy.files import PolicyFileError, check_runs_on, load_policy
+        from pymunk_bot.policy.files import (
+            PolicyFileError, check_runs_on, guidance_for, load_policy,
+        )
         from pymunk_bot.policy.io import action_size, observation_size
 
         if robot.lidar is None:
@@ -276,7 +328,21 @@ class PolicyControllerConfig(Section):
             check_runs_on(policy, inputs, outputs)
         except PolicyFileError as exc:
             return f"'{self.path}', for a robot with {robot.lidar.beams} LiDAR beams: {exc}"
+        try:
+            guidance_for(policy, self.plan_guidance)
+        except PolicyFileError as exc:
+            return f"'{self.path}' {exc}"
         return None
+
+    def guidance(self) -> "PlanGuidanceConfig | None":
+        """The plan guidance this policy runs with (the scenario's key, else
+        what the file records); None for a file that cannot be read (:meth:`misfit` says)."""
+        from pymunk_bot.policy.files import PolicyFileError, guidance_for, load_policy
+
+        try:
+            return guidance_for(load_policy(self.resolved_path), self.plan_guidance)
+        except PolicyFileError:
+            return None
 
 
 class CrowdNavOrcaControllerConfig(Section):
