@@ -244,7 +244,9 @@ class PlanGuidanceConfig(Section):
         if len(numbers) != len(names):
             raise ValueError(f"plan_guidance holds {len(numbers)} numbers, not "
                              f"{len(names)} ({', '.join(names)})")
-        return cls(**dict(zip(names, numbers)))
+        settings = cls.of(dict(zip(names, numbers)))
+        assert settings is not None  # a mapping gives settings
+        return settings
 
     @classmethod
     def of(cls, value: Any) -> "PlanGuidanceConfig | None":

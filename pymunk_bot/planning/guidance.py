@@ -5,7 +5,8 @@ behind it. With guidance, the goal it sees is a point ``lookahead`` metres along
 (:func:`~pymunk_bot.planning.astar.astar` on a clearance grid of the map the robot knows, then
 :func:`~pymunk_bot.planning.paths.shortcut`, as the ``navigate`` controller plans):
 
-- bearing: toward that lookahead point (the "carrot");
+- bearing: toward that lookahead point (the "carrot"), brought nearer along the path when the
+  straight line to it would cross an obstacle on the map (it never points through a wall);
 - distance: to the carrot plus the path's length beyond it, so it is the final goal's distance
   once the carrot reaches the goal, and shrinks with progress along the path before that.
 
@@ -37,6 +38,9 @@ CLEARANCE_COST = 4.0  # extra cost per metre next to an obstacle (navigate's def
 BLOCK_HORIZON = 3.0  # [m] of path ahead checked against unmapped returns
 FORGET_CHECKS = 5  # an unmapped return not seen again for this many checks is forgotten
 MAX_UNMAPPED = 4096  # unmapped cells kept at most (the oldest go first)
+# Fractions of the lookahead tried, farthest first, for a carrot in line of sight (the last:
+# the path point nearest the robot, taken whatever the line crosses)
+CARROT_STEPS = (1.0, 0.75, 0.5, 0.25, 0.0)
 
 Point = tuple[float, float]
 
@@ -199,12 +203,21 @@ class PlanGuide:
         return best
 
     def _carrot(self, x: float, y: float) -> tuple[float, float, float]:
-        """(x, y) [m] of the point ``lookahead`` along the path from the robot's nearest, and
-        the path's length beyond it [m]."""
+        """(x, y) [m] of the point ``lookahead`` along the path from the robot's nearest, or
+        nearer if the straight line to it would cross the map's obstacles (a corner cut
+        through a door frame); and the path's length beyond it [m]."""
         self._segment, along, _ = self._nearest(x, y)
         total = float(self._cumulative[-1])
-        target = min(total, along + self.settings.lookahead)
-        (tx, ty), = self._points_at(np.array([target])).tolist()
+        grid = self._grid()
+        # The line may pass as close to obstacles as the robot is now (pressed to a wall).
+        need = min(self.hard, float(grid.clearance[grid.cell_of(x, y)])) \
+            - 0.5 * grid.resolution
+        ahead = min(total, along + self.settings.lookahead) - along
+        for fraction in CARROT_STEPS:
+            target = along + fraction * ahead
+            (tx, ty), = self._points_at(np.array([target])).tolist()
+            if grid.segment_clearance((x, y), (tx, ty)) >= need:
+                break
         return tx, ty, total - target
 
     def _points_at(self, distances: np.ndarray) -> np.ndarray:

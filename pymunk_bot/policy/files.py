@@ -229,7 +229,7 @@ def guidance_mismatch(trained_with: bool) -> str:
         return ("was trained with plan guidance (its goal features come from a path; the file "
                 f"records '{GUIDANCE_ARRAY}'): run it with plan guidance on")
     return ("was trained without plan guidance (its goal features are the final goal's): run "
-            "it with plan_guidance off")
+            "it with plan_guidance off (false)")
 
 
 def load_policy(path: str | Path) -> MlpPolicy | OnnxPolicy:
