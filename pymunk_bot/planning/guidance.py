@@ -23,11 +23,12 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from pymunk_bot.config.controllers import PlanGuidanceConfig
 from pymunk_bot.planning.astar import astar
-from pymunk_bot.planning.grid import ClearanceGrid
+from pymunk_bot.planning.grid import ClearanceGrid, segment_clearance
 from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.planning.paths import shortcut
 from pymunk_bot.robots.readings import LaserScan
@@ -60,6 +61,7 @@ class PlanGuide:
         self.path: list[Point] | None = None  # the plan being followed (None: the final goal)
         self.plans = 0  # A* searches since the last restart
         self._goal: Point | None = None
+        self._xy = np.zeros((1, 2))  # [m] the path's vertices
         self._cumulative = np.zeros(1)  # [m] path length up to each vertex
         self._segment = 0  # index of the path segment the robot was last nearest to
         self._until_check = 0  # observations before the next check
@@ -130,7 +132,8 @@ class PlanGuide:
         if path[-1] != (gx, gy):  # a goal too close to a wall: the path ends beside it
             path.append((gx, gy))
         self.path = path
-        steps = np.hypot(*np.diff(np.asarray(path), axis=0).T)
+        self._xy = np.array(path, dtype=np.float64)
+        steps = np.hypot(*np.diff(self._xy, axis=0).T)
         self._cumulative = np.concatenate([[0.0], np.cumsum(steps)])
         self._segment = 0
 
@@ -187,41 +190,82 @@ class PlanGuide:
     def _nearest(self, x: float, y: float) -> tuple[int, float, float]:
         """(segment, distance along the path [m], distance from the path [m]) of the path
         point nearest (x, y), from the segment last nearest on (progress does not go back)."""
-        path = self.path
-        assert path is not None
-        best = (self._segment, float(self._cumulative[self._segment]), math.inf)
-        for i in range(self._segment, len(path) - 1):
-            (ax, ay), (bx, by) = path[i], path[i + 1]
-            ex, ey = bx - ax, by - ay
-            length2 = ex * ex + ey * ey
-            t = 0.0 if length2 == 0 else min(1.0, max(0.0, ((x - ax) * ex + (y - ay) * ey)
-                                                      / length2))
-            px, py = ax + t * ex, ay + t * ey
-            distance = math.hypot(x - px, y - py)
-            if distance < best[2]:
-                best = (i, float(self._cumulative[i]) + t * math.sqrt(length2), distance)
-        return best
+        return nearest_on_path(self._xy, self._cumulative, self._segment, x, y)
 
     def _carrot(self, x: float, y: float) -> tuple[float, float, float]:
         """(x, y) [m] of the point ``lookahead`` along the path from the robot's nearest, or
         nearer if the straight line to it would cross the map's obstacles (a corner cut
         through a door frame); and the path's length beyond it [m]."""
-        self._segment, along, _ = self._nearest(x, y)
-        total = float(self._cumulative[-1])
         grid = self._grid()
-        # The line may pass as close to obstacles as the robot is now (pressed to a wall).
-        need = min(self.hard, float(grid.clearance[grid.cell_of(x, y)])) \
-            - 0.5 * grid.resolution
-        ahead = min(total, along + self.settings.lookahead) - along
-        for fraction in CARROT_STEPS:
-            target = along + fraction * ahead
-            (tx, ty), = self._points_at(np.array([target])).tolist()
-            if grid.segment_clearance((x, y), (tx, ty)) >= need:
-                break
-        return tx, ty, total - target
+        self._segment, tx, ty, beyond = carrot(
+            self._xy, self._cumulative, self._segment, x, y, self.settings.lookahead,
+            self.hard, grid.clearance, grid.origin[0], grid.origin[1], grid.size[0],
+            grid.size[1], grid.resolution)
+        return tx, ty, beyond
 
     def _points_at(self, distances: np.ndarray) -> np.ndarray:
         """Points [m] at these distances along the path, shape (n, 2)."""
         xy = np.asarray(self.path)
         return np.column_stack([np.interp(distances, self._cumulative, xy[:, 0]),
                                 np.interp(distances, self._cumulative, xy[:, 1])])
+
+
+@numba.njit(cache=True, nogil=True)
+def nearest_on_path(xy: np.ndarray, cumulative: np.ndarray, first: int, x: float, y: float
+                    ) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    """(segment, distance along [m], distance from the path [m]) of the point of the path
+    ``xy`` (n x 2; ``cumulative``: its length up to each vertex) nearest (x, y), searched from
+    segment ``first`` on (the first of equals)."""
+    best_segment, best_along, best_distance = first, cumulative[first], np.inf
+    for i in range(first, len(xy) - 1):
+        ax, ay, bx, by = xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1]
+        ex, ey = bx - ax, by - ay
+        length2 = ex * ex + ey * ey
+        t = 0.0 if length2 == 0 else min(1.0, max(0.0, ((x - ax) * ex + (y - ay) * ey)
+                                                  / length2))
+        distance = math.hypot(x - (ax + t * ex), y - (ay + t * ey))
+        if distance < best_distance:
+            best_segment, best_distance = i, distance
+            best_along = cumulative[i] + t * math.sqrt(length2)
+    return best_segment, best_along, best_distance
+
+
+@numba.njit(cache=True, nogil=True)
+def point_along(xy: np.ndarray, cumulative: np.ndarray, s: float
+                ) -> tuple[float, float]:  # pragma: no cover - compiled
+    """The point [m] ``s`` metres along the path (clamped to its ends; the last vertex
+    exactly at its length)."""
+    n = len(xy)
+    if s >= cumulative[n - 1]:
+        return xy[n - 1, 0], xy[n - 1, 1]
+    i = 0
+    while i < n - 2 and cumulative[i + 1] <= s:
+        i += 1
+    span = cumulative[i + 1] - cumulative[i]
+    t = 0.0 if span <= 0 else max(0.0, (s - cumulative[i]) / span)
+    return (xy[i, 0] + t * (xy[i + 1, 0] - xy[i, 0]), xy[i, 1] + t * (xy[i + 1, 1] - xy[i, 1]))
+
+
+@numba.njit(cache=True, nogil=True)
+def carrot(xy: np.ndarray, cumulative: np.ndarray, first: int, x: float, y: float,
+           lookahead: float, hard: float, clearance: np.ndarray, ox: float, oy: float,
+           width: float, height: float, resolution: float
+           ) -> tuple[int, float, float, float]:  # pragma: no cover - compiled
+    """(nearest segment, carrot x, y [m], path length beyond the carrot [m]) for the robot at
+    (x, y): the point ``lookahead`` along the path from the robot's nearest, brought back by
+    CARROT_STEPS until the straight line to it keeps ``hard`` clearance (or as much as the
+    robot has now, less half a cell), on the grid ``clearance``."""
+    segment, along, _ = nearest_on_path(xy, cumulative, first, x, y)
+    total = cumulative[len(xy) - 1]
+    rows, cols = clearance.shape
+    col = min(cols - 1, max(0, math.floor((x - ox) / resolution)))
+    row = min(rows - 1, max(0, math.floor((y - oy) / resolution)))
+    need = min(hard, clearance[row, col]) - 0.5 * resolution
+    ahead = min(total, along + lookahead) - along
+    target, tx, ty = along, x, y
+    for fraction in CARROT_STEPS:
+        target = along + fraction * ahead
+        tx, ty = point_along(xy, cumulative, target)
+        if segment_clearance(clearance, ox, oy, width, height, resolution, x, y, tx, ty) >= need:
+            break
+    return segment, tx, ty, total - target
