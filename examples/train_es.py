@@ -62,7 +62,7 @@ def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
 def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bool = False):
     """The MLP whose weights and biases are ``theta`` (layer after layer, W then b); ``guided``:
     it records the default plan guidance it was trained with."""
-    from pymunk_bot.config.controllers import PlanGuidanceConfig
+    from pymunk_bot.config.guidance import PlanGuidanceConfig
     from pymunk_bot.policy.files import MlpPolicy
 
     weights, biases, k = [], [], 0

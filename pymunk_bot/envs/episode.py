@@ -9,7 +9,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from pymunk_bot.config import ScenarioConfig, parse_scenario, scenario_data
-from pymunk_bot.config.controllers import PlanGuidanceConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.engine.replicas import Replicas
 from pymunk_bot.engine.simulation import Simulation

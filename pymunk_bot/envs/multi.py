@@ -20,7 +20,7 @@ except ImportError:  # pragma: no cover - depends on the install
 from gymnasium.utils import seeding
 
 from pymunk_bot.config import ScenarioConfig
-from pymunk_bot.config.controllers import PlanGuidanceConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.engine.simulation import Simulation
 from pymunk_bot.envs.episode import SEED_BOUND, advance, episode_timing
 from pymunk_bot.envs.navigation import RENDER_MODES, make_spaces

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from pymunk_bot.config.controllers import PlanGuidanceConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.planning.guidance import PlanGuide
 from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.robots.command import STOP

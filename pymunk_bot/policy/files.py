@@ -24,7 +24,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from pymunk_bot.config.controllers import PlanGuidanceConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.policy.npz_bounded import NpzError, first_line, read_npz
 from pymunk_bot.outcomes.results import write_atomic
 

@@ -138,3 +138,11 @@ def test_bad_settings_name_the_key(value, words):
     with pytest.raises(ValueError, match=words) as caught:
         NavigationEnv(office(), plan_guidance=value)
     assert "\n" not in str(caught.value)
+
+
+def test_a_planning_grid_too_large_is_refused_naming_the_key():
+    big = office()
+    big["world"]["size"] = [400.0, 400.0]  # 400 million cells at 2 cm
+    env = NavigationEnv(big, plan_guidance={"resolution": 0.02})
+    with pytest.raises(ValueError, match=r"plan_guidance.resolution: .*\(at most 4000000\)"):
+        env.reset(seed=0)

@@ -10,7 +10,7 @@ import yaml
 
 pytest.importorskip("gymnasium")
 
-from pymunk_bot.config.controllers import PlanGuidanceConfig  # noqa: E402
+from pymunk_bot.config.guidance import PlanGuidanceConfig  # noqa: E402
 from pymunk_bot.envs.evaluation import run_episodes  # noqa: E402
 from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy  # noqa: E402
 from command import pymunk_bot

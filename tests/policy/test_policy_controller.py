@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 import pymunk_bot as pb
-from pymunk_bot.config.controllers import PlanGuidanceConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy
 
 gym = pytest.importorskip("gymnasium")
