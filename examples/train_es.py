@@ -13,6 +13,11 @@ action), saved as the ``.npz`` the ``policy`` controller runs. Fitness: the env'
 arrival, a cost per second in contact and near obstacles), episodes ending at the first contact,
 averaged over the same episodes for every candidate of a generation. Held-out evaluation uses
 world seeds training never draws.
+
+``--plan-guidance`` trains (and evaluates) with plan-guided goal features (docs/learning.md,
+"Plan guidance"): the goal the policy sees lies along an A* path on the world's map; the saved
+``.npz`` records it, so ``pymunk-bot evaluate`` and the ``policy`` controller turn it on.
+``--generate office`` or ``maze`` draws that kind of world instead of clutter.
 """
 from __future__ import annotations
 
@@ -36,14 +41,17 @@ HELD_OUT_WORLDS = [1_000_000, 2_000_000]  # never seen in training
 TRAIN_REWARD = {"clearance": -3.0}
 
 
-def env_kwargs(worlds: list[int], training: bool) -> dict:
-    """Navigation-v0's arguments: random goals, starts and generated worlds. Training ends an
-    episode at the first contact and after 20 s (an arrival takes 8 s on average); held-out
-    episodes run on through contacts for up to 30 s."""
+def env_kwargs(worlds: list[int], training: bool, guided: bool = False,
+               kind: str = "clutter") -> dict:
+    """Navigation-v0's arguments: random goals, starts and generated worlds of ``kind``,
+    ``guided``: plan-guided goal features. Training ends an episode at the first contact and
+    after 20 s (an arrival takes 8 s on average); held-out episodes run on through contacts
+    for up to 30 s."""
     return {"scenario": SCENARIO, "random_goal": True, "terminate_on_collision": training,
             "max_episode_time": 20.0 if training else 30.0, "reward": TRAIN_REWARD,
-            "randomize": {"generate": "clutter", "size": SIZE, "world_seeds": worlds,
-                          "start": True}}
+            "randomize": {"generate": kind, "size": SIZE, "world_seeds": worlds,
+                          "start": True},
+            "plan_guidance": True if guided else None}
 
 
 def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
@@ -51,8 +59,10 @@ def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
     return list(zip(sizes[:-1], sizes[1:]))
 
 
-def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]]):
-    """The MLP whose weights and biases are ``theta`` (layer after layer, W then b)."""
+def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bool = False):
+    """The MLP whose weights and biases are ``theta`` (layer after layer, W then b); ``guided``:
+    it records the default plan guidance it was trained with."""
+    from pymunk_bot.config.guidance import PlanGuidanceConfig
     from pymunk_bot.policy.files import MlpPolicy
 
     weights, biases, k = [], [], 0
@@ -61,7 +71,7 @@ def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]]):
         k += n_in * n_out
         biases.append(theta[k:k + n_out])
         k += n_out
-    return MlpPolicy(weights, biases)
+    return MlpPolicy(weights, biases, PlanGuidanceConfig() if guided else None)
 
 
 _ENV = None  # each worker's training env (it keeps the generated worlds it drew)
@@ -73,28 +83,28 @@ def fitness(job: tuple) -> tuple[float, float]:
     from pymunk_bot.envs.evaluation import run_episodes
 
     global _ENV
+    theta, layer_shapes, seeds, guided, kind = job
     if _ENV is None:
-        _ENV = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True))
-    theta, layer_shapes, seeds = job
-    runs = run_episodes(to_policy(theta, layer_shapes), None, seeds, env=_ENV)
+        _ENV = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind))
+    runs = run_episodes(to_policy(theta, layer_shapes, guided), None, seeds, env=_ENV)
     return (float(np.mean([r.episode_return for r in runs])),
             float(np.mean([r.success for r in runs])))
 
 
 def train(minutes: float, seed: int = 0, hidden: int = 8, popsize: int = 16,
           episodes: int = 8, sigma: float = 0.3, workers: int = 2, progress: bool = True,
-          generations: int | None = None
+          generations: int | None = None, guided: bool = False, kind: str = "clutter"
           ) -> tuple[np.ndarray, list[tuple[int, int]], list[dict]]:
     """CMA-ES for ``minutes`` of wall time (or ``generations``, whichever ends first): (mean
     parameters, layer shapes, per-generation history of elapsed time, mean and best fitness,
     mean success rate). With ``generations`` alone, how far it gets does not depend on how fast
-    the machine is."""
+    the machine is. ``guided``: plan-guided goal features; ``kind``: the generated worlds'."""
     import cma
     from tqdm import tqdm
 
     from pymunk_bot.envs import NavigationEnv
 
-    probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True))
+    probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind))
     inputs = probe.episode.task.obs_size
     layer_shapes = shapes(inputs, hidden)
     size = sum(a * b + b for a, b in layer_shapes)
@@ -112,7 +122,7 @@ def train(minutes: float, seed: int = 0, hidden: int = 8, popsize: int = 16,
                                                           or len(history) < generations):
             seeds = rng.integers(2**31 - 1, size=episodes).tolist()  # the same for everyone
             candidates = es.ask()
-            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds)
+            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, guided, kind)
                                          for c in candidates])
             es.tell(candidates, [-r[0] for r in results])
             elapsed = time.perf_counter() - started
@@ -170,6 +180,10 @@ def main() -> None:
     parser.add_argument("--plot", type=Path, default=None)
     parser.add_argument("--episodes", type=int, default=200, help="held-out evaluation episodes")
     parser.add_argument("--evaluate", type=Path, default=None, help="only evaluate this .npz")
+    parser.add_argument("--plan-guidance", action="store_true",
+                        help="goal features along an A* path (recorded in the .npz)")
+    parser.add_argument("--generate", choices=("clutter", "office", "maze"), default="clutter",
+                        help="the kind of generated worlds (default clutter)")
     args = parser.parse_args()
     from pymunk_bot.policy.files import MlpPolicy
 
@@ -178,8 +192,9 @@ def main() -> None:
     else:
         theta, layer_shapes, history = train(args.minutes, args.seed, args.hidden, args.popsize,
                                              args.train_episodes, workers=args.workers,
-                                             generations=args.generations)
-        policy = to_policy(theta, layer_shapes)
+                                             generations=args.generations,
+                                             guided=args.plan_guidance, kind=args.generate)
+        policy = to_policy(theta, layer_shapes, args.plan_guidance)
         policy.save(args.out)
         print(f"{len(history)} generations in {history[-1]['time'] / 60:.1f} min; "
               f"saved {args.out}")
@@ -190,9 +205,11 @@ def main() -> None:
     from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, summarize
 
     # Held out: worlds training never draws, and no early end at a contact.
-    outcomes = evaluate_policy(policy, env_kwargs(HELD_OUT_WORLDS, False), args.episodes,
-                               seed=10_000, workers=args.workers)
-    print("held-out episodes in unseen generated worlds:")
+    guided = policy.plan_guidance is not None  # as trained (the file records it)
+    outcomes = evaluate_policy(policy, env_kwargs(HELD_OUT_WORLDS, False, guided, args.generate),
+                               args.episodes, seed=10_000, workers=args.workers)
+    print(f"held-out episodes in unseen generated {args.generate} worlds"
+          f"{' (plan-guided)' if guided else ''}:")
     print(format_summary(summarize(outcomes)))
 
 

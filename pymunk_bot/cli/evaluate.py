@@ -4,8 +4,11 @@ contacts and time to goal, with 95 % confidence intervals.
 Each episode is the scenario in ``pymunk_bot/Navigation-v0`` (the policy drives its first
 robot, or ``--robot``) reset with seed ``--seed + k``; ``--random-goal``, ``--random-start``
 and ``--generate KIND`` (of ``--size``, seeds from ``--world-seeds``) draw a new goal, start
-pose or generated world per episode (:mod:`pymunk_bot.envs.randomize`). Exit status: 0 evaluated, 2 bad input
-(a policy file that cannot be read, does not fit the robot, or returns a NaN action).
+pose or generated world per episode (:mod:`pymunk_bot.envs.randomize`). A policy file that
+records plan guidance (docs/learning.md) is evaluated with it; ``--plan-guidance`` turns it on
+for a file that does not record it (an ONNX model). Exit status: 0 evaluated, 2 bad input (a
+policy file that cannot be read, does not fit the robot, returns a NaN action, or was trained
+without plan guidance and is given ``--plan-guidance``).
 """
 from __future__ import annotations
 
@@ -44,6 +47,8 @@ def add_parser(sub) -> None:
                    help="episode time limit [s] (default: the scenario's world.duration)")
     p.add_argument("--control-period", type=duration_seconds, default=0.1,
                    help="seconds per action (the policy controller's 1 / rate), default 0.1")
+    p.add_argument("--plan-guidance", action="store_true",
+                   help="goal features along an A* path (default: as the policy file records)")
     p.add_argument("--workers", type=jobs_count, default=1, help="processes (default 1)")
     p.add_argument("--out", type=Path, default=None, help="one row per episode (.csv)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -81,7 +86,7 @@ def command(args: argparse.Namespace) -> int:
         print(f"error: evaluate: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
-    from pymunk_bot.policy.files import PolicyFileError, check_runs_on, load_policy
+    from pymunk_bot.policy.files import PolicyFileError, check_runs_on, guidance_for, load_policy
 
     if args.out is not None:
         check_output("--out", args.out, (".csv",))
@@ -91,6 +96,11 @@ def command(args: argparse.Namespace) -> int:
         print(f"error: {args.policy}: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     kwargs = env_kwargs(args)
+    try:  # a policy trained with plan guidance records it: it is evaluated with it
+        kwargs["plan_guidance"] = guidance_for(policy, True if args.plan_guidance else None)
+    except PolicyFileError as exc:
+        print(f"error: {args.policy}: {exc} (--plan-guidance)", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         env = NavigationEnv(**kwargs)
     except ValueError as exc:  # a bad option value (ScenarioError is raised as it is)

@@ -126,8 +126,31 @@ def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) 
         raise SemanticError(loc, "avoid steers by the LiDAR: add a 'lidar' to the robot")
     if isinstance(controller, NavigateControllerConfig):
         _check_navigate(index, robot, controller, scenario)
-    if isinstance(controller, PolicyControllerConfig) and (problem := controller.misfit(robot)):
-        raise SemanticError(loc, problem)
+    if isinstance(controller, PolicyControllerConfig):
+        if problem := controller.misfit(robot):
+            raise SemanticError(loc, problem)
+        _check_plan_guidance(index, robot, controller, scenario)
+
+
+def _check_plan_guidance(index: int, robot: RobotConfig, controller: PolicyControllerConfig,
+                         scenario: ScenarioConfig) -> None:
+    """A plan-guided policy needs a map given in advance, and a planning grid of bounded size."""
+    guidance = controller.guidance()
+    if guidance is None:
+        return
+    loc = ("robots", index, "controller", "plan_guidance")
+    if getattr(robot.localization, "type", robot.localization) == "slam":
+        raise SemanticError(loc, f"plan guidance plans on the map the robot is given, and "
+                                 f"localization 'slam' starts with none: set robots[{index}]."
+                                 "localization to ground_truth, odometry, mcl or ekf (or turn "
+                                 "plan_guidance off)")
+    width, height = _arena_size(scenario)
+    cells = math.ceil(width / guidance.resolution) * math.ceil(height / guidance.resolution)
+    if cells > MAX_GRID_CELLS:
+        raise SemanticError(loc + ("resolution",),
+                            f"a {width:g} m x {height:g} m arena at {guidance.resolution:g} m "
+                            f"is {cells} planning cells (at most {MAX_GRID_CELLS}); "
+                            "use a coarser resolution")
 
 
 def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControllerConfig,

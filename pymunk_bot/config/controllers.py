@@ -12,6 +12,7 @@ from pydantic import (
 )
 
 from pymunk_bot.config.class_path import check_class_path
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.config.types import (
     MAX_WAYPOINTS, Accel, Distance, Duration, Float, Gain, NonNegativeFloat, PositiveFloat,
     PositiveInt, PositiveShort, Rate, Section, Short, Speed, Vec2,
@@ -231,6 +232,9 @@ class PolicyControllerConfig(Section):
     goal: Vec2 | None = None  # [m]; None = the robot's goal
     tolerance: Distance | None = None  # [m] stop radius; None = the goal's tolerance
     give_up_after: Duration = 20.0  # [s] without getting closer to the goal: fail
+    # None: as the policy file records; true: on (the file's settings, or the defaults);
+    # false: off; a mapping: on with these settings (PlanGuidanceConfig)
+    plan_guidance: PlanGuidanceConfig | bool | None = None
     _base_dir: str | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -252,7 +256,9 @@ class PolicyControllerConfig(Section):
     def misfit(self, robot) -> str | None:
         """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
         and a goal, takes the observation of the robot's beams and gives its action."""
-        from pymunk_bot.policy.files import PolicyFileError, check_runs_on, load_policy
+        from pymunk_bot.policy.files import (
+            PolicyFileError, check_runs_on, guidance_for, load_policy,
+        )
         from pymunk_bot.policy.io import action_size, observation_size
 
         if robot.lidar is None:
@@ -276,7 +282,21 @@ class PolicyControllerConfig(Section):
             check_runs_on(policy, inputs, outputs)
         except PolicyFileError as exc:
             return f"'{self.path}', for a robot with {robot.lidar.beams} LiDAR beams: {exc}"
+        try:
+            guidance_for(policy, self.plan_guidance)
+        except PolicyFileError as exc:
+            return f"'{self.path}' {exc}"
         return None
+
+    def guidance(self) -> "PlanGuidanceConfig | None":
+        """The plan guidance this policy runs with (the scenario's key, else
+        what the file records); None for a file that cannot be read (:meth:`misfit` says)."""
+        from pymunk_bot.policy.files import PolicyFileError, guidance_for, load_policy
+
+        try:
+            return guidance_for(load_policy(self.resolved_path), self.plan_guidance)
+        except PolicyFileError:
+            return None
 
 
 class CrowdNavOrcaControllerConfig(Section):

@@ -11,13 +11,19 @@ A policy that returns a NaN or infinite action, or gets no closer to the goal fo
 ``give_up_after`` seconds, fails the run (status "failed", the reason in the result's
 ``controller_message``); a file that cannot drive the robot (missing, malformed,
 the wrong input size for the robot's LiDAR) is refused when the scenario is checked.
+
+With ``plan_guidance`` (or a policy file that records it) the goal the policy sees is a point
+along an A* path on the scenario's map (:mod:`pymunk_bot.planning.guidance`), exactly as the
+env computes it with the same setting; arriving and giving up still measure the final goal.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from pymunk_bot.config.controllers import PolicyControllerConfig
-from pymunk_bot.policy.files import PolicyFileError, load_policy
+from pymunk_bot.planning.guidance import PlanGuide
+from pymunk_bot.planning.map import MapInfo
+from pymunk_bot.policy.files import PolicyFileError, guidance_for, load_policy
 from pymunk_bot.policy.io import ActionScale, ObservationBuilder, goal_features
 from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 
@@ -31,13 +37,23 @@ class PolicyController(Controller):
         self.path = config.path
         try:
             self.policy = load_policy(config.resolved_path)
+            guidance = guidance_for(self.policy, config.plan_guidance)
         except PolicyFileError as exc:  # the file changed since the scenario was checked
             raise ValueError(f"policy '{config.path}': {exc}") from None
+        # The scenario's map is given (set_map) only to a plan-guided policy.
+        self.needs_map = guidance is not None
+        self.guide = None if guidance is None else PlanGuide(guidance, robot.radius,
+                                                             1.0 / self.rate)
         self.scale = ActionScale.of(robot)
         self.tolerance = config.tolerance  # [m]; None: the goal's
         self.previous = np.zeros((1, self.scale.size))  # the last clipped action
         self._builder: ObservationBuilder | None = None
         self._obs: np.ndarray | None = None
+
+    def set_map(self, world_map: MapInfo) -> None:
+        """Plan on the scenario's map (called when the policy is plan-guided)."""
+        if self.guide is not None:
+            self.guide.set_map(world_map)
 
     def compute(self, obs: Observation) -> Command:
         if self.status == "failed":
@@ -60,6 +76,8 @@ class PolicyController(Controller):
         if obs.scan.ranges.size != self._builder.beams:
             return self._fail(f"the scan has {obs.scan.ranges.size} beams, the policy was "
                               f"built for {self._builder.beams}")
+        if self.guide is not None:  # the goal seen along the plan, as the env shows it
+            features = self.guide.features(x, y, theta, obs.goal[0], obs.goal[1], obs.scan)
         self._builder.fill(self._obs, obs.scan.ranges[None], [features], self.previous)
         try:
             action = self.policy.act(self._obs)[0]

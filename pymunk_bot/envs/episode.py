@@ -9,9 +9,11 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from pymunk_bot.config import ScenarioConfig, parse_scenario, scenario_data
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.engine.replicas import Replicas
 from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.envs.randomize import Randomization, start_pose
 from pymunk_bot.envs.robot_task import RobotTask
 from pymunk_bot.envs.task import RewardWeights, end_info, load_config, prepare_scenario, sample_goal
@@ -61,7 +63,10 @@ class NavigationEpisode:
                  reward: RewardWeights | Mapping[str, float] | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False,
-                 randomize: Mapping[str, Any] | Randomization | None = None) -> None:
+                 randomize: Mapping[str, Any] | Randomization | None = None,
+                 plan_guidance: bool | Mapping[str, float] | PlanGuidanceConfig | None = None
+                 ) -> None:
+        guidance = PlanGuidanceConfig.of(plan_guidance)  # ValueError naming the key
         config, self.source = load_config(scenario)
         # control period and time limit [s]
         self.steps_per_action, self.control_period, self.time_limit = episode_timing(
@@ -72,7 +77,9 @@ class NavigationEpisode:
         self.random_goal = bool(random_goal)
         self.terminate_on_collision = bool(terminate_on_collision)
         robot_config = next(r for r in self.config.robots if r.name == self.robot_name)
-        self.task = RobotTask(robot_config, RewardWeights.from_any(reward), pose_source)
+        self.task = RobotTask(robot_config, RewardWeights.from_any(reward), pose_source,
+                              guidance, self.control_period)
+        self._map: tuple[ScenarioConfig, MapInfo] | None = None  # the last world's, planned on
         self._lidar = dict(lidar or {})
         self._base = scenario_data(config, exclude_unset=True)  # what each draw starts from
         self.randomize: Randomization | None = None
@@ -107,11 +114,18 @@ class NavigationEpisode:
         robot = self.sim.robots[self.robot_name]
         if self.random_goal:
             robot.set_goal(sample_goal(self.sim, robot, rng))
-        self.task.start(robot)
+        self.task.start(robot, None if self.task.guide is None else self._world_map(self.sim))
         self.done = False
         return self.task.observe(), {"sim_seed": seed, "goal": tuple(self.task.goal()),
                                      "distance_to_goal": self.task.goal_distance(),
                                      "collisions": robot.collisions}
+
+    def _world_map(self, sim: Simulation) -> MapInfo:
+        """The map plan guidance plans on: the scenario's arena and fixed obstacles (a drawn
+        world's, or its map file's), made once per world."""
+        if self._map is None or self._map[0] is not sim.config:
+            self._map = (sim.config, MapInfo.from_scenario(sim.config))
+        return self._map[1]
 
     def _drawn_simulation(self, rng: np.random.Generator, seed: int) -> Simulation:
         """A simulation of this episode's drawn scenario (``randomize``), its start pose drawn

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from pymunk_bot.policy.files import Policy, PolicyFileError, load_policy
+from pymunk_bot.policy.files import Policy, PolicyFileError, check_guidance, load_policy
 
 MAX_EPISODES = 100_000
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -39,13 +39,20 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
                  seeds: list[int], env: Any = None) -> list[EpisodeOutcome]:
     """Play the policy (or the policy file) for one episode per seed, in ``env`` if given
     (kept open: a trainer reuses it, and its generated worlds) or a new env of ``env_kwargs``;
-    PolicyFileError if the policy returns a NaN or infinite action or fails to run."""
+    PolicyFileError if the policy returns a NaN or infinite action or fails to run, or records
+    that it was trained with plan guidance and the env has none (or the reverse)."""
     from pymunk_bot.envs.navigation import NavigationEnv
 
     agent = load_policy(policy) if isinstance(policy, (str, Path)) else policy
     own = env is None
     if env is None:
         env = NavigationEnv(**(env_kwargs or {}))
+    try:
+        check_guidance(agent, env.episode.task.plan_guidance)
+    except PolicyFileError:
+        if own:
+            env.close()
+        raise
     outcomes = []
     for seed in seeds:
         obs, _ = env.reset(seed=int(seed))

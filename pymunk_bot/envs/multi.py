@@ -20,11 +20,13 @@ except ImportError:  # pragma: no cover - depends on the install
 from gymnasium.utils import seeding
 
 from pymunk_bot.config import ScenarioConfig
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.engine.simulation import Simulation
 from pymunk_bot.envs.episode import SEED_BOUND, advance, episode_timing
 from pymunk_bot.envs.navigation import RENDER_MODES, make_spaces
 from pymunk_bot.envs.robot_task import RobotTask
 from pymunk_bot.envs.task import RewardWeights, end_info, load_config, prepare_scenario
+from pymunk_bot.planning.map import MapInfo
 
 if TYPE_CHECKING:
     from pymunk_bot.envs.render import FrameRenderer
@@ -38,8 +40,10 @@ class MultiRobotEnv(ParallelEnv):
     """Every robot of ``scenario`` is an agent (named as the robot) driving to its own goal.
 
     Keyword arguments as :class:`~pymunk_bot.envs.NavigationEnv` (``lidar`` overrides apply
-    to every robot), except that there is no ``robot`` and no ``random_goal``; with no
-    ``scenario``, the shipped ``crossing`` (four robots, DEFAULT_SCENARIO).
+    to every robot, ``plan_guidance`` to every agent), except that there is no ``robot`` and
+    no ``random_goal`` nor ``randomize``; with no ``scenario``, the shipped ``crossing`` (four
+    robots, DEFAULT_SCENARIO). With plan guidance each agent plans on the scenario's map; the
+    other robots are not on it (its LiDAR sees them).
     """
 
     metadata = {"name": "pymunk_bot_multi_robot_v0", "render_modes": list(RENDER_MODES),
@@ -51,10 +55,12 @@ class MultiRobotEnv(ParallelEnv):
                  lidar: Mapping[str, Any] | None = None,
                  reward: RewardWeights | Mapping[str, float] | None = None,
                  pose_source: str = "ground_truth",
-                 terminate_on_collision: bool = False) -> None:
+                 terminate_on_collision: bool = False,
+                 plan_guidance: bool | Mapping[str, float] | None = None) -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
+        guidance = PlanGuidanceConfig.of(plan_guidance)  # ValueError naming the key
         config, self.source = load_config(DEFAULT_SCENARIO if scenario is None else scenario)
         # control period and time limit [s]
         self.steps_per_action, self.control_period, self.time_limit = episode_timing(
@@ -62,8 +68,9 @@ class MultiRobotEnv(ParallelEnv):
         names = [r.name for r in config.robots]
         self.config, _ = prepare_scenario(config, self.source, names, lidar, self.control_period)
         weights = RewardWeights.from_any(reward)
-        self.tasks = {r.name: RobotTask(r, weights, pose_source)
+        self.tasks = {r.name: RobotTask(r, weights, pose_source, guidance, self.control_period)
                       for r in self.config.robots}
+        self.world_map = MapInfo.from_scenario(self.config) if guidance is not None else None
         self.terminate_on_collision = bool(terminate_on_collision)
         self.possible_agents = names
         self.agents: list[str] = []
@@ -92,7 +99,7 @@ class MultiRobotEnv(ParallelEnv):
             self.sim.reset(sim_seed)
         self.agents = list(self.possible_agents)
         for name in self.agents:
-            self.tasks[name].start(self.sim.robots[name])
+            self.tasks[name].start(self.sim.robots[name], self.world_map)
         observations = {a: self.tasks[a].observe() for a in self.agents}
         infos = {a: {"sim_seed": sim_seed, "goal": tuple(self.tasks[a].goal())}
                  for a in self.agents}

@@ -46,6 +46,10 @@ class NavigationEnv(gym.Env):
         terminate_on_collision: end the episode at the first contact.
         randomize: what to draw anew every episode: a generated world, a start pose, scenario
             keys (see :mod:`pymunk_bot.envs.randomize`).
+        plan_guidance: True, or a mapping of ``lookahead`` [m], ``replan_period`` [s],
+            ``off_path`` [m], ``resolution`` [m]: the observation's goal features point along
+            an A* path on the scenario's map instead of at the goal (same observation size;
+            :mod:`pymunk_bot.planning.guidance`, docs/learning.md). None or False: off.
 
     ``info["is_success"]`` is true when the robot reached its goal without any contact on
     the way; ``info["contact_time"]`` counts the episode's seconds in contact.
@@ -60,13 +64,14 @@ class NavigationEnv(gym.Env):
                  reward: RewardWeights | Mapping[str, float] | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False,
-                 randomize: Mapping[str, Any] | None = None) -> None:
+                 randomize: Mapping[str, Any] | None = None,
+                 plan_guidance: bool | Mapping[str, float] | None = None) -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
         self.episode = NavigationEpisode(scenario, robot, control_period, max_episode_time,
                                          lidar, reward, random_goal, pose_source,
-                                         terminate_on_collision, randomize)
+                                         terminate_on_collision, randomize, plan_guidance)
         self.observation_space, self.action_space = make_spaces(self.episode.task)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.episode.control_period}

@@ -2,7 +2,9 @@
 (:func:`outcomes`) for one robot (:meth:`RobotTask.outcome`) or many of one scenario at once.
 
 The observation and the action scaling are :mod:`pymunk_bot.policy.io`'s (the ``policy``
-controller uses them too); the reward is :class:`~pymunk_bot.envs.task.RewardWeights`'.
+controller uses them too); the reward is :class:`~pymunk_bot.envs.task.RewardWeights`'. With
+plan guidance the observation's goal features come from :class:`~pymunk_bot.planning.guidance.
+PlanGuide` (as the controller's do); the reward and ``distance_to_goal`` keep the final goal's.
 """
 from __future__ import annotations
 
@@ -10,6 +12,9 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
+from pymunk_bot.config.guidance import PlanGuidanceConfig
+from pymunk_bot.planning.guidance import PlanGuide
+from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.robots.command import STOP
 from pymunk_bot.policy.io import (
     ActionScale, ObservationBuilder, action_size, goal_features, observation_bounds,
@@ -42,7 +47,11 @@ class RobotTask:
     """
 
     def __init__(self, robot_config, weights: RewardWeights,
-                 pose_source: str = "ground_truth") -> None:
+                 pose_source: str = "ground_truth",
+                 plan_guidance: PlanGuidanceConfig | None = None,
+                 control_period: float = 0.1) -> None:
+        """``plan_guidance``: goal features along a path (planned on the map :meth:`start`
+        is given); ``control_period`` [s] between observations (counts its replan period)."""
         if pose_source not in ("ground_truth", "odometry"):
             raise ValueError(f"pose_source must be 'ground_truth' or 'odometry' (got {pose_source!r})")
         self.name = robot_config.name
@@ -64,6 +73,9 @@ class RobotTask:
         self._distance = 0.0  # [m] to the goal at the last observation
         self._collisions = 0
         self._start_collisions = 0
+        self.plan_guidance = plan_guidance
+        self.guide = None if plan_guidance is None else PlanGuide(
+            plan_guidance, float(robot_config.radius), control_period)
 
     @property
     def v_max(self) -> float:
@@ -118,8 +130,15 @@ class RobotTask:
         contacts (:func:`outcomes` tells each task)."""
         self._distance, self._collisions, self.contact_time = distance, collisions, contact_time
 
-    def start(self, robot: Robot) -> None:
-        """Bind to the (re)built robot and remember where the episode starts."""
+    def start(self, robot: Robot, world_map: MapInfo | None = None) -> None:
+        """Bind to the (re)built robot and remember where the episode starts; ``world_map``:
+        what plan guidance plans on (needed with it)."""
+        if self.guide is not None:
+            if world_map is None:
+                raise ValueError(f"robot '{self.name}' has plan guidance: start() needs the "
+                                 "map to plan on")
+            self.guide.set_map(world_map)
+            self.guide.restart()
         self.robot = robot
         self.radius = robot.radius  # [m] of the disc holding its footprint
         self._lidar = robot.lidar  # read every step: the handle's lookup once per episode
@@ -177,9 +196,19 @@ class RobotTask:
         ``where``: :meth:`where`, if already read this step."""
         assert self.builder is not None, "call start() first"
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
-        features = goal_features(*(self.where() if where is None else where))
+        where = self.where() if where is None else where
+        features = self.goal_seen(where, goal_features(*where))
         self.builder.fill(obs[None], self.ranges()[None], [features], self.previous)
         return obs
+
+    def goal_seen(self, where: Where, features: tuple[float, float, float]
+                  ) -> tuple[float, float, float]:
+        """The goal features the observation shows: the final goal's ``features``, or with
+        plan guidance the guided goal's (call once per observation: it counts them)."""
+        if self.guide is None:
+            return features
+        self.bound()
+        return self.guide.features(*where, self._lidar.latest)
 
     def state(self, where: Where | None = None) -> dict[str, np.ndarray]:
         """The robot's state as :func:`outcomes` reads it (``Replicas.robot_states``' keys), one
@@ -235,6 +264,11 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
                              contact_time.tolist()):
         task.remember(d, c, t)
     if obs is not None:
+        if first.guide is not None:
+            goals = [task.goal_seen(where, features) for task, where, features in zip(
+                tasks, zip(states["x"].tolist(), states["y"].tolist(),
+                           states["theta"].tolist(), states["goal_x"].tolist(),
+                           states["goal_y"].tolist()), goals)]
         first.builder.fill(obs, ranges, goals, np.concatenate([task.previous for task in tasks]))
     info = {"distance_to_goal": distance, "collisions": collisions,
             "new_collisions": new_collisions, "contact_time": contact_time,

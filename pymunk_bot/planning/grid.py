@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import overload
 
+import numba
 import numpy as np
 
 from pymunk_bot.planning.map import MapInfo
@@ -158,11 +159,27 @@ class ClearanceGrid:
 
     def segment_clearance(self, a, b) -> float:
         """Smallest cell clearance along the straight segment a-b (sampled at res/2)."""
-        ax, ay = float(a[0]), float(a[1])
-        bx, by = float(b[0]), float(b[1])
-        n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * self.resolution)) + 1)
-        t = np.linspace(0.0, 1.0, n)
+        return float(segment_clearance(self.clearance, self.origin[0], self.origin[1],
+                                       self.size[0], self.size[1], self.resolution,
+                                       float(a[0]), float(a[1]), float(b[0]), float(b[1])))
+
+
+@numba.njit(cache=True, nogil=True)
+def segment_clearance(clearance: np.ndarray, ox: float, oy: float, width: float, height: float,
+                      resolution: float, ax: float, ay: float, bx: float, by: float
+                      ) -> float:  # pragma: no cover - compiled
+    """Smallest cell clearance [m] along the segment a-b, sampled every res/2 or closer (0 if
+    a sample leaves the arena): :meth:`ClearanceGrid.segment_clearance`, callable from other
+    compiled code (plan guidance's lookahead point, every control step)."""
+    n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * resolution)) + 1)
+    rows, cols = clearance.shape
+    lowest = np.inf
+    for k in range(n):
+        t = k / (n - 1)
         x, y = ax + t * (bx - ax), ay + t * (by - ay)
-        if not self.inside(x, y).all():
+        if not (ox <= x <= ox + width and oy <= y <= oy + height):
             return 0.0
-        return float(self.clearance[self.cells_of(x, y)].min())
+        col = min(cols - 1, max(0, math.floor((x - ox) / resolution)))
+        row = min(rows - 1, max(0, math.floor((y - oy) / resolution)))
+        lowest = min(lowest, clearance[row, col])
+    return lowest

@@ -2,7 +2,10 @@
 
 An ``.npz`` MLP holds ``W0, b0, W1, b1, ...``, ``W_i`` of shape (inputs, outputs) and ``b_i`` of
 shape (outputs,): ``x = tanh(x @ W_i + b_i)`` for every layer but the last,
-``action = clip(x @ W_last + b_last, -1, 1)``, in float64. An ONNX model (what Stable-Baselines3
+``action = clip(x @ W_last + b_last, -1, 1)``, in float64; a policy trained with plan-guided
+goal features also holds ``plan_guidance``, its settings as numbers
+(:meth:`~pymunk_bot.config.controllers.PlanGuidanceConfig.as_array`), so that whoever runs it
+turns the guidance on (:func:`guidance_for`). An ONNX model (what Stable-Baselines3
 and PyTorch export) takes a float32 batch of observations (its first input) and returns
 actions (its first output), clipped to [-1, 1]; it runs on onnxruntime (the ``onnx`` extra).
 The observation and the action are :mod:`pymunk_bot.policy.io`'s.
@@ -21,6 +24,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.policy.npz_bounded import NpzError, first_line, read_npz
 from pymunk_bot.outcomes.results import write_atomic
 
@@ -29,6 +33,7 @@ MAX_NPZ_BYTES = 64 * 2**20  # an .npz larger than this, on disk or inflated, is 
 MAX_LAYERS = 64
 ONNX_FLOAT_TYPES = ("tensor(float)", "tensor(double)", "tensor(float16)")  # action outputs
 _NAME = re.compile(r"^([Wb])(\d+)$")
+GUIDANCE_ARRAY = "plan_guidance"  # an .npz MLP's record of its plan guidance settings
 ONNX_INSTALL = "pip install 'pymunk-bot[onnx]'"
 
 
@@ -41,6 +46,8 @@ class Policy(Protocol):
 
     inputs: int | None  # observation length it takes (None: the file does not say)
     outputs: int | None  # action length it gives (None: the file does not say)
+    records_guidance: bool  # the file says whether it was trained with plan guidance
+    plan_guidance: PlanGuidanceConfig | None  # what it was trained with (None: without)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n x outputs, float64, in [-1, 1]) of observations (n x inputs, float32)."""
@@ -50,7 +57,11 @@ class Policy(Protocol):
 class MlpPolicy:
     """A multi-layer perceptron: tanh hidden layers, a linear output clipped to [-1, 1]."""
 
-    def __init__(self, weights: list[np.ndarray], biases: list[np.ndarray]) -> None:
+    records_guidance = True
+
+    def __init__(self, weights: list[np.ndarray], biases: list[np.ndarray],
+                 plan_guidance: PlanGuidanceConfig | None = None) -> None:
+        self.plan_guidance = plan_guidance  # what its observations were trained with
         if not weights or len(weights) != len(biases) or len(weights) > MAX_LAYERS:
             raise PolicyFileError(f"an MLP needs 1 to {MAX_LAYERS} layers, a bias for each "
                                   f"weight matrix (got {len(weights)} W and {len(biases)} b)")
@@ -72,15 +83,21 @@ class MlpPolicy:
     def load(cls, path: str | Path) -> "MlpPolicy":
         """Read an ``.npz`` MLP; PolicyFileError says what is wrong with it."""
         try:
-            arrays = read_npz(path, 2 * MAX_LAYERS, MAX_NPZ_BYTES)
+            arrays = read_npz(path, 2 * MAX_LAYERS + 1, MAX_NPZ_BYTES)
         except NpzError as exc:
             raise PolicyFileError(f"not a readable .npz file: {exc}") from None
+        guidance = None
+        if GUIDANCE_ARRAY in arrays:
+            try:
+                guidance = PlanGuidanceConfig.from_array(arrays.pop(GUIDANCE_ARRAY).reshape(-1))
+            except ValueError as exc:
+                raise PolicyFileError(f"array '{GUIDANCE_ARRAY}': {first_line(exc)}") from None
         numbered: dict[str, dict[int, np.ndarray]] = {"W": {}, "b": {}}
         for name, array in arrays.items():
             match = _NAME.match(name)
             if match is None:
                 raise PolicyFileError(f"unexpected array '{name}' (an MLP holds W0, b0, W1, "
-                                      "b1, ...)")
+                                      f"b1, ... and maybe {GUIDANCE_ARRAY})")
             numbered[match.group(1)][int(match.group(2))] = array
         count = len(numbered["W"])
         for kind in ("W", "b"):
@@ -88,13 +105,15 @@ class MlpPolicy:
                 raise PolicyFileError(f"the arrays must be W0..W{count - 1} and b0..b{count - 1} "
                                       f"(got {sorted(arrays)})")
         return cls([numbered["W"][i] for i in range(count)],
-                   [numbered["b"][i] for i in range(count)])
+                   [numbered["b"][i] for i in range(count)], guidance)
 
     def save(self, path: str | Path) -> None:
         """Write the MLP as ``.npz`` (atomically: a reader never sees half a file)."""
         arrays: dict[str, Any] = {}
         for i, (w, b) in enumerate(zip(self.weights, self.biases)):
             arrays[f"W{i}"], arrays[f"b{i}"] = w, b
+        if self.plan_guidance is not None:
+            arrays[GUIDANCE_ARRAY] = np.array(self.plan_guidance.as_array())
         data = io.BytesIO()
         np.savez(data, **arrays)
         write_atomic(path, data.getvalue())
@@ -108,7 +127,11 @@ class MlpPolicy:
 
 
 class OnnxPolicy:
-    """An ONNX model run by onnxruntime on the CPU."""
+    """An ONNX model run by onnxruntime on the CPU (it does not record plan guidance: the
+    scenario's or the env's ``plan_guidance`` decides)."""
+
+    records_guidance = False
+    plan_guidance: PlanGuidanceConfig | None = None
 
     def __init__(self, path: str | Path) -> None:
         try:
@@ -174,6 +197,39 @@ def check_runs_on(policy: Policy, inputs: int, outputs: int) -> None:
     if action.shape != (1, outputs):
         raise PolicyFileError(f"gives {action.size} numbers for an observation of {inputs}; "
                               f"the robot takes {outputs}")
+
+
+def guidance_for(policy: Policy, setting: PlanGuidanceConfig | bool | None
+                 ) -> PlanGuidanceConfig | None:
+    """The plan guidance a policy runs with, given a scenario's ``plan_guidance`` (None: as
+    the file records; True: on, with the file's settings or the defaults; False: off;
+    settings: these). PolicyFileError if the setting contradicts what the file records."""
+    recorded = policy.plan_guidance
+    if setting is None:
+        return recorded
+    if policy.records_guidance and (recorded is None) != (setting is False):
+        raise PolicyFileError(guidance_mismatch(recorded is not None))
+    if setting is False:
+        return None
+    if setting is True:
+        return recorded or PlanGuidanceConfig()
+    return setting
+
+
+def check_guidance(policy: Policy, guidance: PlanGuidanceConfig | None) -> None:
+    """PolicyFileError if the policy records that it was trained with plan guidance and the
+    env has none, or the reverse."""
+    if policy.records_guidance and (policy.plan_guidance is None) != (guidance is None):
+        raise PolicyFileError(guidance_mismatch(policy.plan_guidance is not None))
+
+
+def guidance_mismatch(trained_with: bool) -> str:
+    """Why a policy trained with (or without) plan guidance cannot run the other way."""
+    if trained_with:
+        return ("was trained with plan guidance (its goal features come from a path; the file "
+                f"records '{GUIDANCE_ARRAY}'): run it with plan guidance on")
+    return ("was trained without plan guidance (its goal features are the final goal's): run "
+            "it with plan_guidance off (false)")
 
 
 def load_policy(path: str | Path) -> MlpPolicy | OnnxPolicy:

@@ -27,3 +27,15 @@ def test_a_short_run_learns_saves_and_plots(tmp_path):
     np.testing.assert_array_equal(load_policy(tmp_path / "p.npz").weights[0], policy.weights[0])
     train_es.plot(history, tmp_path / "curve.png", "test")
     assert (tmp_path / "curve.png").stat().st_size > 5_000
+
+
+def test_a_guided_run_records_its_guidance(tmp_path):
+    pytest.importorskip("cma")
+    theta, shapes, history = train_es.train(minutes=0.03, seed=0, popsize=4, episodes=1,
+                                            workers=1, progress=False, guided=True,
+                                            kind="office")
+    assert history
+    train_es.to_policy(theta, shapes, guided=True).save(tmp_path / "p.npz")
+    from pymunk_bot.policy.files import load_policy
+
+    assert load_policy(tmp_path / "p.npz").plan_guidance is not None  # evaluate turns it on

@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 import pymunk_bot as pb
+from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.policy.files import MlpPolicy, PolicyFileError, load_policy
 
 gym = pytest.importorskip("gymnasium")
@@ -48,13 +49,23 @@ def test_npz_mlp_is_the_documented_formula(tmp_path):
     assert loaded.inputs == BEAMS + 8 and loaded.outputs == 2
 
 
-@pytest.mark.parametrize("localization, pose_source", [("ground_truth", "ground_truth"),
-                                                       ("odometry", "odometry")])
-def test_controller_drives_exactly_as_the_env_steps(tmp_path, localization, pose_source):
+@pytest.mark.parametrize("localization, pose_source, guided", [
+    ("ground_truth", "ground_truth", None), ("odometry", "odometry", None),
+    ("ground_truth", "ground_truth", "file"), ("odometry", "odometry", "scenario")])
+def test_controller_drives_exactly_as_the_env_steps(tmp_path, localization, pose_source, guided):
+    # guided: plan guidance recorded in the policy file, or set by the scenario's key
     policy = random_mlp(np.random.default_rng(7))
+    guidance = PlanGuidanceConfig(replan_period=0.3) if guided else None
+    if guided:  # "scenario": the file records the defaults, the scenario's key overrides them
+        policy.plan_guidance = guidance if guided == "file" else PlanGuidanceConfig()
     policy.save(tmp_path / "p.npz")
     data = scenario(tmp_path / "p.npz", localization=localization)
-    env = NavigationEnv(data, pose_source=pose_source)
+    if guided:  # a crate off the map, that the LiDAR sees: replans around it
+        data["obstacles"].append({"type": "box", "center": [4.2, 1.5], "size": [0.4, 0.4],
+                                  "movable": True})
+    if guided == "scenario":
+        data["robots"][0]["controller"]["plan_guidance"] = {"replan_period": 0.3}
+    env = NavigationEnv(data, pose_source=pose_source, plan_guidance=guidance)
     obs, info = env.reset(seed=3)
     stepped = []
     for _ in range(120):
@@ -70,6 +81,16 @@ def test_controller_drives_exactly_as_the_env_steps(tmp_path, localization, pose
         driven.append(sim.robots["r1"].pose)
     assert len(stepped) > 20
     np.testing.assert_array_equal(np.array(driven), np.array(stepped))  # bit for bit
+    if guided:
+        guide = sim.robots["r1"].controller.guide
+        assert guide is not None and guide.plans >= 2  # it replanned, as the env's did
+        # the env observes once more, after the last step, than the controller has computed
+        assert env.episode.task.guide.plans - guide.plans in (0, 1)
+        unguided = NavigationEnv(data, pose_source=pose_source)
+        obs, _ = unguided.reset(seed=3)
+        for _ in range(20):
+            obs, *_ = unguided.step(policy.act(obs[None])[0])
+        assert not np.array_equal(unguided.sim.robots["r1"].pose, stepped[19])  # it matters
 
 
 def test_the_controller_stops_at_the_goal(tmp_path):
