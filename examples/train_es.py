@@ -173,7 +173,7 @@ def plot(history: list[dict], out: Path, title: str) -> None:
     plt.close(fig)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--minutes", type=float, default=None,
                         help="training wall time (default 10 without --generations)")
@@ -195,7 +195,7 @@ def main() -> None:
     parser.add_argument("--plot", type=Path, default=None)
     parser.add_argument("--episodes", type=int, default=200, help="held-out evaluation episodes")
     parser.add_argument("--evaluate", type=Path, default=None, help="only evaluate this .npz")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.minutes is None and args.generations is None:
         args.minutes = 10.0
     if args.generations is not None and not 1 <= args.generations <= MAX_GENERATIONS:

@@ -266,7 +266,11 @@ class JobPool:
         self._ship_by_value(cloudpickle)
 
         def run(task: Callable[[Any], Any], jobs: Sequence[Any]) -> list:
-            futures = client.map(task, list(jobs), pure=False)
+            if self._is_by_value(task):  # Dask pickles a task graph by reference: ship the code
+                futures = client.map(_call_pickled, [cloudpickle.dumps(task)] * len(jobs),
+                                     list(jobs), pure=False)
+            else:
+                futures = client.map(task, list(jobs), pure=False)
             try:
                 return list(client.gather(futures))  # in the order of the futures
             except BaseException:
@@ -289,8 +293,18 @@ class JobPool:
                 raise
         return run
 
+    def _is_by_value(self, task: Callable[[Any], Any]) -> bool:
+        return any(task.__module__ == module.__name__ for module in self.by_value)
+
     def _ship_by_value(self, pickler: Any) -> None:
         for module in self.by_value:
             if module.__name__ != "__main__":  # a script's functions already travel by value
                 pickler.register_pickle_by_value(module)
                 self._stack.callback(pickler.unregister_pickle_by_value, module)
+
+
+def _call_pickled(task: bytes, job: Any) -> Any:
+    """``task(job)`` for a task cloudpickled with its code (JobPool's ``by_value``)."""
+    import cloudpickle
+
+    return cloudpickle.loads(task)(job)
