@@ -42,6 +42,7 @@ HELD_OUT_WORLDS = [1_000_000, 2_000_000]  # never seen in training
 # policy learns to slow down and keep off obstacles rather than graze them at full speed.
 TRAIN_REWARD = {"clearance": -3.0}
 MAX_GENERATIONS = 100_000
+MAX_MINUTES = 10_080  # a week of training
 
 
 def env_kwargs(worlds: list[int], training: bool) -> dict:
@@ -198,9 +199,15 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.minutes is None and args.generations is None:
         args.minutes = 10.0
-    if args.generations is not None and not 1 <= args.generations <= MAX_GENERATIONS:
-        parser.error(f"--generations must be in [1, {MAX_GENERATIONS}] "
-                     f"(got {args.generations})")
+    problem = None
+    if args.minutes is not None and not 0 < args.minutes <= MAX_MINUTES:  # NaN too
+        problem = (f"--minutes must be a number of minutes in (0, {MAX_MINUTES}] "
+                   f"(got {args.minutes})")
+    elif args.generations is not None and not 1 <= args.generations <= MAX_GENERATIONS:
+        problem = f"--generations must be in [1, {MAX_GENERATIONS}] (got {args.generations})"
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)
     from pymunk_bot.policy.files import MlpPolicy
     from pymunk_bot.sweep.backends import BackendUnavailable
 

@@ -34,7 +34,7 @@ def test_a_short_run_learns_saves_and_plots(tmp_path):
 
 # ------------------------------------------------------------------ beyond one machine
 
-SHORT = {"seed": 3, "popsize": 6, "episodes": 2, "generations": 3}  # ~10 s of CPU in all
+SHORT = {"seed": 3, "popsize": 6, "episodes": 2, "generations": 3}  # about 4 s of CPU a run
 
 
 def arrays(policy) -> list[np.ndarray]:
@@ -117,3 +117,19 @@ def test_ray_trains_the_same_policy_bit_for_bit_as_local_processes():
     on_ray = train_es.train(None, backend="ray", workers=2, progress=False, **SHORT)[0]
     local = train_es.train(None, backend="process", workers=2, progress=False, **SHORT)[0]
     assert np.array_equal(on_ray, local)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--minutes", "0"], "error: --minutes must be a number of minutes in (0, 10080] (got 0.0)"),
+    (["--minutes", "nan"], "error: --minutes must be a number of minutes in (0, 10080] (got nan)"),
+    (["--generations", "0"], "error: --generations must be in [1, 100000] (got 0)"),
+    (["--generations", "1", "--backend", "process", "--workers", "0"],
+     "error: --workers must be in [1, 1024] (got 0)"),
+])
+def test_a_bad_budget_is_one_line_and_exit_2(tmp_path, capsys, argv, message):
+    pytest.importorskip("cma")
+    with pytest.raises(SystemExit) as exit_:
+        train_es.main([*argv, "--out", str(tmp_path / "p.npz")])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.count("\n") == 1 and err.startswith(message)
+    assert not (tmp_path / "p.npz").exists()
