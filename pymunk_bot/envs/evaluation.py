@@ -87,6 +87,12 @@ def kept_env(env_kwargs: dict[str, Any]) -> Any:
     return _kept_envs[key]
 
 
+def release_kept_envs() -> None:
+    """Close every env :func:`kept_env` keeps in this process."""
+    while _kept_envs:
+        _kept_envs.popitem()[1].close()
+
+
 def evaluate_policy(policy: Policy | str | Path, env_kwargs: dict[str, Any], episodes: int,
                     seed: int = 0, workers: int = 1) -> list[EpisodeOutcome]:
     """Episodes ``seed`` .. ``seed + episodes - 1``, split over ``workers`` processes."""
