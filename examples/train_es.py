@@ -4,6 +4,12 @@
     python examples/train_es.py --minutes 10 --workers 2 --seed 0 \\
         --out clutter_es.npz --plot learning_curve.png
     python examples/train_es.py --evaluate clutter_es.npz --episodes 200
+    python examples/train_es.py --generations 150 --backend dask --address SCHEDULER:8786
+
+With ``--generations`` the same seed gives the same policy, bit for bit, on every backend
+(``process``, ``dask``, ``ray``) and worker count: every random draw (CMA's samples, each
+generation's episode seeds) is made here from ``--seed``, and the candidates' results are taken
+in candidate order, never in the order the workers finish them.
 
 Every episode is a generated cluttered world (``pymunk-bot generate clutter``, 8 x 6 m, its seed
 drawn per episode from 200), a random free start pose and a random goal: the policy learns to
@@ -22,7 +28,8 @@ world seeds training never draws.
 from __future__ import annotations
 
 import argparse
-import multiprocessing
+import math
+import sys
 import time
 from pathlib import Path
 
@@ -39,6 +46,8 @@ HELD_OUT_WORLDS = [1_000_000, 2_000_000]  # never seen in training
 # The env's reward with a steeper clearance cost (default -1 per second at contact): the
 # policy learns to slow down and keep off obstacles rather than graze them at full speed.
 TRAIN_REWARD = {"clearance": -3.0}
+MAX_GENERATIONS = 100_000
+MAX_MINUTES = 10_080  # a week of training
 
 
 def env_kwargs(worlds: list[int], training: bool, guided: bool = False,
@@ -74,56 +83,68 @@ def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bo
     return MlpPolicy(weights, biases, PlanGuidanceConfig() if guided else None)
 
 
-_ENV = None  # each worker's training env (it keeps the generated worlds it drew)
-
-
 def fitness(job: tuple) -> tuple[float, float]:
-    """(mean return, contact-free success rate) of parameters ``theta`` over ``seeds``."""
-    from pymunk_bot.envs import NavigationEnv
-    from pymunk_bot.envs.evaluation import run_episodes
+    """(mean return, contact-free success rate) of parameters ``theta`` over ``seeds``, on
+    the worker's kept training env (it keeps the generated worlds it drew)."""
+    from pymunk_bot.envs.evaluation import kept_env, run_episodes
 
-    global _ENV
     theta, layer_shapes, seeds, guided, kind = job
-    if _ENV is None:
-        _ENV = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind))
-    runs = run_episodes(to_policy(theta, layer_shapes, guided), None, seeds, env=_ENV)
+    runs = run_episodes(to_policy(theta, layer_shapes, guided), None, seeds,
+                        env=kept_env(env_kwargs(TRAIN_WORLDS, True, guided, kind)))
     return (float(np.mean([r.episode_return for r in runs])),
             float(np.mean([r.success for r in runs])))
 
 
-def train(minutes: float, seed: int = 0, hidden: int = 8, popsize: int = 16,
+def episode_seeds(seed: int, generation: int, episodes: int) -> list[int]:
+    """The training episodes' seeds of ``generation`` (the same for all its candidates): a
+    function of the run's seed, the generation and the episode's index alone."""
+    state = np.random.SeedSequence([seed, generation]).generate_state(episodes, np.uint32)
+    return [int(s) >> 1 for s in state]  # 31 bits, as env seeds have always been
+
+
+def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 16,
           episodes: int = 8, sigma: float = 0.3, workers: int = 2, progress: bool = True,
-          generations: int | None = None, guided: bool = False, kind: str = "clutter"
+          generations: int | None = None, backend: str = "process", address: str | None = None,
+          guided: bool = False, kind: str = "clutter"
           ) -> tuple[np.ndarray, list[tuple[int, int]], list[dict]]:
-    """CMA-ES for ``minutes`` of wall time (or ``generations``, whichever ends first): (mean
-    parameters, layer shapes, per-generation history of elapsed time, mean and best fitness,
-    mean success rate). With ``generations`` alone, how far it gets does not depend on how fast
-    the machine is. ``guided``: plan-guided goal features; ``kind``: the generated worlds'."""
+    """CMA-ES for ``minutes`` of wall time and/or ``generations`` (whichever ends first; at
+    least one): (mean parameters, layer shapes, per-generation history of elapsed time, mean
+    and best fitness, mean success rate). Candidates are evaluated on ``backend`` (``process``:
+    ``workers`` local processes; ``dask``, ``ray``: the cluster at ``address``, or a local one
+    of ``workers``). With ``generations`` alone the result depends on the seed only: the same
+    bits on every backend, worker count and machine. ``guided``: plan-guided goal features;
+    ``kind``: the generated worlds'."""
     import cma
     from tqdm import tqdm
 
     from pymunk_bot.envs import NavigationEnv
+    from pymunk_bot.sweep.backends import JobPool
+
+    if minutes is None and generations is None:
+        raise ValueError("give --minutes or --generations (or both)")
 
     probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind))
     inputs = probe.episode.task.obs_size
     layer_shapes = shapes(inputs, hidden)
     size = sum(a * b + b for a, b in layer_shapes)
+    # CMA samples from its own Generator seeded here, not from numpy's global state
+    samples = np.random.default_rng(np.random.SeedSequence([seed, 1]))
     es = cma.CMAEvolutionStrategy(np.zeros(size), sigma, {
-        "popsize": popsize, "seed": seed + 1, "verbose": -9,
+        "popsize": popsize, "seed": np.nan, "verbose": -9,
+        "randn": lambda *shape: samples.standard_normal(shape),
         "CMA_diagonal": size > 200})  # separable CMA for large nets: linear time per update
-    rng = np.random.default_rng(seed)
     history: list[dict] = []
     started = time.perf_counter()
-    budget = minutes * 60.0
-    context = multiprocessing.get_context("spawn")
-    with context.Pool(workers) as pool, tqdm(total=round(budget), unit="s", disable=not progress,
-                                             desc="CMA-ES") as bar:
+    budget = math.inf if minutes is None else minutes * 60.0
+    with JobPool(backend, workers, address, by_value=[sys.modules[__name__]]) as pool, \
+            tqdm(total=generations if minutes is None else round(budget), disable=not progress,
+                 unit="gen" if minutes is None else "s", desc="CMA-ES") as bar:
         while time.perf_counter() - started < budget and (generations is None
                                                           or len(history) < generations):
-            seeds = rng.integers(2**31 - 1, size=episodes).tolist()  # the same for everyone
+            seeds = episode_seeds(seed, len(history), episodes)  # the same for everyone
             candidates = es.ask()
             results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, guided, kind)
-                                         for c in candidates])
+                                         for c in candidates])  # in candidate order
             es.tell(candidates, [-r[0] for r in results])
             elapsed = time.perf_counter() - started
             returns = [r[0] for r in results]
@@ -131,7 +152,7 @@ def train(minutes: float, seed: int = 0, hidden: int = 8, popsize: int = 16,
                             "mean_return": float(np.mean(returns)),
                             "best_return": float(np.max(returns)),
                             "success": float(np.mean([r[1] for r in results]))})
-            bar.update(min(round(elapsed), bar.total) - bar.n)
+            bar.update(1 if minutes is None else min(round(elapsed), bar.total) - bar.n)
             bar.set_postfix(ret=f"{history[-1]['mean_return']:.1f}",
                             ok=f"{history[-1]['success']:.2f}")
     return np.asarray(es.mean), layer_shapes, history
@@ -165,17 +186,24 @@ def plot(history: list[dict], out: Path, title: str) -> None:
     plt.close(fig)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--minutes", type=float, default=10.0, help="training wall time")
+    parser.add_argument("--minutes", type=float, default=None,
+                        help="training wall time (default 10 without --generations)")
     parser.add_argument("--generations", type=int, default=None,
-                        help="stop after this many generations (if --minutes has not ended it)")
+                        help="train this many generations: the same seed gives the same policy "
+                             "on every backend and machine (with --minutes: whichever ends first)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--hidden", type=int, default=8, help="hidden tanh units (0: linear)")
     parser.add_argument("--popsize", type=int, default=16)
     parser.add_argument("--train-episodes", type=int, default=8,
                         help="episodes per candidate per generation")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=int, default=2,
+                        help="local processes (process backend; dask/ray without --address)")
+    parser.add_argument("--backend", choices=["process", "dask", "ray"], default="process",
+                        help="where candidates are evaluated")
+    parser.add_argument("--address", default=None,
+                        help="HOST:PORT of the Dask scheduler or Ray head (dask/ray backends)")
     parser.add_argument("--out", type=Path, default=Path("clutter_es.npz"))
     parser.add_argument("--plot", type=Path, default=None)
     parser.add_argument("--episodes", type=int, default=200, help="held-out evaluation episodes")
@@ -184,16 +212,32 @@ def main() -> None:
                         help="goal features along an A* path (recorded in the .npz)")
     parser.add_argument("--generate", choices=("clutter", "office", "maze"), default="clutter",
                         help="the kind of generated worlds (default clutter)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
+    if args.minutes is None and args.generations is None:
+        args.minutes = 10.0
+    problem = None
+    if args.minutes is not None and not 0 < args.minutes <= MAX_MINUTES:  # NaN too
+        problem = (f"--minutes must be a number of minutes in (0, {MAX_MINUTES}] "
+                   f"(got {args.minutes})")
+    elif args.generations is not None and not 1 <= args.generations <= MAX_GENERATIONS:
+        problem = f"--generations must be in [1, {MAX_GENERATIONS}] (got {args.generations})"
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)
     from pymunk_bot.policy.files import MlpPolicy
+    from pymunk_bot.sweep.backends import BackendUnavailable
 
     if args.evaluate is not None:
         policy = MlpPolicy.load(args.evaluate)
     else:
-        theta, layer_shapes, history = train(args.minutes, args.seed, args.hidden, args.popsize,
-                                             args.train_episodes, workers=args.workers,
-                                             generations=args.generations,
-                                             guided=args.plan_guidance, kind=args.generate)
+        try:
+            theta, layer_shapes, history = train(
+                args.minutes, args.seed, args.hidden, args.popsize, args.train_episodes,
+                workers=args.workers, generations=args.generations, backend=args.backend,
+                address=args.address, guided=args.plan_guidance, kind=args.generate)
+        except (ValueError, BackendUnavailable) as exc:  # each names its option or address
+            print(f"error: {exc}", file=sys.stderr)
+            sys.exit(2)
         policy = to_policy(theta, layer_shapes, args.plan_guidance)
         policy.save(args.out)
         print(f"{len(history)} generations in {history[-1]['time'] / 60:.1f} min; "

@@ -7,6 +7,7 @@ in a scenario (tests/policy), so these figures hold for the controller too.
 """
 from __future__ import annotations
 
+import json
 import math
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -19,6 +20,8 @@ from pymunk_bot.policy.files import Policy, PolicyFileError, check_guidance, loa
 
 MAX_EPISODES = 100_000
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
+MAX_KEPT_ENVS = 4  # envs one process keeps for kept_env (each holds the worlds it generated)
+_kept_envs: dict[str, Any] = {}  # this process's kept envs, by their arguments, oldest first
 
 
 @dataclass(frozen=True)
@@ -73,6 +76,28 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
     if own:
         env.close()
     return outcomes
+
+
+def kept_env(env_kwargs: dict[str, Any]) -> Any:
+    """A ``NavigationEnv(**env_kwargs)`` made once per process and kept, with the worlds it
+    generates, for every later call with the same arguments: a trainer's job that evaluates
+    one candidate reuses it on whichever worker (a local process, a Dask or Ray worker) it
+    lands, as ``run_episodes(..., env=kept_env(kwargs))``. An episode depends only on its seed,
+    not on what the env played before. At most MAX_KEPT_ENVS are kept (the oldest is closed)."""
+    from pymunk_bot.envs.navigation import NavigationEnv
+
+    key = json.dumps(env_kwargs, sort_keys=True, default=repr)
+    if key not in _kept_envs:
+        if len(_kept_envs) >= MAX_KEPT_ENVS:
+            _kept_envs.pop(next(iter(_kept_envs))).close()
+        _kept_envs[key] = NavigationEnv(**env_kwargs)
+    return _kept_envs[key]
+
+
+def release_kept_envs() -> None:
+    """Close every env :func:`kept_env` keeps in this process."""
+    while _kept_envs:
+        _kept_envs.popitem()[1].close()
 
 
 def evaluate_policy(policy: Policy | str | Path, env_kwargs: dict[str, Any], episodes: int,

@@ -2,13 +2,16 @@
 
 Every backend takes the same chunks and yields each chunk's rows as soon as it finishes (in
 any order); the caller writes them down at once, so a worker that dies loses only the chunk
-it was running.
+it was running. ``JobPool`` keeps one backend open for rounds of other jobs (the ES recipe's
+generations of candidates) and gives their results in job order.
 """
 from __future__ import annotations
 
 import logging
 import os
 import socket
+from contextlib import ExitStack, contextmanager
+from types import ModuleType
 from typing import Any, Callable, Iterator, Sequence
 
 from pymunk_bot.sweep.runner import run_chunk
@@ -106,9 +109,14 @@ def _process(base, source, chunks, duration, workers, address, base_dir, task) -
                 future.cancel()
 
 
-def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
+@contextmanager
+def dask_client(workers: int | None, address: str | None) -> Iterator[Any]:
+    """A ``distributed.Client`` on the Dask scheduler at ``address``, or on a new cluster of
+    ``workers`` processes on 127.0.0.1 (one per CPU if None) when there is no address; closed
+    (and the local cluster stopped) on leaving. BackendUnavailable, one line, when Dask is
+    missing or the scheduler cannot be reached."""
     try:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client, LocalCluster
     except ImportError:
         raise BackendUnavailable("the dask backend needs dask.distributed: "
                                  "pip install 'pymunk-bot[dask]'") from None
@@ -128,6 +136,17 @@ def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> I
             cluster.close()
         raise BackendUnavailable(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
+    from distributed import as_completed
+
+    with dask_client(workers, address) as client:
         base_future = client.scatter(base, broadcast=True)
         futures = [client.submit(task, base_future, source, chunk, duration, base_dir,
                                  pure=False)
@@ -137,13 +156,14 @@ def _dask(base, source, chunks, duration, workers, address, base_dir, task) -> I
                 yield future.result()
         finally:
             client.cancel(futures)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
-def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
+@contextmanager
+def ray_session(workers: int | None, address: str | None) -> Iterator[Any]:
+    """The ``ray`` module, connected to the Ray cluster at ``address`` (``auto``: the one on
+    this machine) or to a new local instance of ``workers`` CPUs; shut down on leaving if it
+    was started here. BackendUnavailable, one line, when Ray is missing or the head cannot be
+    reached."""
     try:
         import ray
     except ImportError:
@@ -161,6 +181,14 @@ def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> It
             ray.init(address=address, log_to_driver=False)
         started = True
     try:
+        yield ray
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> Iterator[Rows]:
+    with ray_session(workers, address) as ray:
         remote = ray.remote(num_cpus=1)(task)
         base_ref = ray.put(base)
         pending = [remote.remote(base_ref, source, chunk, duration, base_dir) for chunk in chunks]
@@ -171,6 +199,112 @@ def _ray(base, source, chunks, duration, workers, address, base_dir, task) -> It
         finally:
             for ref in pending:
                 ray.cancel(ref)
-    finally:
-        if started:
-            ray.shutdown()
+
+
+class JobPool:
+    """Runs rounds of jobs on one backend, opened once for all of them (a trainer evaluates
+    a generation of candidates after another on the same workers, which keep what they
+    cached): ``with JobPool("dask", address=...) as pool: results = pool.map(task, jobs)``.
+
+    ``map`` returns ``task(job)`` for every job **in the order of the jobs**, whatever order
+    they finish in, so a caller that draws every random number itself gets the same results
+    on every backend and worker count. ``task`` is a top-level function of one picklable
+    argument; it must be importable where the jobs run, or live in one of ``by_value``'s
+    modules (e.g. a script's own module, which a remote worker does not have), whose code is
+    then shipped with the jobs. Opening the pool raises ValueError (``--workers``,
+    ``--address``, an unknown backend) or BackendUnavailable, one line each, as ``run_chunks``
+    does.
+    """
+
+    def __init__(self, backend: str, workers: int | None = None, address: str | None = None,
+                 by_value: Sequence[ModuleType] = ()) -> None:
+        if backend not in BACKENDS:
+            raise ValueError(f"unknown backend '{backend}' (choose from {', '.join(BACKENDS)})")
+        if address is not None and backend not in ("dask", "ray"):
+            raise ValueError(f"--address is for the dask and ray backends, not '{backend}'")
+        check_workers(workers)
+        self.backend, self.workers, self.address = backend, workers, address
+        self.by_value = tuple(by_value)
+        self._stack = ExitStack()
+        self._map: Callable[[Callable[[Any], Any], Sequence[Any]], list] | None = None
+
+    def __enter__(self) -> JobPool:
+        try:
+            self._map = getattr(self, f"_open_{self.backend}")()
+        except BaseException:
+            self._stack.close()
+            raise
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._map = None
+        self._stack.close()
+
+    def map(self, task: Callable[[Any], Any], jobs: Sequence[Any]) -> list:
+        """``[task(job) for job in jobs]``, run on the pool's workers."""
+        if self._map is None:
+            raise RuntimeError("JobPool.map outside its `with` block")
+        return self._map(task, jobs)
+
+    def _open_serial(self) -> Callable[[Callable[[Any], Any], Sequence[Any]], list]:
+        return lambda task, jobs: [task(job) for job in jobs]
+
+    def _open_process(self) -> Callable[[Callable[[Any], Any], Sequence[Any]], list]:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        # spawn, as run_chunks: the same on every OS, no fork of a process holding threads
+        pool = self._stack.enter_context(ProcessPoolExecutor(
+            max_workers=self.workers or default_workers(),
+            mp_context=multiprocessing.get_context("spawn")))
+        return lambda task, jobs: list(pool.map(task, jobs))
+
+    def _open_dask(self) -> Callable[[Callable[[Any], Any], Sequence[Any]], list]:
+        client = self._stack.enter_context(dask_client(self.workers, self.address))
+        import cloudpickle  # Dask ships functions with it
+
+        self._ship_by_value(cloudpickle)
+
+        def run(task: Callable[[Any], Any], jobs: Sequence[Any]) -> list:
+            if self._is_by_value(task):  # Dask pickles a task graph by reference: ship the code
+                futures = client.map(_call_pickled, [cloudpickle.dumps(task)] * len(jobs),
+                                     list(jobs), pure=False)
+            else:
+                futures = client.map(task, list(jobs), pure=False)
+            try:
+                return list(client.gather(futures))  # in the order of the futures
+            except BaseException:
+                client.cancel(futures)
+                raise
+        return run
+
+    def _open_ray(self) -> Callable[[Callable[[Any], Any], Sequence[Any]], list]:
+        ray = self._stack.enter_context(ray_session(self.workers, self.address))
+        self._ship_by_value(ray.cloudpickle)  # Ray ships functions with its own copy
+
+        def run(task: Callable[[Any], Any], jobs: Sequence[Any]) -> list:
+            remote = ray.remote(num_cpus=1)(task)
+            refs = [remote.remote(job) for job in jobs]
+            try:
+                return list(ray.get(refs))  # in the order of the refs
+            except BaseException:
+                for ref in refs:
+                    ray.cancel(ref)
+                raise
+        return run
+
+    def _is_by_value(self, task: Callable[[Any], Any]) -> bool:
+        return any(task.__module__ == module.__name__ for module in self.by_value)
+
+    def _ship_by_value(self, pickler: Any) -> None:
+        for module in self.by_value:
+            if module.__name__ != "__main__":  # a script's functions already travel by value
+                pickler.register_pickle_by_value(module)
+                self._stack.callback(pickler.unregister_pickle_by_value, module)
+
+
+def _call_pickled(task: bytes, job: Any) -> Any:
+    """``task(job)`` for a task cloudpickled with its code (JobPool's ``by_value``)."""
+    import cloudpickle
+
+    return cloudpickle.loads(task)(job)

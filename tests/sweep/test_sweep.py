@@ -3,9 +3,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -14,7 +11,7 @@ from pymunk_bot.cli import main as cli_main
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.sweep import backends, parse_assignment, parse_seeds, run_sweep, summarize
 from pymunk_bot.sweep.output import journal_path
-from bounds import HANG_GUARD
+from dask_cluster import loopback_dask_cluster
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEEDS = {"robots[0].max_wheel_speed": [0.5, 1.0]}
@@ -170,39 +167,9 @@ def test_process_backend_gives_the_serial_rows():
 @pytest.fixture(scope="module")
 def dask_cluster(tmp_path_factory):
     """A real scheduler and two worker processes on 127.0.0.1, stopped afterwards."""
-    pytest.importorskip("distributed")
-    dask = Path(sys.executable).with_name("dask")
-    if not dask.exists():
-        pytest.skip("the dask command line is not installed")
-    info = tmp_path_factory.mktemp("dask") / "scheduler.json"
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env, "cwd": ROOT}
-    scheduler = subprocess.Popen([str(dask), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                                  "--no-dashboard", "--scheduler-file", str(info)], **quiet)
-    procs = [scheduler]
-    try:
-        deadline = time.monotonic() + HANG_GUARD
-        while not info.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(info.read_text())["address"]
-        assert address.startswith("tcp://127.0.0.1:")
-        for _ in range(2):  # no nanny: each worker is one process, quick to stop
-            procs.append(subprocess.Popen([str(dask), "worker", address, "--host", "127.0.0.1",
-                                           "--nthreads", "1", "--no-nanny", "--no-dashboard"],
-                                          **quiet))
-        from distributed import Client
-
-        with Client(address, timeout=f"{HANG_GUARD:.0f}s") as client:
-            client.wait_for_workers(2, timeout=HANG_GUARD)
+    with loopback_dask_cluster(tmp_path_factory.mktemp("dask"), cwd=ROOT,
+                               pythonpath=ROOT) as address:
         yield address
-    finally:
-        for proc in reversed(procs):  # workers first, while the scheduler still answers
-            proc.terminate()
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
 
 
 def test_dask_cluster_gives_the_serial_rows(dask_cluster, tmp_path):
