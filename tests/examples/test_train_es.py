@@ -53,6 +53,7 @@ def arrays(policy) -> list[np.ndarray]:
     return [*policy.weights, *policy.biases]
 
 
+@pytest.mark.slow  # about 16 s of CPU: a scheduler, two workers and three trainings
 def test_a_dask_cluster_trains_the_same_policy_bit_for_bit_as_local_processes(tmp_path):
     """The script, run as a user runs it, on a scheduler and 2 workers on 127.0.0.1 that
     cannot import it (they run elsewhere), and train() called from this module: the same
