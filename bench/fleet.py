@@ -202,8 +202,9 @@ def real_time(n_robots: int, beams: int, sim_seconds: float, repeats: int = 1,
         single = sim.single_substep_ticks
         cpu.append(_ticks(sim, ticks))
         single = sim.single_substep_ticks - single
-        scans = [r.lidar.latest for r in sim.robots.values() if r.sensor("lidar") is not None]
-        if any(s is None or sim.time - s.time > 0.1 + 1e-9 for s in scans):
+        scans = [r.lidar.latest_time for r in sim.robots.values()
+                 if r.sensor("lidar") is not None]
+        if any(t is None or sim.time - t > 0.1 + 1e-9 for t in scans):
             raise RuntimeError("a LiDAR did not keep its 10 Hz")
         reference.append(_hand_written_ticks(sim, ticks))
     ours, theirs = statistics.median(cpu), statistics.median(reference)

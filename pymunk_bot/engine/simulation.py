@@ -200,9 +200,8 @@ class Simulation:
     def _after_sensors(self, now: float) -> None:
         """Maps, localizers, localization scores and metrics, once the sensors have read."""
         for robot in self._mapping:
-            scan = robot.lidar.latest
-            if scan.time == now and robot.mapper.due(now):
-                robot.mapper.integrate(robot.pose, scan)
+            if robot.lidar.latest_time == now and robot.mapper.due(now):
+                robot.mapper.integrate(robot.pose, robot.lidar.latest)
         for robot in self._localized:
             robot.localizer.update(self._localizer_inputs(robot, now))
         if self._scores:

@@ -189,7 +189,9 @@ class RobotTask:
     def ranges(self) -> np.ndarray:
         """The latest LiDAR ranges [m] (one scan per control period)."""
         self.bound()
-        return self._lidar.latest.ranges
+        ranges = self._lidar.ranges
+        assert ranges is not None  # a scan is taken at the start of every episode
+        return ranges
 
     def observe(self, out: np.ndarray | None = None, where: Where | None = None) -> np.ndarray:
         """The observation (:mod:`pymunk_bot.policy.io`), written into ``out`` if given;

@@ -78,7 +78,10 @@ class Lidar:
         # max_range, dropout).
         self.model = (float(config.noise_std), float(config.min_range),
                        float(config.max_range), float(config.dropout))
-        self.latest: LaserScan | None = None  # None until the first scan
+        # The latest periodic scan as kept (time [s], ranges [m]), and as a LaserScan once read:
+        # a fleet's scans mostly go to arrays (policies, the vector env) and are never read as one.
+        self._kept: tuple[float, np.ndarray] | None = None
+        self._latest: LaserScan | None = None
         self._normals_ahead: np.ndarray | None = None  # periodic noise drawn ahead (_normals)
         self._normals_used = 0
 
@@ -91,7 +94,7 @@ class Lidar:
     @property
     def ranges(self) -> np.ndarray | None:
         """Ranges [m] of the latest periodic scan (read-only), None before the first."""
-        return None if self.latest is None else self.latest.ranges
+        return None if self._kept is None else self._kept[1]
 
     @property
     def reading(self) -> LaserScan | None:
@@ -134,11 +137,26 @@ class Lidar:
         self.keep(time, ranges)
 
     def keep(self, time: float, ranges: np.ndarray) -> None:
-        """Make ``ranges`` [m] (the error model applied) the latest periodic scan, taken at
-        ``time`` [s]."""
-        c = self.config
-        self.latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
-                                max_range=c.max_range, offset=self.offset, time=time)
+        """Make ``ranges`` [m] (the error model applied, read-only) the latest periodic scan,
+        taken at ``time`` [s]."""
+        self._kept = (time, ranges)
+        self._latest = None
+
+    @property
+    def latest(self) -> LaserScan | None:
+        """The latest periodic scan, None before the first."""
+        if self._latest is None and self._kept is not None:
+            time, ranges = self._kept
+            c = self.config
+            self._latest = LaserScan(ranges=ranges, angles=self._angles, min_range=c.min_range,
+                                     max_range=c.max_range, offset=self.offset, time=time)
+        return self._latest
+
+    @property
+    def latest_time(self) -> float | None:
+        """When the latest periodic scan was taken [s] (None before the first), without
+        building it."""
+        return None if self._kept is None else self._kept[0]
 
     # ------------------------------------------------------------------ model
     def _measure(self, rng: np.random.Generator) -> np.ndarray:
