@@ -263,7 +263,10 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     from pymunk_bot.engine.simulation import Simulation
 
     revisit = localizer == "slam_revisit"
-    data = world_for(family, seed, revisit)
+    try:
+        data = world_for(family, seed, revisit)
+    except ValueError as exc:  # e.g. fewer walkers fit than asked: a failure line, not a crash
+        return Outcome(localizer, family, profile, seed, lidar=lidar_for(seed), error=str(exc))
     if data is None:
         return None
     tour = tour_goals(family, seed, data)
