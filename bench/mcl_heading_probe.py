@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from bench.localization_robustness import (FAMILIES, MAX_TIME, PEOPLE_FAMILIES, lidar_for,
-                                           odometry_for, world_for)
+from bench.localization_robustness import (FAMILIES, MAX_SEEDS, MAX_TIME, PEOPLE_FAMILIES,
+                                           lidar_for, odometry_for, world_for)
 from pymunk_bot.localization.se2 import transform_points, wrap
 
 PROBE_SPAN = math.radians(6.0)  # [rad] headings tried either side of the truth
@@ -44,7 +44,10 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
     """The figures above [deg] for one run (MCL, the benchmark's world, LiDAR and odometry)."""
     from pymunk_bot.engine.simulation import Simulation
 
-    data = world_for(family, seed)
+    try:
+        data = world_for(family, seed)
+    except ValueError as exc:  # e.g. fewer walkers fit than asked
+        raise SystemExit(f"mcl_heading_probe: {family} seed {seed}: {exc}") from None
     if data is None:
         raise SystemExit(f"mcl_heading_probe: the {family} map is not here")
     robot = data["robots"][0]
@@ -89,6 +92,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("seed", type=int)
     parser.add_argument("--settings", default="{}", metavar="JSON", help="extra MCL keys")
     args = parser.parse_args(argv)
+    if not 0 <= args.seed < MAX_SEEDS:
+        parser.error(f"seed must be 0..{MAX_SEEDS - 1} (got {args.seed})")
     try:
         settings = json.loads(args.settings)
     except json.JSONDecodeError as exc:

@@ -274,7 +274,8 @@ class MclLocalizer(Localizer):
                               self._odom_at_update, scan.time)
 
     def used_points(self, scan) -> np.ndarray:
-        """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned."""
+        """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned:
+        the ones the likelihood field weighs (bench/mcl_heading_probe.py probes them too)."""
         n_beams = np.asarray(scan.ranges).size
         step = max(1, (n_beams - 1) // (self.config.max_beams - 1))
         points, index = scan_points(scan)
