@@ -13,6 +13,8 @@ heading std its curvature stands for (how sure the filter takes the scan to be).
 from __future__ import annotations
 
 import math
+import sys
+from typing import NoReturn
 
 import numpy as np
 
@@ -40,6 +42,12 @@ def scan_heading_profile(mcl, scan, truth: np.ndarray) -> tuple[float, float]:
     return float(offsets[np.argmax(log_l)]), std
 
 
+def _refuse(problem: str) -> NoReturn:
+    """One line on stderr, exit status 2."""
+    print(f"mcl_heading_probe: {problem}", file=sys.stderr)
+    raise SystemExit(2)
+
+
 def probe(family: str, profile: str, seed: int, settings: dict | None = None) -> dict[str, float]:
     """The figures above [deg] for one run (MCL, the benchmark's world, LiDAR and odometry)."""
     from pymunk_bot.engine.simulation import Simulation
@@ -47,9 +55,9 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
     try:
         data = world_for(family, seed)
     except ValueError as exc:  # e.g. fewer walkers fit than asked
-        raise SystemExit(f"mcl_heading_probe: {family} seed {seed}: {exc}") from None
+        _refuse(f"{family} seed {seed}: {exc}")
     if data is None:
-        raise SystemExit(f"mcl_heading_probe: the {family} map is not here")
+        _refuse(f"the {family} map is not here")
     robot = data["robots"][0]
     robot.update(lidar=lidar_for(seed), odometry=odometry_for(profile, seed),
                  localization={"type": "mcl", **(settings or {})})
