@@ -196,7 +196,7 @@ class MclLocalizer(Localizer):
         c = self.config
         # Rejection only while tracking: from a wrong pose it would hide the beams that say so.
         reject = c.reject_short and self.localized
-        points = self._used_points(scan)
+        points = self.used_points(scan)
         short = np.zeros(points.shape[0], dtype=bool)
         if reject and points.shape[0]:
             short = self._short(predicted, points, scan)
@@ -229,7 +229,7 @@ class MclLocalizer(Localizer):
             self.scan_fit = self.fit_at(self._filter_pose, scan)
         self._restart_if_lost()
         if not self.localized:
-            self._reseed_from_scan(scan, self._used_points(scan), RESEED_MARGIN)
+            self._reseed_from_scan(scan, self.used_points(scan), RESEED_MARGIN)
             self._explore(scan)
             return
         self._explorer.forget()
@@ -273,8 +273,9 @@ class MclLocalizer(Localizer):
         self._explorer.update(self.field, modes, share, scan_points(scan)[0], scan.max_range,
                               self._odom_at_update, scan.time)
 
-    def _used_points(self, scan) -> np.ndarray:
-        """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned."""
+    def used_points(self, scan) -> np.ndarray:
+        """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned:
+        the ones the likelihood field weighs (bench/mcl_heading_probe.py probes them too)."""
         n_beams = np.asarray(scan.ranges).size
         step = max(1, (n_beams - 1) // (self.config.max_beams - 1))
         points, index = scan_points(scan)
@@ -309,7 +310,7 @@ class MclLocalizer(Localizer):
             n_beams = np.asarray(scan.ranges).size
             return self._beam_likelihood(scan, np.arange(0, n_beams, max(1, (n_beams - 1) // (c.max_beams - 1))))
         if points is None:
-            points = self._used_points(scan)
+            points = self.used_points(scan)
         p = np.ones(self.particles.shape[0])
         self._beam_mean = None
         if points.shape[0] == 0:

@@ -18,7 +18,8 @@ def test_defaults_are_nav2_amcls_but_the_documented_ones():
     assert (c.alpha1, c.alpha2, c.alpha3, c.alpha4, c.alpha5) == (0.02, 0.05, 0.02, 0.02, 0.02)
     assert (c.min_particles, c.max_particles, c.pf_err, c.pf_z) == (500, 2000, 0.05, 0.99)
     assert (c.update_min_d, c.update_min_a, c.resample_interval) == (0.1, 0.1, 1)
-    assert (c.z_hit, c.z_short, c.z_max, c.z_rand, c.sigma_hit) == (0.5, 0.05, 0.05, 0.5, 0.2)
+    assert (c.z_hit, c.z_short, c.z_max, c.z_rand) == (0.5, 0.05, 0.05, 0.5)
+    assert c.sigma_hit == 0.1  # Nav2: 0.2, too flat in heading: issue 36
     assert (c.lambda_short, c.laser_likelihood_max_dist, c.max_beams) == (0.1, 2.0, 60)
     # Nav2's likelihood_field_prob (the product, while localized) and recovery on: issue 20
     assert c.laser_model_type == "likelihood_field_prob" and c.initial == "known"

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from bench.localization_robustness import PEOPLE_RMSE, run_one
+from bench.localization_robustness import PEOPLE_OCCUPIED, PEOPLE_RMSE, run_one
 from pymunk_bot.localization import MappingConfig, OccupancyMapper
 from pymunk_bot.localization.dynamic import MAX_SHORT_SHARE, excused_fit, short_returns
 from pymunk_bot.localization.likelihood import LikelihoodField
@@ -88,3 +88,16 @@ def test_mcl_tracks_among_thirty_walkers():
     assert got.rmse <= PEOPLE_RMSE, got.line()
     before = run_one("mcl", "office_sf30", "typical", 1, {"reject_short": False})
     assert before is not None and before.rmse > PEOPLE_RMSE, before.line()
+
+
+@pytest.mark.slow
+def test_mapping_among_ten_walkers_keeps_at_most_1_percent_of_their_cells_occupied():
+    """Issue 36: the map built with the true pose in an office with 10 social-force walkers
+    (seed 3, the worst of seeds 0-9) holds at most 1 % of the cells only people walked through
+    occupied; plain log-odds (clear_decay 1) held 1.26 % there."""
+    got = run_one("mapping", "office_sf10", "typical", 3)
+    assert got is not None and not got.error
+    assert got.people_occupied <= PEOPLE_OCCUPIED, got.line()
+    assert got.map_precision >= 0.9, got.line()
+    plain = run_one("mapping", "office_sf10", "typical", 3, {"clear_decay": 1.0})
+    assert plain is not None and plain.people_occupied > PEOPLE_OCCUPIED, plain.line()
