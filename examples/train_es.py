@@ -247,6 +247,7 @@ def main(argv: list[str] | None = None) -> None:
     if problem is not None:
         print(f"error: {problem}", file=sys.stderr)
         sys.exit(2)
+    from pymunk_bot.config.errors import ScenarioError
     from pymunk_bot.policy.files import MlpPolicy
     from pymunk_bot.sweep.backends import BackendUnavailable
 
@@ -261,6 +262,9 @@ def main(argv: list[str] | None = None) -> None:
                 maps=tuple(args.maps))
         except (ValueError, BackendUnavailable) as exc:  # each names its option or address
             print(f"error: {exc}", file=sys.stderr)
+            sys.exit(2)
+        except ScenarioError as exc:  # a --maps file that is not there or not a map
+            print(f"error: --maps: {exc.problem}", file=sys.stderr)
             sys.exit(2)
         policy = to_policy(theta, layer_shapes, args.plan_guidance)
         policy.save(args.out)
