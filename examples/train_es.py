@@ -23,7 +23,13 @@ world seeds training never draws.
 ``--plan-guidance`` trains (and evaluates) with plan-guided goal features (docs/learning.md,
 "Plan guidance"): the goal the policy sees lies along an A* path on the world's map; the saved
 ``.npz`` records it, so ``pymunk-bot evaluate`` and the ``policy`` controller turn it on.
-``--generate office`` or ``maze`` draws that kind of world instead of clutter.
+``--generate office`` or ``maze`` draws that kind of world instead of clutter; a list
+(``--generate clutter,office,maze``) draws one of the kinds per episode, each at its own default
+size, and ``--maps FILE ...`` adds ROS maps (random free starts and goals on them) to the draw.
+The general policy shipped as ``scenarios/policies/navigator.npz`` is (docs/learning.md)::
+
+    python examples/train_es.py --plan-guidance --generate clutter,office,maze \
+        --maps maps/office.yaml --minutes 20 --workers 2 --seed 0 --out navigator.npz
 """
 from __future__ import annotations
 
@@ -46,21 +52,31 @@ HELD_OUT_WORLDS = [1_000_000, 2_000_000]  # never seen in training
 # The env's reward with a steeper clearance cost (default -1 per second at contact): the
 # policy learns to slow down and keep off obstacles rather than graze them at full speed.
 TRAIN_REWARD = {"clearance": -3.0}
+TRAIN_SECONDS = 20.0  # [s] of a training episode with several families
+HELD_OUT_SECONDS = 60.0  # [s] of a held-out episode with several families
 MAX_GENERATIONS = 100_000
 MAX_MINUTES = 10_080  # a week of training
 
 
 def env_kwargs(worlds: list[int], training: bool, guided: bool = False,
-               kind: str = "clutter") -> dict:
-    """Navigation-v0's arguments: random goals, starts and generated worlds of ``kind``,
-    ``guided``: plan-guided goal features. Training ends an episode at the first contact and
-    after 20 s (an arrival takes 8 s on average); held-out episodes run on through contacts
-    for up to 30 s."""
+               kind: str = "clutter", maps: tuple[str, ...] = ()) -> dict:
+    """Navigation-v0's arguments: random goals, starts and generated worlds of ``kind`` (a
+    comma-separated list: one drawn per episode, each at its default size; one kind: 8 x 6 m),
+    and the ROS ``maps`` drawn among them; ``guided``: plan-guided goal features. Training ends
+    an episode at the first contact and after TRAIN_SECONDS; held-out episodes run on through
+    contacts for up to HELD_OUT_SECONDS."""
+    kinds = kind.split(",")
+    several = len(kinds) > 1 or bool(maps)
+    randomize: dict = {"generate": kinds if several else kind, "world_seeds": worlds,
+                       "start": True}
+    if not several:
+        randomize["size"] = SIZE
+    if maps:
+        randomize["maps"] = list(maps)
     return {"scenario": SCENARIO, "random_goal": True, "terminate_on_collision": training,
-            "max_episode_time": 20.0 if training else 30.0, "reward": TRAIN_REWARD,
-            "randomize": {"generate": kind, "size": SIZE, "world_seeds": worlds,
-                          "start": True},
-            "plan_guidance": True if guided else None}
+            "max_episode_time": (TRAIN_SECONDS if several else 20.0) if training
+            else (HELD_OUT_SECONDS if several else 30.0), "reward": TRAIN_REWARD,
+            "randomize": randomize, "plan_guidance": True if guided else None}
 
 
 def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
@@ -88,9 +104,9 @@ def fitness(job: tuple) -> tuple[float, float]:
     the worker's kept training env (it keeps the generated worlds it drew)."""
     from pymunk_bot.envs.evaluation import kept_env, run_episodes
 
-    theta, layer_shapes, seeds, guided, kind = job
+    theta, layer_shapes, seeds, guided, kind, maps = job
     runs = run_episodes(to_policy(theta, layer_shapes, guided), None, seeds,
-                        env=kept_env(env_kwargs(TRAIN_WORLDS, True, guided, kind)))
+                        env=kept_env(env_kwargs(TRAIN_WORLDS, True, guided, kind, maps)))
     return (float(np.mean([r.episode_return for r in runs])),
             float(np.mean([r.success for r in runs])))
 
@@ -105,7 +121,7 @@ def episode_seeds(seed: int, generation: int, episodes: int) -> list[int]:
 def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 16,
           episodes: int = 8, sigma: float = 0.3, workers: int = 2, progress: bool = True,
           generations: int | None = None, backend: str = "process", address: str | None = None,
-          guided: bool = False, kind: str = "clutter"
+          guided: bool = False, kind: str = "clutter", maps: tuple[str, ...] = ()
           ) -> tuple[np.ndarray, list[tuple[int, int]], list[dict]]:
     """CMA-ES for ``minutes`` of wall time and/or ``generations`` (whichever ends first; at
     least one): (mean parameters, layer shapes, per-generation history of elapsed time, mean
@@ -113,7 +129,8 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
     ``workers`` local processes; ``dask``, ``ray``: the cluster at ``address``, or a local one
     of ``workers``). With ``generations`` alone the result depends on the seed only: the same
     bits on every backend, worker count and machine. ``guided``: plan-guided goal features;
-    ``kind``: the generated worlds'."""
+    ``kind``: the generated worlds' (comma-separated: several); ``maps``: ROS maps drawn
+    among them."""
     import cma
     from tqdm import tqdm
 
@@ -123,7 +140,7 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
     if minutes is None and generations is None:
         raise ValueError("give --minutes or --generations (or both)")
 
-    probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind))
+    probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind, maps))
     inputs = probe.episode.task.obs_size
     layer_shapes = shapes(inputs, hidden)
     size = sum(a * b + b for a, b in layer_shapes)
@@ -143,8 +160,8 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
                                                           or len(history) < generations):
             seeds = episode_seeds(seed, len(history), episodes)  # the same for everyone
             candidates = es.ask()
-            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, guided, kind)
-                                         for c in candidates])  # in candidate order
+            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, guided, kind,
+                                          maps) for c in candidates])  # in candidate order
             es.tell(candidates, [-r[0] for r in results])
             elapsed = time.perf_counter() - started
             returns = [r[0] for r in results]
@@ -210,8 +227,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--evaluate", type=Path, default=None, help="only evaluate this .npz")
     parser.add_argument("--plan-guidance", action="store_true",
                         help="goal features along an A* path (recorded in the .npz)")
-    parser.add_argument("--generate", choices=("clutter", "office", "maze"), default="clutter",
-                        help="the kind of generated worlds (default clutter)")
+    parser.add_argument("--generate", default="clutter", metavar="KIND[,KIND...]",
+                        help="the kinds of generated worlds, clutter, office or maze, "
+                             "comma-separated for several (default clutter)")
+    parser.add_argument("--maps", nargs="+", default=[], metavar="MAP_YAML",
+                        help="ROS maps also drawn from (random free starts and goals)")
     args = parser.parse_args(argv)
     if args.minutes is None and args.generations is None:
         args.minutes = 10.0
@@ -221,9 +241,13 @@ def main(argv: list[str] | None = None) -> None:
                    f"(got {args.minutes})")
     elif args.generations is not None and not 1 <= args.generations <= MAX_GENERATIONS:
         problem = f"--generations must be in [1, {MAX_GENERATIONS}] (got {args.generations})"
+    elif any(k not in ("clutter", "office", "maze") for k in args.generate.split(",")):
+        problem = (f"--generate takes kinds from clutter, office, maze, comma-separated "
+                   f"(got '{args.generate}')")
     if problem is not None:
         print(f"error: {problem}", file=sys.stderr)
         sys.exit(2)
+    from pymunk_bot.config.errors import ScenarioError
     from pymunk_bot.policy.files import MlpPolicy
     from pymunk_bot.sweep.backends import BackendUnavailable
 
@@ -234,9 +258,13 @@ def main(argv: list[str] | None = None) -> None:
             theta, layer_shapes, history = train(
                 args.minutes, args.seed, args.hidden, args.popsize, args.train_episodes,
                 workers=args.workers, generations=args.generations, backend=args.backend,
-                address=args.address, guided=args.plan_guidance, kind=args.generate)
+                address=args.address, guided=args.plan_guidance, kind=args.generate,
+                maps=tuple(args.maps))
         except (ValueError, BackendUnavailable) as exc:  # each names its option or address
             print(f"error: {exc}", file=sys.stderr)
+            sys.exit(2)
+        except ScenarioError as exc:  # a --maps file that is not there or not a map
+            print(f"error: --maps: {exc.problem}", file=sys.stderr)
             sys.exit(2)
         policy = to_policy(theta, layer_shapes, args.plan_guidance)
         policy.save(args.out)
@@ -248,14 +276,19 @@ def main(argv: list[str] | None = None) -> None:
                  f"episodes per generation, {args.workers} workers, seed {args.seed}")
     from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, summarize
 
-    # Held out: worlds training never draws, and no early end at a contact.
+    # Held out: worlds training never draws, and no early end at a contact; each kind apart.
     guided = policy.plan_guidance is not None  # as trained (the file records it)
-    outcomes = evaluate_policy(policy, env_kwargs(HELD_OUT_WORLDS, False, guided, args.generate),
-                               args.episodes, seed=10_000, workers=args.workers)
-    print(f"held-out episodes in unseen generated {args.generate} worlds"
-          f"{' (plan-guided)' if guided else ''}:")
-    print(format_summary(summarize(outcomes)))
-
+    several = "," in args.generate or bool(args.maps)
+    for kind in args.generate.split(","):
+        kwargs = env_kwargs(HELD_OUT_WORLDS, False, guided, kind)
+        if several:  # the kind's default size and the longer episodes, as in training
+            kwargs["randomize"].pop("size")
+            kwargs["max_episode_time"] = HELD_OUT_SECONDS
+        outcomes = evaluate_policy(policy, kwargs, args.episodes, seed=10_000,
+                                   workers=args.workers)
+        print(f"held-out episodes in unseen generated {kind} worlds"
+              f"{' (plan-guided)' if guided else ''}:")
+        print(format_summary(summarize(outcomes)))
 
 if __name__ == "__main__":
     main()

@@ -32,3 +32,17 @@ def test_shipped_scenario_meets_its_expectations(name):
     sim.run(config.world.duration)
     failed = [c.describe() for c in sim.check_expectations() if not c.passed]
     assert not failed
+
+
+# The general policy's collision regression tests, one per world family (docs/learning.md).
+NAVIGATOR = {"navigator_clutter": "clutter", "navigator_office": "office",
+             "navigator_maze": "maze", "navigator_floor": "map"}
+
+
+def test_the_general_policy_has_a_regression_scenario_in_every_family():
+    for name, family in NAVIGATOR.items():
+        config = load_scenario(SHIPPED[name])
+        controller = config.robots[0].controller
+        assert controller.type == "policy" and Path(controller.path).name == "navigator.npz"
+        assert (config.world.map is not None) == (family == "map")
+        assert config.expect["r1"].max_collisions == 0 and config.expect["r1"].goal_reached

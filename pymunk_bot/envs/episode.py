@@ -88,6 +88,9 @@ class NavigationEpisode:
         elif randomize is not None:
             self.randomize = Randomization.parse(randomize, self.source)
             self.randomize.check(self._base, self.robot_name, self.source)
+        if self.randomize is not None and self.randomize.maps and not self.random_goal:
+            raise ScenarioError(self.source, "randomize.maps", "a map world needs a drawn goal: "
+                                                               "pass random_goal=True")
         self.sim: Simulation | None = None
         self.done = True  # no episode under way until reset
         self._copy: tuple[Replicas, int] | None = None

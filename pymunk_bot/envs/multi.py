@@ -120,10 +120,10 @@ class MultiRobotEnv(ParallelEnv):
         observations, rewards, terminations, truncations, infos = {}, {}, {}, {}, {}
         for name in live:
             task = self.tasks[name]
-            rewards[name], terminations[name], infos[name] = task.outcome(
-                self.control_period, self.terminate_on_collision)
+            observations[name] = np.empty(task.obs_size, dtype=np.float32)
+            rewards[name], terminations[name], infos[name] = task.outcome(  # fills the obs
+                self.control_period, self.terminate_on_collision, obs=observations[name])
             truncations[name] = time_up and not terminations[name]
-            observations[name] = task.observe()
             infos[name]["time"] = self.sim.time
             if terminations[name] or truncations[name]:
                 infos[name].update(end_info(self.sim, name))

@@ -2,6 +2,8 @@
 
     gym.make("pymunk_bot/Navigation-v0", random_goal=True, randomize={
         "generate": "clutter",             # a generated world per episode (maze | clutter | office)
+                                           # or a list of kinds, one drawn per episode
+        "maps": ["scenarios/maps/office.yaml"],  # ROS maps (.yaml): drawn among the kinds
         "world_seeds": [0, 1000],          # its seed drawn from [0, 1000) (default [0, 2**31-1))
         "size": [8.0, 6.0],                # of the generated arena [m] (default: the kind's)
         "start": True,                     # a random free start pose
@@ -16,6 +18,13 @@ for a generated one, its CrowdNav layout (stage, pedestrians' starts and routes,
 start and goal) from a seed drawn from the episode's generator, as the benchmark's episode of
 that seed (:func:`pymunk_bot.benchmark.suite.episode_data`).
 
+``generate`` may list kinds (``["clutter", "office", "maze"]``) and ``maps`` lists ROS map
+files (a path, or one relative to a shipped scenarios folder: ``maps/office.yaml``): each
+episode draws one of these families uniformly (kinds first, then maps, in the order given), then
+a world of it. A map world is the map file's walls with no other obstacle: it needs
+``start: true`` and the env's ``random_goal`` (a free start and goal are drawn on it). One kind
+and no maps draws no family (the draws of one ``generate: KIND`` are unchanged).
+
 ``set`` takes the key paths of ``sweep --set`` and is checked the same way: each range's ends
 and each choice must give a valid scenario. A range of two integers draws integers (both ends
 included). A generated world or a suite's scenario keeps the scenario's learning robot (drive,
@@ -25,9 +34,11 @@ are left out. Every draw comes from the episode's generator: a seed gives the sa
 from __future__ import annotations
 
 import copy
+import functools
 import math
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
@@ -38,7 +49,8 @@ from pymunk_bot.maps.generate import KINDS, generate
 from pymunk_bot.sweep.grid import apply_override, parse_key_path
 from pymunk_bot.envs.crowd_draw import crowd_suite, crowd_world
 
-KEYS = ("generate", "world_seeds", "size", "start", "set", "crowd")
+KEYS = ("generate", "maps", "world_seeds", "size", "start", "set", "crowd")
+MAX_FAMILIES = 64  # kinds and maps listed at most
 MAX_CHOICES = 1000
 MAX_SEED = 2**31 - 1
 WORLD_CACHE = 256  # generated worlds kept (drawing one runs a solvability check)
@@ -75,7 +87,9 @@ class Draw:
 class Randomization:
     """What is drawn anew every episode (see the module docstring)."""
 
-    generate: str | None = None
+    generate: str | None = None  # the first kind (None: no generated world)
+    kinds: tuple[str, ...] = ()  # every kind drawn from
+    maps: tuple[str, ...] = ()  # [resolved paths] of ROS map files drawn from
     world_seeds: tuple[int, int] = (0, MAX_SEED)
     size: tuple[float, float] | None = None  # [m]
     start: bool = False
@@ -93,10 +107,15 @@ class Randomization:
         if unknown:
             raise ScenarioError(source, f"randomize.{unknown[0]}",
                                 f"unknown key; valid: {', '.join(KEYS)}")
-        kind = value.get("generate")
-        if kind is not None and kind not in KINDS:
-            raise ScenarioError(source, "randomize.generate",
-                                f"must be one of {', '.join(KINDS)} (got {kind!r})")
+        kinds = _kinds(value.get("generate"), source)
+        kind = kinds[0] if kinds else None
+        maps = _maps(value.get("maps"), source)
+        if maps and not value.get("start", False):
+            raise ScenarioError(source, "randomize.maps", "a map world needs a drawn start: "
+                                                          "add randomize.start: true")
+        if maps and value.get("crowd") is not None:
+            raise ScenarioError(source, "randomize.crowd", "draws the world itself: leave out "
+                                                           "randomize.maps")
         seeds = value.get("world_seeds", (0, MAX_SEED))
         if not (isinstance(seeds, (list, tuple)) and len(seeds) == 2
                 and all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)
@@ -120,15 +139,20 @@ class Randomization:
         entries: tuple = ()
         if crowd is not None:
             entries = crowd_suite(crowd, kind, source)
-        return cls(kind, (int(seeds[0]), int(seeds[1])),
+        return cls(kind, kinds, maps, (int(seeds[0]), int(seeds[1])),
                    None if size is None else (float(size[0]), float(size[1])), start, draws,
                    None if crowd is None else str(crowd), _suite=entries)
 
     @property
     def changes_world(self) -> bool:
         """Whether an episode's scenario differs from the next one's in more than its seed."""
-        return (self.generate is not None or self.crowd is not None or self.start
-                or bool(self.draws))
+        return (self.generate is not None or bool(self.maps) or self.crowd is not None
+                or self.start or bool(self.draws))
+
+    @property
+    def families(self) -> tuple[str, ...]:
+        """The kinds of generated worlds, then the map files, drawn from (uniformly)."""
+        return self.kinds + self.maps
 
     def check(self, base: dict, robot: str, source: str) -> None:
         """Every range end and choice, applied to ``base`` (or a generated world), parses:
@@ -141,6 +165,9 @@ class Randomization:
                 raise ScenarioError(source, "randomize.crowd",
                                     f"{exc.source}: {exc.path}: {exc.problem}") from None
         else:
+            for family in self.families[1:]:  # the first is checked with the draws below
+                parse_scenario(self.world(base, robot, self.world_seeds[0], source, family),
+                               source)
             world = self.world(base, robot, self.world_seeds[0], source)
         for draw in self.draws:
             for value in draw.values():
@@ -158,20 +185,30 @@ class Randomization:
             entry = self._suite[int(rng.integers(len(self._suite)))]
             data = crowd_world(base, robot, entry, int(rng.integers(MAX_SEED)), source)
         else:
-            seed = int(rng.integers(*self.world_seeds)) if self.generate is not None else 0
-            data = copy.deepcopy(self.world(base, robot, seed, source))
+            families = self.families
+            family = families[int(rng.integers(len(families)))] if len(families) > 1 else None
+            if family in self.maps:
+                seed = 0
+            else:
+                seed = int(rng.integers(*self.world_seeds)) if self.generate is not None else 0
+            data = copy.deepcopy(self.world(base, robot, seed, source, family))
         for draw in self.draws:
             _apply(data, draw.path, draw.sample(rng), source)
         return data
 
-    def world(self, base: dict, robot: str, seed: int, source: str) -> dict:
-        """``base`` with the generated world of ``seed`` in it (``base`` without ``generate``)."""
-        if self.generate is None:
+    def world(self, base: dict, robot: str, seed: int, source: str,
+              family: str | None = None) -> dict:
+        """``base`` with the world of ``family`` (a kind or a map file; default: the first
+        family) in it, a generated one of ``seed``; ``base`` itself with no family."""
+        family = family if family is not None else (self.families or (None,))[0]
+        if family is None:
             return base
-        world = self._worlds.get(seed)
+        if family in self.maps:
+            return map_world(base, robot, family)
+        world = self._worlds.get((family, seed))
         if world is None:
-            world = generate(self.generate, seed, self.size)
-            self._worlds[seed] = world
+            world = generate(family, seed, self.size)
+            self._worlds[(family, seed)] = world
             if len(self._worlds) > WORLD_CACHE:
                 self._worlds.popitem(last=False)
         data = copy.deepcopy(base)
@@ -188,6 +225,39 @@ class Randomization:
         return data
 
 
+def map_world(base: dict, robot: str, path: str) -> dict:
+    """``base`` in the world of the ROS map file ``path``: its walls and nothing else, the
+    learning robot alone (its start and goal are drawn on the map)."""
+    data = copy.deepcopy(base)
+    learner = next(r for r in data["robots"] if r["name"] == robot)
+    spot = list(roomiest_spot(path))  # a valid pose and goal until the episode draws its own
+    learner["pose"] = spot + [0.0]
+    learner["goal"] = {**(learner.get("goal") or {}), "position": spot}
+    data["robots"] = [learner]
+    data["world"] = {**{k: v for k, v in data["world"].items()
+                        if k not in ("size", "map", "map_scale")}, "map": path}
+    data["obstacles"] = []
+    for key in ("expect", "events", "pedestrians"):
+        data.pop(key, None)
+    return data
+
+
+@functools.lru_cache(maxsize=64)
+def roomiest_spot(path: str) -> tuple[float, float]:
+    """The centre [m] of the free cell of the ROS map ``path`` farthest from its solid."""
+    from scipy.ndimage import distance_transform_edt
+
+    from pymunk_bot.maps.outlines import solid_cells
+    from pymunk_bot.maps.ros import read_ros_map
+
+    grid = read_ros_map(path)
+    room = distance_transform_edt(np.pad(~solid_cells(grid), 1))  # the edge is solid too
+    row, col = np.unravel_index(int(np.argmax(room)), room.shape)
+    row, col = row - 1, col - 1  # without the padding
+    return (grid.origin[0] + (col + 0.5) * grid.resolution,
+            grid.origin[1] + (row + 0.5) * grid.resolution)
+
+
 def start_pose(sim, robot, rng: np.random.Generator) -> tuple[float, float, float]:
     """A free pose for ``robot`` in ``sim``'s world: clear of everything but the robot itself by
     START_CLEARANCE, START_GOAL_GAP from its goal, heading uniform."""
@@ -197,11 +267,14 @@ def start_pose(sim, robot, rng: np.random.Generator) -> tuple[float, float, floa
     clearance = robot.radius + START_CLEARANCE  # [m]
     goal = robot.goal
     everything = pymunk.ShapeFilter()
+    x0, y0, x1, y1 = world.extent  # [m] a map's frame need not start at 0
     for _ in range(START_TRIES):
-        x = float(rng.uniform(clearance, world.width - clearance))
-        y = float(rng.uniform(clearance, world.height - clearance))
+        x = float(rng.uniform(x0 + clearance, x1 - clearance))
+        y = float(rng.uniform(y0 + clearance, y1 - clearance))
         theta = float(rng.uniform(-math.pi, math.pi))
         if goal is not None and math.hypot(x - goal[0], y - goal[1]) < START_GOAL_GAP:
+            continue
+        if world.map is not None and world.map.is_solid(x, y):  # inside a map's solid
             continue
         hits = world.space.point_query((x, y), clearance, everything)
         if all(hit.shape is not None and hit.shape.body is body for hit in hits):
@@ -238,3 +311,45 @@ def _draw(path: Any, spec: Any, source: str) -> Draw:
                                            f"{{choices: [...]}} (got {spec!r:.60})")
     integer = all(isinstance(v, int) for v in spec)
     return Draw(str(path), float(spec[0]), float(spec[1]), integer=integer)
+
+
+def _kinds(value: Any, source: str) -> tuple[str, ...]:
+    """``randomize.generate``: a kind or a list of kinds, checked."""
+    if value is None:
+        return ()
+    listed = isinstance(value, (list, tuple))
+    kinds = list(value) if listed else [value]
+    if listed and not 0 < len(kinds) <= MAX_FAMILIES:
+        raise ScenarioError(source, "randomize.generate", f"must list 1 to {MAX_FAMILIES} kinds "
+                                                          f"(got {len(kinds)})")
+    for i, kind in enumerate(kinds):
+        if kind not in KINDS:
+            where = f"randomize.generate[{i}]" if listed else "randomize.generate"
+            raise ScenarioError(source, where, f"must be one of {', '.join(KINDS)} "
+                                               f"(got {kind!r:.60})")
+    return tuple(kinds)
+
+
+def _maps(value: Any, source: str) -> tuple[str, ...]:
+    """``randomize.maps``: a list of ROS map files, resolved (as given, else against the
+    shipped scenarios folders) and checked to exist."""
+    from pymunk_bot.config.loader import shipped_scenario_dirs
+
+    if value is None:
+        return ()
+    if not isinstance(value, (list, tuple)) or not 0 < len(value) <= MAX_FAMILIES:
+        raise ScenarioError(source, "randomize.maps", f"must list 1 to {MAX_FAMILIES} ROS map "
+                                                      f"files (.yaml) (got {value!r:.60})")
+    paths = []
+    for i, item in enumerate(value):
+        if not isinstance(item, (str, Path)) or Path(item).suffix not in (".yaml", ".yml"):
+            raise ScenarioError(source, f"randomize.maps[{i}]", "must be a ROS map file "
+                                                                f"(.yaml) (got {item!r:.60})")
+        found = [p for p in [Path(item), *(d / item for d in shipped_scenario_dirs())]
+                 if p.is_file()]
+        if not found:
+            raise ScenarioError(source, f"randomize.maps[{i}]",
+                                f"no such map file: {item} (relative paths are tried from "
+                                f"here and from the shipped scenarios folder)")
+        paths.append(str(found[0].resolve()))
+    return tuple(paths)

@@ -4,7 +4,10 @@
 The observation and the action scaling are :mod:`pymunk_bot.policy.io`'s (the ``policy``
 controller uses them too); the reward is :class:`~pymunk_bot.envs.task.RewardWeights`'. With
 plan guidance the observation's goal features come from :class:`~pymunk_bot.planning.guidance.
-PlanGuide` (as the controller's do); the reward and ``distance_to_goal`` keep the final goal's.
+PlanGuide` (as the controller's do), and so does the reward's progress term: progress along
+the path (the guided distance: to the lookahead point plus the path beyond it), not the straight
+line, which would punish heading for a door. ``distance_to_goal``, arrival and termination keep
+the final goal's.
 """
 from __future__ import annotations
 
@@ -70,7 +73,7 @@ class RobotTask:
         self.builder: ObservationBuilder | None = None
         self.previous = np.zeros((1, self.action_size))  # the last clipped action
         self.contact_time = 0.0  # [s] in contact this episode
-        self._distance = 0.0  # [m] to the goal at the last observation
+        self._distance = 0.0  # [m] to the (guided) goal at the last observation
         self._collisions = 0
         self._start_collisions = 0
         self.plan_guidance = plan_guidance
@@ -112,7 +115,8 @@ class RobotTask:
 
     @property
     def last_distance(self) -> float:
-        """Distance to the goal [m] at the last observation (progress is measured from it)."""
+        """Distance [m] to the goal at the last observation, along the path with plan guidance
+        (progress is measured from it)."""
         return self._distance
 
     @property
@@ -200,6 +204,8 @@ class RobotTask:
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
         where = self.where() if where is None else where
         features = self.goal_seen(where, goal_features(*where))
+        if self.guide is not None:  # progress is measured along the path from here
+            self._distance = features[0]
         self.builder.fill(obs[None], self.ranges()[None], [features], self.previous)
         return obs
 
@@ -253,25 +259,27 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
     collisions, reached = states["collisions"], states["reached"]
     before = np.array([(task.last_distance, task.last_collisions, task.contact_time,
                         task.start_collisions) for task in tasks]).reshape(-1, 4)
+    seen, along = goals, distance  # what the observation shows; what progress is measured on
+    if first.guide is not None:  # once per step, observed or not: the guide counts steps
+        seen = [task.goal_seen(where, features) for task, where, features in zip(
+            tasks, zip(states["x"].tolist(), states["y"].tolist(),
+                       states["theta"].tolist(), states["goal_x"].tolist(),
+                       states["goal_y"].tolist()), goals)]
+        along = np.array([g[0] for g in seen])
     ranges = np.array([task.ranges() for task in tasks])  # np.stack's own cost is 5 us
     n = len(tasks)
     rewards, contact_time, clearance = np.empty(n), np.empty(n), np.empty(n)
     new_collisions = np.empty(n, dtype=np.int64)
     success, terminated = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
-    step_rows(elapsed, terminate_on_collision, first.weight_row, distance, collisions,
+    step_rows(elapsed, terminate_on_collision, first.weight_row, along, collisions,
               before, np.array([touching(task.bound()) for task in tasks]), ranges,
               np.array([task.radius for task in tasks]), reached, rewards, new_collisions,
               contact_time, clearance, success, terminated)
-    for task, d, c, t in zip(tasks, distance.tolist(), collisions.tolist(),
+    for task, d, c, t in zip(tasks, along.tolist(), collisions.tolist(),
                              contact_time.tolist()):
         task.remember(d, c, t)
     if obs is not None:
-        if first.guide is not None:
-            goals = [task.goal_seen(where, features) for task, where, features in zip(
-                tasks, zip(states["x"].tolist(), states["y"].tolist(),
-                           states["theta"].tolist(), states["goal_x"].tolist(),
-                           states["goal_y"].tolist()), goals)]
-        first.builder.fill(obs, ranges, goals, np.concatenate([task.previous for task in tasks]))
+        first.builder.fill(obs, ranges, seen, np.concatenate([task.previous for task in tasks]))
     info = {"distance_to_goal": distance, "collisions": collisions,
             "new_collisions": new_collisions, "contact_time": contact_time,
             "clearance": clearance, "goal_reached": reached, "is_success": success}

@@ -76,6 +76,20 @@ class MapGeometry:
         x0, y0, x1, y1 = self.extent
         return (x1 - x0, y1 - y0)
 
+    def is_solid(self, x: float, y: float) -> bool:
+        """Whether the point (x, y) [m] lies in the map's solid (a solid cell of a grid map,
+        unknown ones included; a painted area of a vector map) or outside its extent. The
+        physics holds only the solid's outline: a point deep inside it touches no shape."""
+        x0, y0, x1, y1 = self.extent
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            return True
+        if self.grid is not None and self.solid is not None:
+            row, col = self.grid.cell_of(np.array([x, y]))
+            if not self.grid.inside(row, col):
+                return True
+            return bool(self.solid[int(row), int(col)])
+        return any(area.contains(x, y) for area in self.filled)
+
     @property
     def shape_count(self) -> int:
         """Number of pymunk shapes the geometry makes (pieces plus segments)."""

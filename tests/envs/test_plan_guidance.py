@@ -146,3 +146,50 @@ def test_a_planning_grid_too_large_is_refused_naming_the_key():
     env = NavigationEnv(big, plan_guidance={"resolution": 0.02})
     with pytest.raises(ValueError, match=r"plan_guidance.resolution: .*\(at most 4000000\)"):
         env.reset(seed=0)
+
+
+PROGRESS_ONLY = {"contact": 0.0, "clearance": 0.0, "time": 0.0, "success": 0.0}
+
+
+def test_guided_reward_pays_progress_toward_the_door_not_the_straight_line():
+    # The goal is straight ahead behind the wall; the door is up. Driving up toward the door
+    # takes the robot no nearer in a straight line, but nearer along the path: with guidance
+    # the progress term pays for it.
+    data = office(pose=(2.0, 1.0, math.pi / 2))
+    guided = NavigationEnv(data, plan_guidance=True, reward=PROGRESS_ONLY)
+    plain = NavigationEnv(data, reward=PROGRESS_ONLY)
+    obs, _ = guided.reset(seed=0)
+    plain.reset(seed=0)
+
+    def along(o: np.ndarray) -> float:  # [m] the guided distance the observation shows
+        squashed = float(o[BEAMS + GOAL_DISTANCE])
+        return squashed / (1.0 - squashed)
+
+    start = along(obs)
+    guided_total = plain_total = 0.0
+    for _ in range(20):  # 2 s up at 0.5 of full speed
+        obs, reward, *_ = guided.step([0.5, 0.0])
+        guided_total += reward
+        plain_total += plain.step([0.5, 0.0])[1]
+    assert plain_total < 0.0  # farther from the goal in a straight line
+    assert guided_total > 0.3  # but nearer along the path to it: paid
+    assert guided_total == pytest.approx(start - along(obs), abs=1e-4)  # float32 obs
+
+
+def test_multi_robot_env_pays_guided_progress_as_the_single_env():
+    from pymunk_bot.envs import MultiRobotEnv
+
+    data = office(pose=(2.0, 1.0, math.pi / 2))
+    single = NavigationEnv(data, plan_guidance=True, reward=PROGRESS_ONLY)
+    multi = MultiRobotEnv(data, plan_guidance=True, reward=PROGRESS_ONLY)
+    single.reset(seed=0)
+    multi.reset(seed=0)
+    single_total = multi_total = 0.0
+    for _ in range(20):  # up toward the door, as above
+        obs, reward, *_ = single.step([0.5, 0.0])
+        observations, rewards, *_ = multi.step({"r1": np.array([0.5, 0.0], np.float32)})
+        np.testing.assert_array_equal(observations["r1"], obs)
+        single_total += reward
+        multi_total += rewards["r1"]
+    assert multi_total > 0.3
+    assert multi_total == pytest.approx(single_total, abs=1e-6)  # its world is built apart

@@ -146,3 +146,48 @@ def test_a_bad_budget_is_one_line_and_exit_2(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err
     assert exit_.value.code == 2 and err.count("\n") == 1 and err.startswith(message)
     assert not (tmp_path / "p.npz").exists()
+
+
+# ------------------------------------------------------------------ every world family
+
+FAMILIES = {"kind": "clutter,office,maze", "maps": ("maps/office.yaml",)}
+
+
+def test_training_episodes_come_from_every_family():
+    from pymunk_bot.envs import NavigationEnv
+
+    env = NavigationEnv(**train_es.env_kwargs(train_es.TRAIN_WORLDS, True, True, **FAMILIES))
+    seen = set()
+    for seed in range(16):
+        env.reset(seed=seed)
+        world = env.sim.config.world
+        seen.add("map" if world.map is not None else world.size)
+    # each kind at its own default size, and the ROS map
+    assert seen == {(12.0, 8.0), (16.0, 10.0), (8.4, 8.4), "map"}
+    assert env.episode.task.guide is not None
+    assert env.episode.time_limit == train_es.TRAIN_SECONDS
+
+
+def test_a_run_over_every_family_records_guidance(tmp_path):
+    pytest.importorskip("cma")
+    theta, shapes, history = train_es.train(None, seed=0, popsize=4, episodes=4, workers=1,
+                                            progress=False, generations=1, guided=True,
+                                            **FAMILIES)
+    assert len(history) == 1
+    train_es.to_policy(theta, shapes, guided=True).save(tmp_path / "p.npz")
+    from pymunk_bot.policy.files import load_policy
+
+    assert load_policy(tmp_path / "p.npz").plan_guidance is not None
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--generate", "clutter,forest"], "error: --generate takes kinds from clutter, office, maze"),
+    (["--maps", "nowhere.yaml"], "error: --maps: no such map file: nowhere.yaml"),
+])
+def test_bad_families_are_one_line_and_exit_2(tmp_path, capsys, argv, message):
+    pytest.importorskip("cma")
+    with pytest.raises(SystemExit) as exit_:
+        train_es.main([*argv, "--generations", "1", "--out", str(tmp_path / "p.npz")])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.count("\n") == 1 and err.startswith(message), err
+    assert not (tmp_path / "p.npz").exists()
