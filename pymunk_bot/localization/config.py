@@ -73,7 +73,7 @@ class MclConfig(Section):
     # comparing each scan with the last moving_window seconds of scans through the odometry
     # (a return where an earlier beam reached more than moving_margin beyond it; a blob of
     # returns at most moving_blob across that holds one) are left out of the weighting, the
-    # scan seeding and the scan fit, localized or not (localization/moving.py).
+    # scan seeding and the scan fit while not localized (localization/moving.py).
     reject_moving: bool = True
     moving_window: Annotated[Float, Field(gt=0.0, le=10.0)] = 1.0  # [s]
     moving_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.2  # [m]
