@@ -69,6 +69,15 @@ class MclConfig(Section):
     # out of the likelihood-field models and of the scan fit (localization/dynamic.py).
     reject_short: bool = True
     short_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.3  # [m]
+    # Not AMCL's: returns of things that moved (people walking), found with no map pose by
+    # comparing each scan with the last moving_window seconds of scans through the odometry
+    # (a return where an earlier beam reached more than moving_margin beyond it; a blob of
+    # returns at most moving_blob across that holds one) are left out of the weighting, the
+    # scan seeding and the scan fit while not localized (localization/moving.py).
+    reject_moving: bool = True
+    moving_window: Annotated[Float, Field(gt=0.0, le=10.0)] = 1.0  # [s]
+    moving_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.2  # [m]
+    moving_blob: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.8  # [m]; 0: returns one by one
     # AMCL's recovery, on (Nav2: 0, off): a kidnapped robot or a wrong global guess needs it;
     # with it on, tracking succeeded as often (robustness benchmark, docs/localization.md).
     recovery_alpha_slow: Weight = 0.001  # 0 (both) disables recovery

@@ -6,7 +6,8 @@ Per update (after ``update_min_d`` of travel or ``update_min_a`` of turn, on a f
    ``pz = z_hit exp(-d^2 / 2 sigma_hit^2) + z_rand / max_range``, d = distance from a beam's end
    to the nearest obstacle), its ``likelihood_field_prob`` (the product of pz while localized,
    tempered until then: see ``scan_likelihood``) or its beam model (expected ranges by sphere
-   tracing);
+   tracing); returns of things that moved (moving.py, no pose needed) and, while localized,
+   returns short of the map (dynamic.py) are left out;
 3. every ``resample_interval`` updates: low-variance resampling, KLD-sampling choosing how many
    particles (Fox 2003, AMCL's 0.5 m x 0.5 m x 10 deg histogram), and recovery: a fraction
    ``max(0, 1 - w_fast / w_slow)`` of the new particles is drawn uniformly over free space;
@@ -37,6 +38,7 @@ from pymunk_bot.localization.dynamic import excused_fit, short_returns
 from pymunk_bot.localization.explore import Explorer, trace
 from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.motion import sample_motion
+from pymunk_bot.localization.moving import MovingReturns
 from pymunk_bot.localization.particles import (CLUSTER_BIN, cluster_labels, cluster_modes, kld_limit,
                         low_variance_indices, roughen, weighted_pose_stats)
 from pymunk_bot.localization.posesearch import beam_log_pz, refine, search
@@ -112,6 +114,7 @@ class MclLocalizer(Localizer):
         self._contradicted = 0  # updates in a row with a tight cloud and a poor scan fit
         self.restarts = 0  # global restarts after a kidnapping (see _restart_if_lost)
         self.reseeded = 0  # particles put on poses found from the scan, in all
+        self.moving_returns = 0  # returns of the last scan weighed found moving (moving.py)
         # Where the robot fits (half its radius off the map's obstacles): where to search;
         # every free cell if the map is too tight for that.
         free = self.field.free_xy
@@ -123,6 +126,8 @@ class MclLocalizer(Localizer):
         self._explorer = Explorer(context.robot.radius, EXPLORE_CLEARANCE)
         self._beam_mean: np.ndarray | None = None  # per particle: geometric mean pz of the last scan
         self._odom_at_update: np.ndarray | None = None  # odometry when the filter last moved
+        # recent scans, to find returns of things that move (moving.py)
+        self._moving = MovingReturns(config.moving_window, config.moving_margin, config.moving_blob)
         self._filter_pose, self.covariance = weighted_pose_stats(self.particles, self.weights)
         self.pose = start.copy() if config.initial == "known" else self._filter_pose.copy()
 
@@ -147,6 +152,8 @@ class MclLocalizer(Localizer):
                 predicted = compose(self._filter_pose, moved)
                 self._odom_at_update = odom.copy()
                 self._measure_and_resample(scan, predicted)
+        if fresh and self.config.reject_moving:
+            self._moving.observe(scan, odom)
         since = (np.zeros(3) if self._odom_at_update is None
                  else between(self._odom_at_update, odom))
         self.pose = compose(self._filter_pose, since)
@@ -165,13 +172,16 @@ class MclLocalizer(Localizer):
         return (self.cluster_weight >= LOCALIZED_CLUSTER_WEIGHT
                 and self.scan_fit >= LOCALIZED_SCAN_FIT and self.spread_within_bounds())
 
-    def fit_at(self, pose: np.ndarray, scan) -> float:
+    def fit_at(self, pose: np.ndarray, scan, leave_out: np.ndarray | None = None) -> float:
         """The fraction of the scan's returns that end within ``sigma_hit`` of an obstacle of
         the map when seen from ``pose``: near 1 where the estimate is right, low where the map
         and the scan disagree (a kidnapping, a wrong global guess). 1.0 with no return.
-        (While tracking, ``scan_fit`` is this over the used beams with the returns short of
-        the map excused: dynamic.excused_fit.)"""
+        ``leave_out``: boolean per return (``scan_points`` order), returns not counted (those
+        of moving things). (While tracking, ``scan_fit`` is this over the used beams with the
+        returns short of the map excused: dynamic.excused_fit.)"""
         points, _ = scan_points(scan)
+        if leave_out is not None:
+            points = points[~leave_out]
         if points.shape[0] == 0:
             return 1.0
         d = self.field.distance(transform_points(np.asarray(pose, dtype=float), points))
@@ -194,15 +204,28 @@ class MclLocalizer(Localizer):
         """Weigh by ``scan``, resample, estimate. ``predicted``: the estimate moved by the
         odometry, from which returns short of the map are found (while localized)."""
         c = self.config
-        # Rejection only while tracking: from a wrong pose it would hide the beams that say so.
+        # Short of the map: only while tracking, as from a wrong pose it would hide the beams
+        # that say so.
         reject = c.reject_short and self.localized
-        points = self.used_points(scan)
+        all_points, index = scan_points(scan)
+        used = self._used(scan, index)
+        moving_all = np.zeros(index.size, dtype=bool)
+        # Moving (moving.py): needs no pose, so while localizing; not while tracking, where a
+        # push the odometry misses makes the walls look moving (warehouse, 30 walkers, seed 0:
+        # localized on the right pose, then 20 s on a wrong one) and the test above serves.
+        if c.reject_moving and not self.localized and self._odom_at_update is not None:
+            moving_all = self._moving.flag(scan, self._odom_at_update)
+            if np.count_nonzero(~moving_all[used]) < MIN_KEPT_RETURNS:
+                moving_all[:] = False
+        points, moving = all_points[used], moving_all[used]
         short = np.zeros(points.shape[0], dtype=bool)
         if reject and points.shape[0]:
-            short = self._short(predicted, points, scan)
-            if points.shape[0] - np.count_nonzero(short) < MIN_KEPT_RETURNS:
+            short = self._short(predicted, points, scan) & ~moving
+            if points.shape[0] - np.count_nonzero(short | moving) < MIN_KEPT_RETURNS:
                 short[:] = False
-        likelihood = self.scan_likelihood(scan, points[~short])
+        left_out = short | moving
+        self.moving_returns = int(np.count_nonzero(moving_all))
+        likelihood = self.scan_likelihood(scan, points[~left_out])
         weights = self.weights * likelihood
         total = weights.sum()
         if not (np.isfinite(total) and total > 0):
@@ -222,20 +245,20 @@ class MclLocalizer(Localizer):
         if self.updates % c.resample_interval == 0:
             self._resample()
         self._filter_pose, self.covariance = self._cluster_estimate()
-        if reject:  # the used beams, short ones (found from the prediction) excused
+        if reject:  # the used beams, short and moving ones excused
             fits = self.field.distance(transform_points(self._filter_pose, points)) <= c.sigma_hit
-            self.scan_fit = excused_fit(fits, short)
+            self.scan_fit = excused_fit(fits, left_out)
         else:
-            self.scan_fit = self.fit_at(self._filter_pose, scan)
+            self.scan_fit = self.fit_at(self._filter_pose, scan, moving_all)
         self._restart_if_lost()
         if not self.localized:
-            self._reseed_from_scan(scan, self.used_points(scan), RESEED_MARGIN)
+            self._reseed_from_scan(scan, points[~moving], RESEED_MARGIN)
             self._explore(scan)
             return
         self._explorer.forget()
         if self.scan_fit < SUSPECT_SCAN_FIT and scan.time >= self._suspect_search + SUSPECT_PERIOD:
             self._suspect_search = scan.time
-            self._reseed_from_scan(scan, points[~short], SUSPECT_MARGIN)
+            self._reseed_from_scan(scan, points[~left_out], SUSPECT_MARGIN)
 
     def _reseed_from_scan(self, scan, points: np.ndarray, margin: float) -> None:
         """Sensor resetting (posesearch.py): put RESEED_FRACTION of the particles on poses
@@ -276,10 +299,14 @@ class MclLocalizer(Localizer):
     def used_points(self, scan) -> np.ndarray:
         """End points (robot frame) of the ``max_beams`` beams, evenly spread, that returned:
         the ones the likelihood field weighs (bench/mcl_heading_probe.py probes them too)."""
+        points, index = scan_points(scan)
+        return points[self._used(scan, index)]
+
+    def _used(self, scan, index: np.ndarray) -> np.ndarray:
+        """Boolean per return (beam ``index``): which of ``scan``'s are the used beams'."""
         n_beams = np.asarray(scan.ranges).size
         step = max(1, (n_beams - 1) // (self.config.max_beams - 1))
-        points, index = scan_points(scan)
-        return points[index % step == 0]
+        return index % step == 0
 
     def _restart_if_lost(self) -> None:
         """A tight cloud that the scans contradict LOST_UPDATES times in a row (a kidnapping, a

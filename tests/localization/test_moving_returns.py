@@ -1,0 +1,102 @@
+"""Returns of things that move, found from consecutive scans and odometry (localization/moving.py)."""
+import math
+
+import numpy as np
+
+from pymunk_bot.localization.moving import MovingReturns
+from pymunk_bot.localization.se2 import scan_points
+from pymunk_bot.robots.readings import LaserScan
+from pymunk_bot.sensors import beam_angles
+
+ROOM = (8.0, 5.0)  # [m] walls at x = 0, 8 and y = 0, 5
+MAX_RANGE = 6.0  # [m]
+
+
+def _scan(pose, time, walker=None, beams=360, fov=2 * math.pi, radius=0.25) -> LaserScan:
+    """A LiDAR at ``pose`` in the room, optionally with a round walker at ``walker`` (x, y)."""
+    angles = beam_angles(beams, fov)
+    world = pose[2] + angles
+    c, s = np.cos(world), np.sin(world)
+    with np.errstate(divide="ignore"):
+        tx = np.where(c > 0, (ROOM[0] - pose[0]) / c, np.where(c < 0, -pose[0] / c, np.inf))
+        ty = np.where(s > 0, (ROOM[1] - pose[1]) / s, np.where(s < 0, -pose[1] / s, np.inf))
+    ranges = np.minimum(tx, ty)
+    if walker is not None:  # ray-circle intersection
+        dx, dy = walker[0] - pose[0], walker[1] - pose[1]
+        along = dx * c + dy * s
+        miss2 = dx * dx + dy * dy - along * along
+        hit = (along > 0) & (miss2 < radius ** 2)
+        ranges = np.where(hit, np.minimum(ranges, along - np.sqrt(np.maximum(radius ** 2 - miss2, 0))), ranges)
+    ranges = np.where(ranges > MAX_RANGE, MAX_RANGE, ranges)
+    return LaserScan(ranges=ranges, angles=angles, min_range=0.1, max_range=MAX_RANGE,
+                     offset=(0.0, 0.0, 0.0), time=time)
+
+
+def _on_walker(scan, pose, walker, radius=0.25) -> np.ndarray:
+    """Boolean per return: does it end on the walker's outline?"""
+    points, _ = scan_points(scan)
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    world = np.column_stack([pose[0] + c * points[:, 0] - s * points[:, 1],
+                             pose[1] + s * points[:, 0] + c * points[:, 1]])
+    return np.hypot(world[:, 0] - walker[0], world[:, 1] - walker[1]) < radius + 0.01
+
+
+def test_a_static_room_seen_while_driving_and_turning_has_no_moving_return():
+    for beams, fov in ((360, 2 * math.pi), (180, math.pi)):
+        moving = MovingReturns(window=1.0, margin=0.2, blob=0.8)
+        # odometry = the true pose here: the room is static, only the robot moves
+        for k in range(10):
+            pose = np.array([2.0 + 0.05 * k, 2.0 + 0.01 * k, 0.3 * k])
+            scan = _scan(pose, 0.1 * k, beams=beams, fov=fov)
+            flagged = moving.flag(scan, pose)
+            assert not flagged.any(), (beams, k, np.count_nonzero(flagged))
+            moving.observe(scan, pose)
+
+
+def test_a_walker_crossing_the_robots_view_is_flagged_whole_and_the_walls_are_not():
+    moving = MovingReturns(window=1.0, margin=0.2, blob=0.8)
+    robot = np.array([1.0, 2.5, 0.0])
+    for k in range(6):  # the walker crosses in front of the robot at 1 m/s, 3 m ahead
+        walker = (4.0, 1.2 + 0.1 * k)
+        scan = _scan(robot, 0.1 * k, walker)
+        flagged = moving.flag(scan, robot)
+        moving.observe(scan, robot)
+    on = _on_walker(scan, robot, walker)
+    assert on.sum() >= 5
+    assert flagged[on].all()  # its whole outline, not only its leading edge
+    assert not flagged[~on].any()
+
+
+def test_a_standing_walker_is_not_flagged_nor_the_wall_it_uncovers():
+    moving = MovingReturns(window=1.0, margin=0.2, blob=0.8)
+    robot = np.array([1.0, 2.5, 0.0])
+    for k in range(5):
+        scan = _scan(robot, 0.1 * k, (4.0, 2.5))
+        assert not moving.flag(scan, robot).any()
+        moving.observe(scan, robot)
+    # the walker steps out of view: the wall behind it was hidden, not seen free
+    scan = _scan(robot, 0.5, None)
+    assert not moving.flag(scan, robot).any()
+
+
+def test_the_robots_own_motion_is_taken_out_through_the_odometry():
+    # the robot drives towards a standing walker: its returns come nearer, but only as the
+    # odometry says, so nothing entered free space
+    moving = MovingReturns(window=1.0, margin=0.2, blob=0.8)
+    for k in range(8):
+        robot = np.array([1.0 + 0.1 * k, 2.5, 0.0])
+        scan = _scan(robot, 0.1 * k, (4.0, 2.5))
+        assert not moving.flag(scan, robot).any()
+        moving.observe(scan, robot)
+    # were the odometry to say the robot stood still, the walker would look as approaching
+    assert moving.flag(_scan(np.array([1.8, 2.5, 0.0]), 0.8, (4.0, 2.5)), np.array([1.0, 2.5, 0.0])).any()
+
+
+def test_scans_older_than_the_window_are_not_compared():
+    moving = MovingReturns(window=0.5, margin=0.2, blob=0.8)
+    robot = np.array([1.0, 2.5, 0.0])
+    moving.observe(_scan(robot, 0.0), robot)  # free space where the walker will stand
+    late = _scan(robot, 1.0, (4.0, 2.5))
+    assert not moving.flag(late, robot).any()
+    soon = _scan(robot, 0.3, (4.0, 2.5))
+    assert moving.flag(soon, robot).any()
