@@ -37,6 +37,7 @@ def test_the_layout_is_crowdnavs_test_case():
         placed.append((s, g))
 
 
+@pytest.mark.slow  # about 5 s of CPU: 40 CrowdNav test cases
 def test_crowdnav_orca_reproduces_its_row_on_40_test_cases():
     """Each rate within the binomial 99 % interval of 40 draws at the 500-episode rate."""
     from scipy.stats import binom  # here: scipy.stats costs every test worker 0.4 s to import

@@ -90,6 +90,7 @@ def test_a_dask_cluster_trains_the_same_policy_bit_for_bit_as_local_processes(tm
     assert not np.array_equal(local.weights[0], 0)  # it moved from the start: not trivially equal
 
 
+@pytest.mark.slow  # about 6 s of CPU: a serial run and three worker processes
 def test_worker_count_and_order_of_completion_do_not_change_the_policy():
     pytest.importorskip("cma")
     serial = train_es.train(None, backend="serial", progress=False, **SHORT)[0]
