@@ -267,10 +267,8 @@ def start_pose(sim, robot, rng: np.random.Generator) -> tuple[float, float, floa
     clearance = robot.radius + START_CLEARANCE  # [m]
     goal = robot.goal
     everything = pymunk.ShapeFilter()
-    x0, y0, x1, y1 = world.extent  # [m] a map's frame need not start at 0
     for _ in range(START_TRIES):
-        x = float(rng.uniform(x0 + clearance, x1 - clearance))
-        y = float(rng.uniform(y0 + clearance, y1 - clearance))
+        x, y = world.random_point(rng, clearance)
         theta = float(rng.uniform(-math.pi, math.pi))
         if goal is not None and math.hypot(x - goal[0], y - goal[1]) < START_GOAL_GAP:
             continue
@@ -279,8 +277,8 @@ def start_pose(sim, robot, rng: np.random.Generator) -> tuple[float, float, floa
         hits = world.space.point_query((x, y), clearance, everything)
         if all(hit.shape is not None and hit.shape.body is body for hit in hits):
             return x, y, theta
-    raise RuntimeError(f"no free start pose found in {START_TRIES} tries: the arena is too "
-                       "crowded for randomize.start")
+    raise ScenarioError(sim.source, "randomize.start", f"no free start pose found in "
+                        f"{START_TRIES} tries: no open space {clearance:g} m clear of everything")
 
 
 def _apply(data: dict, path: str, value: Any, source: str) -> None:

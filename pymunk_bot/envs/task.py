@@ -126,18 +126,17 @@ def sample_goal(sim, robot, rng: np.random.Generator) -> tuple[float, float]:
     clearance = robot.radius + 0.1  # [m]
     everything = pymunk.ShapeFilter()
     x0, y0 = robot.pose[:2]
-    x_low, y_low, x_high, y_high = world.extent  # [m] a map's frame need not start at 0
     for _ in range(GOAL_SAMPLE_TRIES):
-        x = float(rng.uniform(x_low + clearance, x_high - clearance))
-        y = float(rng.uniform(y_low + clearance, y_high - clearance))
+        x, y = world.random_point(rng, clearance)
         if math.hypot(x - x0, y - y0) < GOAL_MIN_DISTANCE:
             continue
         if world.map is not None and world.map.is_solid(x, y):  # inside a map's solid
             continue
         if world.space.point_query_nearest((x, y), clearance, everything) is None:
             return x, y
-    raise RuntimeError(f"no free goal found in {GOAL_SAMPLE_TRIES} tries: the arena is too "
-                       "crowded for random_goal")
+    raise ScenarioError(sim.source, "random_goal", f"no free goal found in {GOAL_SAMPLE_TRIES} "
+                        f"tries: no open space {clearance:g} m clear of everything, "
+                        f"{GOAL_MIN_DISTANCE:g} m from the robot")
 
 
 def end_info(sim, name: str) -> dict:

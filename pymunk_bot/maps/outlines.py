@@ -90,6 +90,27 @@ class MapGeometry:
             return bool(self.solid[int(row), int(col)])
         return any(area.contains(x, y) for area in self.filled)
 
+    def random_free_point(self, rng: np.random.Generator) -> tuple[float, float] | None:
+        """A point [m] drawn uniformly from a grid map's free cells (never an occupied or
+        unknown one); None for a vector map or a grid with no free cell. A map's free space can
+        be a few percent of its extent (TurtleBot3's world: 2 %), where drawing in the extent
+        and rejecting would mostly miss."""
+        if self.grid is None or self.solid is None:
+            return None
+        cells = self._free_cells
+        if cells.size == 0:
+            return None
+        row, col = divmod(int(cells[rng.integers(cells.size)]), self.solid.shape[1])
+        r = self.grid.resolution
+        return (float(self.grid.origin[0] + (col + rng.random()) * r),
+                float(self.grid.origin[1] + (row + rng.random()) * r))
+
+    @cached_property
+    def _free_cells(self) -> np.ndarray:
+        """Flat indices (row-major) of the grid's cells that are not solid."""
+        assert self.solid is not None
+        return np.flatnonzero(~self.solid)
+
     @property
     def shape_count(self) -> int:
         """Number of pymunk shapes the geometry makes (pieces plus segments)."""

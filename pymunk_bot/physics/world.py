@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+import numpy as np
 import pymunk
 
 from pymunk_bot.physics import settings as physics
@@ -172,6 +173,18 @@ class World:
         ground = getattr(self, "_ground", None)
         if ground is not None:
             ground.disturb()
+
+    def random_point(self, rng: np.random.Generator, margin: float) -> tuple[float, float]:
+        """A point [m] drawn uniformly from the arena's open area: a grid map's free cells,
+        else the arena less ``margin`` [m] from its edges (what is there is the caller's to
+        test: obstacles, a vector map's painted areas)."""
+        if self.map is not None:
+            point = self.map.random_free_point(rng)
+            if point is not None:
+                return point
+        x0, y0, x1, y1 = self.extent
+        return (float(rng.uniform(x0 + margin, x1 - margin)),
+                float(rng.uniform(y0 + margin, y1 - margin)))
 
     def take_disturbed(self) -> bool:
         """Whether :meth:`disturb` was called since the last time this was asked."""
