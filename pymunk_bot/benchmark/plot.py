@@ -1,7 +1,6 @@
 """The comparison plot of a benchmark summary (matplotlib, imported only here)."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ def plot_summary(summary: dict[str, Any], path: str | Path, title: str = "") -> 
         import matplotlib.pyplot as plt
     except ImportError:
         raise ValueError("--plot needs matplotlib: pip install matplotlib") from None
-    from pymunk_bot.outcomes.results import temp_beside
+    from pymunk_bot.outcomes.results import save_figure
 
     names = list(summary["controllers"])
     fig, axes = plt.subplots(2, 4, figsize=(16, 7), constrained_layout=True)
@@ -33,11 +32,7 @@ def plot_summary(summary: dict[str, Any], path: str | Path, title: str = "") -> 
         unit = BY_NAME[metric].unit
         ax.set_title(f"{metric} [{unit}]" if unit else metric)
     fig.suptitle(title or f"benchmark (thresholds {summary['signature']}), mean and 95 % CI")
-    path = Path(path)
-    tmp = temp_beside(path, suffix=path.suffix or ".png")
     try:
-        fig.savefig(tmp, dpi=100)
-        os.replace(tmp, path)
+        save_figure(fig, path, dpi=100)
     finally:
         plt.close(fig)
-        Path(tmp).unlink(missing_ok=True)

@@ -6,7 +6,6 @@ episodes. matplotlib is imported only by :func:`plot_families`.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +36,7 @@ def plot_families(rows: list[Row], path: str | Path, title: str = "") -> None:
         import matplotlib.pyplot as plt
     except ImportError:
         raise ValueError("--plot needs matplotlib: pip install matplotlib") from None
-    from pymunk_bot.outcomes.results import temp_beside
+    from pymunk_bot.outcomes.results import save_figure
 
     names = [name for name, _ in rows]
     success = [s["success"] for _, s in rows]
@@ -57,11 +56,7 @@ def plot_families(rows: list[Row], path: str | Path, title: str = "") -> None:
     ax.set_ylabel("episodes [%]")
     ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=8, frameon=False)
     fig.suptitle(title or "per world family", fontsize=9)
-    path = Path(path)
-    tmp = temp_beside(path, suffix=path.suffix or ".png")
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
+        save_figure(fig, path, dpi=110)
     finally:
         plt.close(fig)
-        Path(tmp).unlink(missing_ok=True)

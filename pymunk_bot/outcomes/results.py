@@ -18,6 +18,7 @@ import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 
 def _directory_of(path: Path) -> Path:
@@ -78,6 +79,19 @@ def temp_beside(path: str | Path, suffix: str = ".tmp") -> str:
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     return tmp
+
+
+def save_figure(fig: Any, path: str | Path, **options: Any) -> None:
+    """Write the matplotlib figure ``fig`` to ``path`` atomically (a file beside it, renamed
+    onto it), in the format its suffix names (.png without one); ``options`` go to
+    ``savefig``. The figure stays open: the caller closes it."""
+    path = Path(path)
+    tmp = temp_beside(path, suffix=path.suffix or ".png")
+    try:
+        fig.savefig(tmp, **options)
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
 
 
 def temp_folder_beside(path: str | Path, suffix: str = ".tmp") -> str:

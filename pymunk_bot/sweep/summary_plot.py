@@ -30,7 +30,7 @@ def plot_summary(groups: list[Group], path: str | Path, scenario: str | None = N
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from pymunk_bot.outcomes.results import temp_beside
+    from pymunk_bot.outcomes.results import save_figure
 
     keys = list(dict.fromkeys(g.key for g in groups))
     shown = [m for m in groups[0].metrics if m.rsplit(".", 1)[-1] in HEADLINE] if groups else []
@@ -66,11 +66,7 @@ def plot_summary(groups: list[Group], path: str | Path, scenario: str | None = N
     fig.text(0.5, 0.005, "points: mean over the runs of each value; error bars: ± 1 standard "
              "deviation", ha="center", va="bottom", fontsize="small", color="0.35")
     fig.tight_layout(rect=(0, 0.03, 1, 1))
-    path = Path(path)
-    tmp = temp_beside(path, path.suffix or ".png")
     try:
-        fig.savefig(tmp)
-        Path(tmp).replace(path)
+        save_figure(fig, path)
     finally:
         plt.close(fig)
-        Path(tmp).unlink(missing_ok=True)
