@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -167,6 +168,7 @@ class _Background:
     _END = None
     POLL = 0.05  # [s] how often the idle thread looks at the stop flag
     ABORT_WAIT = 2.0  # [s] at most, for the thread to stop after an abort
+    PUT_POLL = 0.002  # [s] how often a full queue is tried again (a frame takes milliseconds)
 
     def __init__(self, writer: _GifWriter | _Mp4Writer) -> None:
         self._writer = writer
@@ -197,12 +199,16 @@ class _Background:
             raise self._error
 
     def _put(self, item: bytes | None) -> None:
+        """Queue ``item`` once there is room, polling: waiting inside the queue, an interrupt
+        (SIGTERM's SystemExit) that struck inside ``Condition.wait``, between its release and
+        re-acquire of the queue's lock, surfaced as "release unlocked lock" instead."""
         while self._thread.is_alive():
             try:
-                self._frames.put(item, timeout=0.5)
+                self._frames.put_nowait(item)
                 return
             except queue.Full:
                 self._raise()
+                time.sleep(self.PUT_POLL)
 
     def append(self, frame: bytes) -> None:
         """Queue ``frame``, one frame's pixels (``_pixels``)."""
