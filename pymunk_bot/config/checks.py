@@ -132,6 +132,16 @@ def _check_controller(index: int, robot: RobotConfig, scenario: ScenarioConfig) 
         _check_plan_guidance(index, robot, controller, scenario)
 
 
+def too_many_cells(width: float, height: float, resolution: float) -> str | None:
+    """What is wrong with planning a ``width`` x ``height`` m arena on a grid of ``resolution``
+    [m], or None: more cells than MAX_GRID_CELLS (every planner's bound)."""
+    cells = math.ceil(width / resolution) * math.ceil(height / resolution)
+    if cells <= MAX_GRID_CELLS:
+        return None
+    return (f"a {width:g} m x {height:g} m arena at {resolution:g} m is {cells} planning cells "
+            f"(at most {MAX_GRID_CELLS}); use a coarser resolution")
+
+
 def _check_plan_guidance(index: int, robot: RobotConfig, controller: PolicyControllerConfig,
                          scenario: ScenarioConfig) -> None:
     """A plan-guided policy needs a map given in advance, and a planning grid of bounded size."""
@@ -144,25 +154,17 @@ def _check_plan_guidance(index: int, robot: RobotConfig, controller: PolicyContr
                                  f"localization 'slam' starts with none: set robots[{index}]."
                                  "localization to ground_truth, odometry, mcl or ekf (or turn "
                                  "plan_guidance off)")
-    width, height = _arena_size(scenario)
-    cells = math.ceil(width / guidance.resolution) * math.ceil(height / guidance.resolution)
-    if cells > MAX_GRID_CELLS:
-        raise SemanticError(loc + ("resolution",),
-                            f"a {width:g} m x {height:g} m arena at {guidance.resolution:g} m "
-                            f"is {cells} planning cells (at most {MAX_GRID_CELLS}); "
-                            "use a coarser resolution")
+    problem = too_many_cells(*_arena_size(scenario), guidance.resolution)
+    if problem is not None:
+        raise SemanticError(loc + ("resolution",), problem)
 
 
 def _check_navigate(index: int, robot: RobotConfig, controller: NavigateControllerConfig,
                     scenario: ScenarioConfig) -> None:
     loc = ("robots", index, "controller")
-    width, height = _arena_size(scenario)
-    cells = math.ceil(width / controller.resolution) * math.ceil(height / controller.resolution)
-    if cells > MAX_GRID_CELLS:
-        raise SemanticError(loc + ("resolution",),
-                            f"a {width:g} m x {height:g} m arena at {controller.resolution:g} m "
-                            f"is {cells} planning cells (at most {MAX_GRID_CELLS}); "
-                            "use a coarser resolution")
+    problem = too_many_cells(*_arena_size(scenario), controller.resolution)
+    if problem is not None:
+        raise SemanticError(loc + ("resolution",), problem)
     unmapped = [o.type for o in scenario.obstacles
                 if getattr(o, "movable", False) and not controller.map_movable]
     if robot.lidar is None and (unmapped or len(scenario.robots) > 1):

@@ -26,7 +26,7 @@ import math
 import numba
 import numpy as np
 
-from pymunk_bot.config.checks import MAX_GRID_CELLS
+from pymunk_bot.config.checks import too_many_cells
 from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.planning.astar import astar
 from pymunk_bot.planning.grid import ClearanceGrid, segment_clearance
@@ -74,13 +74,9 @@ class PlanGuide:
         grid is rasterised again only for a new map."""
         if world_map is self._map:
             return
-        resolution = self.settings.resolution
-        cells = math.ceil(world_map.size[0] / resolution) * math.ceil(world_map.size[1]
-                                                                      / resolution)
-        if cells > MAX_GRID_CELLS:
-            raise ValueError(f"plan_guidance.resolution: a {world_map.size[0]:g} m x "
-                             f"{world_map.size[1]:g} m arena at {resolution:g} m is {cells} "
-                             f"planning cells (at most {MAX_GRID_CELLS}); use a coarser one")
+        problem = too_many_cells(*world_map.size, self.settings.resolution)
+        if problem is not None:
+            raise ValueError(f"plan_guidance.resolution: {problem}")
         self._map = world_map
         cap = self.soft + 2.0 * self.settings.resolution
         self._static = ClearanceGrid.from_map(world_map.without_movable(),
