@@ -15,11 +15,12 @@ for every body b a walker a could reach before it next chooses (``step``: the ti
 decision period), u the unit direction from a toward b's nearest point. Between two walkers an
 excess closing speed is removed by equal and opposite impulses (their masses weigh them, so
 momentum is kept: a walker pressed from behind pushes the one ahead, and dense counterflows
-shove through as they did with contacts); against a wall, obstacle, robot footprint or ORCA
-walker (which do not yield to it) the walker takes all of it, v_b its velocity (0 for a
-surface). Gauss-Seidel sweeps over every walker's constraints, ITERATIONS times, like pymunk's
-own solver, then the surfaces' alone (what the sweeps leave goes to pairs of walkers). A walker loses speed only toward a body closer than a step's travel, and slides
-along it freely. Bodies that push a walker (robots, crates) still push it.
+shove through as they did with contacts); against a wall, obstacle or robot footprint (v_b
+taken as 0: a robot that drives into a walker pushes it, a contact the robot counts) or an ORCA
+walker (v_b its velocity), which do not yield to it, the walker takes all of it. Gauss-Seidel
+sweeps over every walker's constraints, ITERATIONS times, like pymunk's own solver, then the
+surfaces' alone (what the sweeps leave goes to pairs of walkers). A walker loses speed only
+toward a body closer than a step's travel, and slides along it freely.
 """
 from __future__ import annotations
 

@@ -25,8 +25,8 @@ SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are l
 def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.ndarray,
                   pull: np.ndarray, tau: np.ndarray, radius: np.ndarray, opos: np.ndarray,
                   ovel: np.ndarray, orad: np.ndarray, v0: np.ndarray, sigma: np.ndarray,
-                  reacts: np.ndarray, force: np.ndarray, pref: np.ndarray, step_reach: np.ndarray,
-                  near: np.ndarray, count: np.ndarray) -> None:
+                  reacts: np.ndarray, force: np.ndarray, pref: np.ndarray,
+                  step_reach: np.ndarray, near: np.ndarray, count: np.ndarray) -> None:
     """The driving and social forces per unit mass [m/s^2] on each of the n walkers at
     ``pos`` with ``vel``, ``radius``, into ``force`` (n, 2), and their wished velocities
     [m/s] into ``pref`` (n, 2): ``wish`` [m/s] toward ``goal`` plus ``pull`` [m/s]. The others
@@ -41,9 +41,9 @@ def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.n
     the goal direction e). Then KEEP_RIGHT of the social force's part against e is turned to
     the walker's right.
 
-    Every other walker whose room (:mod:`.clearance`) is within the walker's ``step_reach`` [m]
-    (its travel in a step) is recorded into ``near`` and ``count`` (a
-    :class:`.clearance.Clearances`' arrays)."""
+    Every other walker whose room (:mod:`.clearance`) is within twice the walker's
+    ``step_reach`` [m] (its travel in a step: both may close the gap) is recorded into
+    ``near`` and ``count`` (a :class:`.clearance.Clearances`' arrays)."""
     n = len(pos)
     for i in range(n):
         ex, ey = goal[i, 0] - pos[i, 0], goal[i, 1] - pos[i, 1]
@@ -62,7 +62,6 @@ def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.n
                 continue
             qx, qy = rx - sx, ry - sy
             rn = max(math.sqrt(rx * rx + ry * ry), 1e-9)
-            # (both may close the gap: twice the walker's reach)
             if j < n and rn - radius[i] - orad[j] - CONTACT_MARGIN < 2.0 * step_reach[i]:
                 record(near, count, i, rn - radius[i] - orad[j], -rx / rn, -ry / rn, j)
             qn = max(math.sqrt(qx * qx + qy * qy), 1e-9)

@@ -68,7 +68,7 @@ def test_walkers_squeezing_past_a_standing_robot_never_walk_into_it():
     # (0.7 m on either side of it, for two flows), and press against it and the walls.
     seen = clearances(counterflow(8, 1.6, robot_x=6.0), 15.0)
     assert seen["collisions"] == 0
-    assert seen["robot"] >= OVERLAP, f"a walker overlapped the robot by {-seen['robot'] * 1e3:.1f} mm"
+    assert seen["robot"] >= OVERLAP, f"overlapped the robot by {-seen['robot'] * 1e3:.1f} mm"
     assert seen["walkers"] >= OVERLAP and seen["walls"] >= OVERLAP
 
 
