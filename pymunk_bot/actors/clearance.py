@@ -38,17 +38,13 @@ class Clearances:
     of :mod:`.social_forces` and :mod:`.surfaces` record them: ``near`` (n, MAX_CONTACTS, 4)
     holds each one's room [m] (clearance beyond CONTACT_MARGIN), the unit direction toward it
     and the other walker's index (SURFACE for a surface), smallest room first; ``count`` (n,)
-    how many; ``reach`` (n,) [m] how far each walker can go in a step."""
+    how many (:func:`.social_forces.social_forces` starts each tick's afresh); ``reach`` (n,)
+    [m] how far each walker can go in a step (its owner keeps it)."""
 
     def __init__(self, walkers: int) -> None:
         self.near = np.zeros((walkers, MAX_CONTACTS, 4))
         self.count = np.zeros(walkers, dtype=np.int64)
         self.reach = np.zeros(walkers)  # [m]
-
-    def start(self, reach: np.ndarray) -> None:
-        """Forget the last tick's bodies; ``reach`` [m]: each walker's travel in a step."""
-        self.count[:] = 0
-        self.reach[:] = reach
 
     def limit(self, velocity: np.ndarray, step: np.ndarray, mass: np.ndarray,
               bound: np.ndarray) -> None:

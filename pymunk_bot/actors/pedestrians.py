@@ -169,6 +169,7 @@ class Crowd:
         self._walls = np.column_stack([self._wall_reach, self.radius - NOMINAL_RADIUS,
                                        self.u0, self.wall_range, self.radius]).reshape(-1, 5)
         self._clearances = Clearances(n)
+        self._step_dt, self._step = math.nan, np.zeros(n)  # see _step_for
         self._mass = np.array([c.mass for c in cfg], dtype=float)  # [kg]
         # the social-force walkers, whose velocity closes no gap within a step (.clearance)
         self._hard_core = ~orca
@@ -225,10 +226,7 @@ class Crowd:
             gap = np.hypot(*(self._goal_xy - pos).T)
             near = np.clip(gap / np.where(self._slow > 0, self._slow, 1.0), 0.0, 1.0)
             wish = np.where(self._slow > 0, wish * near, wish)
-        # the time each walker holds the velocity it chooses now [s], and how far that takes it
-        step = np.where(self._period > 0, self._period, dt)
-        clear = self._clearances
-        clear.start(self._cap * step)
+        step, clear = self._step_for(dt), self._clearances
         # from everything a walker avoids: walkers, then robots (centres of gravity)
         social_forces(pos, vel, self._goal_xy, wish, pull, self.tau, self.radius,
                       every_xy, every_v, self._all_radius, self.v0, self.sigma,
@@ -250,6 +248,15 @@ class Crowd:
         if self._holds:
             new = self._hold(time, new)
         self._states.set_velocities(new)
+
+    def _step_for(self, dt: float) -> np.ndarray:
+        """The time [s] each walker holds the velocity it chooses at a tick of ``dt`` [s],
+        with the clearances' reach (how far that takes it) set to match (kept while dt is)."""
+        if dt != self._step_dt:
+            self._step_dt = dt
+            self._step = np.where(self._period > 0, self._period, dt)
+            self._clearances.reach[:] = self._cap * self._step
+        return self._step
 
     def _hold(self, time: float, new: np.ndarray) -> np.ndarray:
         """``new`` [m/s] where a walker's decision is due at ``time`` [s]; elsewhere the

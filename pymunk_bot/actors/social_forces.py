@@ -43,9 +43,10 @@ def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.n
 
     Every other walker whose room (:mod:`.clearance`) is within twice the walker's
     ``step_reach`` [m] (its travel in a step: both may close the gap) is recorded into
-    ``near`` and ``count`` (a :class:`.clearance.Clearances`' arrays)."""
+    ``near`` and ``count`` (a :class:`.clearance.Clearances`' arrays), afresh."""
     n = len(pos)
     for i in range(n):
+        count[i] = 0  # this tick's record starts here (the wall forces' follow)
         ex, ey = goal[i, 0] - pos[i, 0], goal[i, 1] - pos[i, 1]
         norm = max(math.sqrt(ex * ex + ey * ey), 1e-9)
         ex, ey = ex / norm, ey / norm

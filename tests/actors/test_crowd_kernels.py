@@ -55,7 +55,7 @@ def test_wall_forces_match_pymunk_point_queries_inside_and_outside_shapes():
     radius, step_reach = rng.uniform(0.2, 0.35, n), rng.uniform(0.0, 0.1, n)
     got = np.zeros((n, 2))
     clear = Clearances(n)
-    clear.start(step_reach)
+    clear.reach[:] = step_reach
     surfaces = Surfaces(fixed, set())
     walkers = np.column_stack([reach, excess, strength, wall_range, radius])
     wall_forces(surfaces, surfaces.poses(), CellIndex(surfaces.boxes(), float(reach.max())),
@@ -155,7 +155,8 @@ def test_social_forces_match_the_pairwise_formula_with_driving_keep_right_and_ro
     reacts = np.arange(n) % 3 != 0
     force, pref = np.zeros((n, 2)), np.zeros((n, 2))
     clear = Clearances(n)
-    clear.start(np.full(n, 0.3))
+    clear.reach[:] = 0.3
+    clear.count[:] = 5  # (a last tick's: social_forces starts afresh)
     social_forces(pos, vel, goal, wish, pull, tau, radius, opos, ovel, orad, v0, sigma, reacts,
                   force, pref, clear.reach, clear.near, clear.count)
     recorded = 0
@@ -196,7 +197,7 @@ def test_a_walker_running_into_a_queue_pushes_it_against_a_wall_without_closing_
     # walking along y beside nobody. The allowed closing speeds: (clearance - margin) / step.
     step = np.full(4, 1.0 / 60.0)
     clear = Clearances(4)
-    clear.start(np.full(4, 0.03))
+    clear.reach[:] = 0.03
     left = (-1.0, 0.0)
     record(clear.near, clear.count, 1, 0.003, *left, SURFACE)  # B: 3 mm from the wall
     record(clear.near, clear.count, 1, 0.008, 1.0, 0.0, 2)  # B - C
