@@ -30,7 +30,10 @@ of one ``group`` share its slowest pace, and each is pulled back toward the grou
 when it strays farther than GROUP_SPACING per companion (Moussaid et al. 2010's cohesion).
 The forces are compiled (numba: :mod:`.social_forces`, :mod:`.surfaces`); the fixed world's
 surfaces are read once, when the crowd is made. Each walker is a dynamic disc: contacts push
-it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0.
+it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0,
+and a social-force walker's velocity then closes no gap to another body within the time it
+holds it (:mod:`.clearance`: the model is soft at contact, and walkers converging from several
+sides would otherwise meet and stay pressed together).
 """
 from __future__ import annotations
 
@@ -44,6 +47,7 @@ from pymunk_bot.physics import settings as physics
 from pymunk_bot.config.motion import MAX_SPEED_FACTOR
 from pymunk_bot.physics.obstacles import Obstacle
 from pymunk_bot.actors.body_state import BodyStates
+from pymunk_bot.actors.clearance import Clearances
 from pymunk_bot.actors.orca import MAX_WALL_LINES, Orca
 from pymunk_bot.actors.social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
 from pymunk_bot.actors.surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
@@ -161,9 +165,14 @@ class Crowd:
         # than 1 % of the force at contact); ORCA walls bind out to where (d - r) / tau_obst
         # exceeds the speed cap.
         self._wall_reach = WALL_REACH * self.wall_range + self.radius  # [m]
-        # reach [m], excess size [m], U0 [m^2/s^2] and R [m] of each walker's wall force
+        # reach [m], excess size [m], U0 [m^2/s^2], R [m] of each walker's wall force, radius
         self._walls = np.column_stack([self._wall_reach, self.radius - NOMINAL_RADIUS,
-                                       self.u0, self.wall_range]).reshape(-1, 4)
+                                       self.u0, self.wall_range, self.radius]).reshape(-1, 5)
+        self._clearances = Clearances(n)
+        self._step_dt, self._step = math.nan, np.zeros(n)  # see _step_for
+        self._mass = np.array([c.mass for c in cfg], dtype=float)  # [kg]
+        # the social-force walkers, whose velocity closes no gap within a step (.clearance)
+        self._hard_core = ~orca
         self._orca_reach = np.zeros(0)  # [m]
         if self.orca is not None:
             agents = self.orca.agents
@@ -217,14 +226,15 @@ class Crowd:
             gap = np.hypot(*(self._goal_xy - pos).T)
             near = np.clip(gap / np.where(self._slow > 0, self._slow, 1.0), 0.0, 1.0)
             wish = np.where(self._slow > 0, wish * near, wish)
+        step, clear = self._step_for(dt), self._clearances
         # from everything a walker avoids: walkers, then robots (centres of gravity)
         social_forces(pos, vel, self._goal_xy, wish, pull, self.tau, self.radius,
                       every_xy, every_v, self._all_radius, self.v0, self.sigma,
-                      self.reacts, force, pref)
+                      self.reacts, force, pref, clear.reach, clear.near, clear.count)
         poses = self.moving.poses()
         wall_forces(self.fixed, self._fixed_poses, self._cells, pos, self._walls, self.reacts,
-                    force)
-        wall_forces(self.moving, poses, None, pos, self._walls, self.reacts, force)
+                    force, clear)
+        wall_forces(self.moving, poses, None, pos, self._walls, self.reacts, force, clear)
         if self._fluctuates:
             force += self.fluctuation[:, None] * self.rng.standard_normal(pos.shape)
         nudge = self._perturbation(n)
@@ -234,9 +244,19 @@ class Crowd:
             # does not move: the velocity it chooses is nudged instead, within them.
             new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt, nudge)
         cap_speeds(new, self._cap)
+        clear.limit(new, step, self._mass, self._hard_core)
         if self._holds:
             new = self._hold(time, new)
         self._states.set_velocities(new)
+
+    def _step_for(self, dt: float) -> np.ndarray:
+        """The time [s] each walker holds the velocity it chooses at a tick of ``dt`` [s],
+        with the clearances' reach (how far that takes it) set to match (kept while dt is)."""
+        if dt != self._step_dt:
+            self._step_dt = dt
+            self._step = np.where(self._period > 0, self._period, dt)
+            self._clearances.reach[:] = self._cap * self._step
+        return self._step
 
     def _hold(self, time: float, new: np.ndarray) -> np.ndarray:
         """``new`` [m/s] where a walker's decision is due at ``time`` [s]; elsewhere the

@@ -7,6 +7,8 @@ import math
 import numba
 import numpy as np
 
+from pymunk_bot.actors.clearance import CONTACT_MARGIN, record
+
 STEP_TIME = 2.0  # [s] Delta t of the elliptical potential (Helbing & Molnar 1995)
 SIGHT_COS = math.cos(math.radians(100.0))  # half the field of view
 SIGHT_WEIGHT = 0.5  # weight of forces from outside the field of view
@@ -23,7 +25,8 @@ SOCIAL_CUTOFF = 3.0  # [m] beyond their step |s| plus this, others' forces are l
 def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.ndarray,
                   pull: np.ndarray, tau: np.ndarray, radius: np.ndarray, opos: np.ndarray,
                   ovel: np.ndarray, orad: np.ndarray, v0: np.ndarray, sigma: np.ndarray,
-                  reacts: np.ndarray, force: np.ndarray, pref: np.ndarray) -> None:
+                  reacts: np.ndarray, force: np.ndarray, pref: np.ndarray,
+                  step_reach: np.ndarray, near: np.ndarray, count: np.ndarray) -> None:
     """The driving and social forces per unit mass [m/s^2] on each of the n walkers at
     ``pos`` with ``vel``, ``radius``, into ``force`` (n, 2), and their wished velocities
     [m/s] into ``pref`` (n, 2): ``wish`` [m/s] toward ``goal`` plus ``pull`` [m/s]. The others
@@ -36,9 +39,14 @@ def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.n
     |s|^2), r from the other to the walker, s = v_b STEP_TIME), gap = b less both bodies' size
     beyond NOMINAL_RADIUS; weighted SIGHT_WEIGHT from behind (outside the field of view around
     the goal direction e). Then KEEP_RIGHT of the social force's part against e is turned to
-    the walker's right."""
+    the walker's right.
+
+    Every other walker whose room (:mod:`.clearance`) is within twice the walker's
+    ``step_reach`` [m] (its travel in a step: both may close the gap) is recorded into
+    ``near`` and ``count`` (a :class:`.clearance.Clearances`' arrays), afresh."""
     n = len(pos)
     for i in range(n):
+        count[i] = 0  # this tick's record starts here (the wall forces' follow)
         ex, ey = goal[i, 0] - pos[i, 0], goal[i, 1] - pos[i, 1]
         norm = max(math.sqrt(ex * ex + ey * ey), 1e-9)
         ex, ey = ex / norm, ey / norm
@@ -55,6 +63,8 @@ def social_forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, wish: np.n
                 continue
             qx, qy = rx - sx, ry - sy
             rn = max(math.sqrt(rx * rx + ry * ry), 1e-9)
+            if j < n and rn - radius[i] - orad[j] - CONTACT_MARGIN < 2.0 * step_reach[i]:
+                record(near, count, i, rn - radius[i] - orad[j], -rx / rn, -ry / rn, j)
             qn = max(math.sqrt(qx * qx + qy * qy), 1e-9)
             two_b = math.sqrt(max((rn + qn) ** 2 - (sx * sx + sy * sy), 1e-12))
             scale = (rn + qn) / (2.0 * two_b)

@@ -21,6 +21,8 @@ import numba
 import numpy as np
 import pymunk
 
+from pymunk_bot.actors.clearance import CONTACT_MARGIN, SURFACE, Clearances, record
+
 MAGIC_EPSILON = 1e-5  # [m] Chipmunk's: closer than this a query gives a normal, not p - closest
 MAX_CELLS = 250_000  # the fixed world's lookup grid has at most this many cells ...
 MAX_LISTED = 2_000_000  # ... and lists at most this many shapes over all of them
@@ -143,17 +145,19 @@ class CellIndex:
 
 def wall_forces(surfaces: Surfaces, poses: np.ndarray, cells: CellIndex | None,
                 pos: np.ndarray, walkers: np.ndarray, reacts: np.ndarray,
-                out: np.ndarray) -> None:
+                out: np.ndarray, clearances: Clearances) -> None:
     """Add to ``out`` (n, 2) each walker's wall repulsion per unit mass [m/s^2] from every
     shape of ``surfaces`` (bodies at ``poses``) nearer than its reach from its centre ``pos``:
     U0 / R exp(-max(d - excess, 0) / R) along the shape's gradient, d its signed distance [m].
-    ``walkers`` (n, 4): reach [m], excess [m], U0 [m^2/s^2], R [m] of each. ``cells``: the
-    lookup grid of a fixed set (None: every shape is looked at). Walkers that do not
-    ``react`` skip robots."""
+    ``walkers`` (n, 5): reach [m], excess [m], U0 [m^2/s^2], R [m] and radius [m] of each.
+    ``cells``: the lookup grid of a fixed set (None: every shape is looked at). Walkers that
+    do not ``react`` skip robots. Each of those shapes a walker could reach in a step is
+    recorded in ``clearances``."""
     if len(surfaces) and len(pos):
         start, listed, grid = _lookup(surfaces, cells)
         _wall_forces(surfaces.pieces, surfaces.shapes, surfaces.radius, poses, start, listed,
-                     grid, pos, walkers, reacts, out)
+                     grid, pos, walkers, reacts, out, clearances.reach, clearances.near,
+                     clearances.count)
 
 
 def _lookup(surfaces: Surfaces, cells: CellIndex | None
@@ -214,7 +218,8 @@ def shape_query(px: float, py: float, pieces: np.ndarray, start: int, stop: int,
 def _wall_forces(pieces: np.ndarray, shapes: np.ndarray, radius: np.ndarray, poses: np.ndarray,
                  cell_start: np.ndarray, cell_shapes: np.ndarray, grid: np.ndarray,
                  pos: np.ndarray, walkers: np.ndarray, reacts: np.ndarray,
-                 out: np.ndarray) -> None:  # pragma: no cover - compiled
+                 out: np.ndarray, step_reach: np.ndarray, near: np.ndarray,
+                 count: np.ndarray) -> None:  # pragma: no cover - compiled
     for i in range(len(pos)):
         px, py = pos[i, 0], pos[i, 1]
         cell = _cell(px, py, grid)
@@ -229,6 +234,8 @@ def _wall_forces(pieces: np.ndarray, shapes: np.ndarray, radius: np.ndarray, pos
                 continue
             d, gx, gy = shape_query(px, py, pieces, shapes[s, 0], shapes[s, 1], radius[s],
                                     flags & CLOSED != 0, poses[shapes[s, 2]])
+            if d - walkers[i, 4] - CONTACT_MARGIN < step_reach[i]:
+                record(near, count, i, d - walkers[i, 4], -gx, -gy, SURFACE)
             if d >= reach:
                 continue
             push = strength / wall_range * math.exp(-max(d - excess, 0.0) / wall_range)

@@ -1,6 +1,7 @@
-"""Walkers swapping places across a circle (exactly symmetric: RVO2's classic case) reach their
-goals: a tiny seeded perturbation breaks the symmetry that held ORCA walkers still in the middle
-for the whole run (issue 33)."""
+"""Walkers swapping places across a circle (exactly symmetric: RVO2's classic case), or crossing a
+square in four groups, reach their goals without overlapping: a tiny seeded perturbation breaks
+the symmetry that held ORCA walkers still in the middle for the whole run, and social-force
+walkers' velocities close no gap within a tick (actors/clearance.py) (issue 33)."""
 from __future__ import annotations
 
 import math
@@ -27,9 +28,27 @@ def circle_crossing(n: int, policy: str, radius: float = 2.5) -> dict:
             "robots": [{"name": "r1", "pose": [0.4, 0.4, 0.0], "controller": {"type": "wheels"}}]}
 
 
-def crossing(n: int, policy: str, seconds: float = 40.0) -> tuple[bool, float]:
+def square_crossing(n: int, policy: str, half: float = 2.5, spacing: float = 0.7) -> dict:
+    """``n`` walkers (a multiple of 4) in four groups, one on each side of a square about
+    (4, 4), each walker walking straight across to the opposite side: four-fold symmetric."""
+    walkers = []
+    for side in range(4):
+        c, s = math.cos(math.pi / 2 * side), math.sin(math.pi / 2 * side)
+        for k in range(n // 4):
+            offset = (k - (n // 4 - 1) / 2) * spacing
+            start, goal = (-half, offset), (half, offset)
+            walkers.append({"type": "pedestrian", "mode": "once", "policy": policy,
+                            "center": [4.0 + c * start[0] - s * start[1],
+                                       4.0 + s * start[0] + c * start[1]],
+                            "goals": [[4.0 + c * goal[0] - s * goal[1],
+                                       4.0 + s * goal[0] + c * goal[1]]]})
+    return {**circle_crossing(0, policy), "name": "square_crossing", "obstacles": walkers}
+
+
+def crossing(n: int, policy: str, seconds: float = 40.0,
+             layout=circle_crossing) -> tuple[bool, float]:
     """(every walker reached its goal, the smallest disc clearance between walkers [m])."""
-    sim = pb.Simulation.from_dict(circle_crossing(n, policy))
+    sim = pb.Simulation.from_dict(layout(n, policy))
     crowd = next(a for a in sim.world.actors if isinstance(a, Crowd))
     radius = crowd.radius
     closest = math.inf
@@ -51,9 +70,17 @@ def test_orca_walkers_swapping_across_a_circle_reach_their_goals_without_overlap
 
 
 @pytest.mark.parametrize("n", [6, 12, 20])
-def test_social_force_walkers_swapping_across_a_circle_reach_their_goals(n):
-    reached, _ = crossing(n, "social_force")
+def test_social_force_walkers_swapping_across_a_circle_reach_their_goals_without_overlap(n):
+    reached, closest = crossing(n, "social_force")
     assert reached, f"{n} social-force walkers did not all reach their goals"
+    assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
+
+
+@pytest.mark.parametrize("n", [8, 12, 20])
+def test_social_force_walkers_crossing_a_square_in_four_groups_reach_their_goals_without_overlap(n):
+    reached, closest = crossing(n, "social_force", 30.0, square_crossing)
+    assert reached, f"{n} social-force walkers did not all reach their goals"
+    assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
 
 
 def test_the_perturbation_is_seeded():

@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pymunk
 
+from pymunk_bot.actors.clearance import (CONTACT_MARGIN, MAX_CONTACTS, SURFACE, Clearances,
+                                         record)
 from pymunk_bot.actors.social_forces import (KEEP_RIGHT, NOMINAL_RADIUS, SIGHT_COS,
                                              SIGHT_WEIGHT, SOCIAL_CUTOFF, STEP_TIME,
                                              cap_speeds, social_forces)
@@ -35,6 +37,11 @@ def _space() -> tuple[pymunk.Space, pymunk.Body]:
     return space, mover
 
 
+def _recorded(clear: Clearances, i: int) -> np.ndarray:
+    """Walker ``i``'s recorded bodies, sorted (ties in room come in any order)."""
+    return np.array(sorted(map(tuple, clear.near[i, :clear.count[i]]))).reshape(-1, 4)
+
+
 def test_wall_forces_match_pymunk_point_queries_inside_and_outside_shapes():
     space, mover = _space()
     fixed = [s for s in space.shapes if s.body.body_type == pymunk.Body.STATIC]
@@ -45,22 +52,35 @@ def test_wall_forces_match_pymunk_point_queries_inside_and_outside_shapes():
     reach = rng.uniform(0.5, 2.5, n)
     excess = rng.uniform(-0.05, 0.1, n)
     strength, wall_range = rng.uniform(1.0, 10.0, n), rng.uniform(0.1, 0.5, n)
+    radius, step_reach = rng.uniform(0.2, 0.35, n), rng.uniform(0.0, 0.1, n)
     got = np.zeros((n, 2))
+    clear = Clearances(n)
+    clear.reach[:] = step_reach
     surfaces = Surfaces(fixed, set())
-    walkers = np.column_stack([reach, excess, strength, wall_range])
+    walkers = np.column_stack([reach, excess, strength, wall_range, radius])
     wall_forces(surfaces, surfaces.poses(), CellIndex(surfaces.boxes(), float(reach.max())),
-                pos, walkers, np.ones(n, bool), got)
+                pos, walkers, np.ones(n, bool), got, clear)
     movers = Surfaces(moving, set())
-    wall_forces(movers, movers.poses(), None, pos, walkers, np.ones(n, bool), got)
+    wall_forces(movers, movers.poses(), None, pos, walkers, np.ones(n, bool), got, clear)
     want = np.zeros((n, 2))
-    inside = 0
+    inside = recorded = 0
     for i, (x, y) in enumerate(pos.tolist()):
+        close = []  # (room, direction toward the shape) of the shapes within a step's reach
         for hit in space.point_query((x, y), float(reach[i]), pymunk.ShapeFilter()):
             inside += hit.distance < 0
             gap = max(hit.distance - excess[i], 0.0)
             push = strength[i] / wall_range[i] * math.exp(-gap / wall_range[i])
             want[i] += push * np.array(tuple(hit.gradient))
+            if hit.distance - radius[i] - CONTACT_MARGIN < step_reach[i]:
+                close.append((max(hit.distance - radius[i] - CONTACT_MARGIN, 0.0),
+                              -hit.gradient.x, -hit.gradient.y, SURFACE))
+        close.sort()  # (ties in room: in any order, compared sorted)
+        assert clear.count[i] == min(len(close), MAX_CONTACTS)
+        np.testing.assert_allclose(_recorded(clear, i),
+                                   np.array(close).reshape(-1, 4)[:MAX_CONTACTS], atol=1e-9)
+        recorded += clear.count[i]
     assert inside > 5  # points inside shapes were compared too
+    assert recorded > 20
     assert np.abs(want).max() > 1.0
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
 
@@ -134,8 +154,23 @@ def test_social_forces_match_the_pairwise_formula_with_driving_keep_right_and_ro
     v0, sigma = rng.uniform(1, 3, n), rng.uniform(0.2, 0.5, n)
     reacts = np.arange(n) % 3 != 0
     force, pref = np.zeros((n, 2)), np.zeros((n, 2))
+    clear = Clearances(n)
+    clear.reach[:] = 0.3
+    clear.count[:] = 5  # (a last tick's: social_forces starts afresh)
     social_forces(pos, vel, goal, wish, pull, tau, radius, opos, ovel, orad, v0, sigma, reacts,
-                  force, pref)
+                  force, pref, clear.reach, clear.near, clear.count)
+    recorded = 0
+    for i in range(n):  # other walkers (not robots) that both could reach within a step
+        rel = pos - pos[i]
+        dist = np.hypot(*rel.T)
+        close = sorted((max(dist[j] - radius[i] - radius[j] - CONTACT_MARGIN, 0.0),
+                        *(rel[j] / dist[j]), j) for j in range(n)
+                       if j != i and dist[j] - radius[i] - radius[j] - CONTACT_MARGIN < 0.6)
+        assert clear.count[i] == min(len(close), MAX_CONTACTS)
+        np.testing.assert_allclose(_recorded(clear, i),
+                                   np.array(close).reshape(-1, 4)[:MAX_CONTACTS], atol=1e-12)
+        recorded += clear.count[i]
+    assert recorded > 4
     for i in range(n):
         e = (goal[i] - pos[i]) / np.hypot(*(goal[i] - pos[i]))
         np.testing.assert_allclose(pref[i], wish[i] * e + pull[i], rtol=1e-12)
@@ -154,3 +189,29 @@ def test_speeds_are_capped_and_directions_kept():
     velocity = np.array([[3.0, 4.0], [0.3, 0.4], [0.0, 0.0]])
     cap_speeds(velocity, np.array([1.0, 1.0, 1.0]))
     np.testing.assert_allclose(velocity, [[0.6, 0.8], [0.3, 0.4], [0.0, 0.0]])
+
+
+def test_a_walker_running_into_a_queue_pushes_it_against_a_wall_without_closing_a_gap():
+    # Along x: a wall at x = 0, walkers B (70 kg) and C (140 kg) standing 3 mm and 8 mm clear
+    # of it and of each other, walker A (70 kg) running at them at 1.5 m/s from 1 cm, and D
+    # walking along y beside nobody. The allowed closing speeds: (clearance - margin) / step.
+    step = np.full(4, 1.0 / 60.0)
+    clear = Clearances(4)
+    clear.reach[:] = 0.03
+    left = (-1.0, 0.0)
+    record(clear.near, clear.count, 1, 0.003, *left, SURFACE)  # B: 3 mm from the wall
+    record(clear.near, clear.count, 1, 0.008, 1.0, 0.0, 2)  # B - C
+    record(clear.near, clear.count, 2, 0.008, *left, 1)
+    record(clear.near, clear.count, 2, 0.010, 1.0, 0.0, 0)  # C - A
+    record(clear.near, clear.count, 0, 0.010, *left, 2)
+    velocity = np.array([[-1.5, 0.2], [0.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
+    mass = np.array([70.0, 70.0, 140.0, 70.0])
+    clear.limit(velocity, step, mass, np.ones(4, bool))
+    a, b, c, d = velocity
+    assert -b[0] <= 1e-12  # B does not move toward the wall (3 mm: inside the margin)
+    residual = 0.02 * 1.5  # [m/s] what ITERATIONS sweeps may leave of A's speed on pairs
+    assert c[0] - b[0] <= (0.008 - CONTACT_MARGIN) / step[0] + residual
+    assert a[0] - c[0] <= (0.010 - CONTACT_MARGIN) / step[0] + residual
+    assert -1.5 < a[0] < -0.2 and a[1] == 0.2  # A slows along x only ...
+    assert c[0] < -0.1  # ... and pushes C (a pair shares the correction by mass)
+    np.testing.assert_array_equal(d, [0.0, 1.0])  # nothing near: untouched
