@@ -154,6 +154,9 @@ WALKER_SPACING = 0.7  # [m] between walkers' starts
 ROBOT_KEEP_OUT = 1.2  # [m] no walker starts this close to the robot
 ON_ROUTE_SHARE = 0.5  # of the walkers pace the robot's route (ahead of it and towards it)
 MAX_WALKER_DRAWS = 100_000  # bounded placement
+# Route draws failing this many times in a row: the route is full (a short one in a small
+# office holds 13 walkers 0.7 m apart), and the rest of its share walk between free points.
+ROUTE_FULL_AFTER = 10_000
 GRID_RESOLUTION = 0.1  # [m] of the clearance grid walkers are placed on
 
 
@@ -163,7 +166,9 @@ def with_walkers(data: dict, walkers: int, policy: str, seed: int) -> dict:
     robot's planned route (between two of its points: towards the robot and with it, pushing
     it now and then), the rest between random free points; every start and goal at least
     WALKER_CLEARANCE from obstacles, starts WALKER_SPACING apart and ROBOT_KEEP_OUT from the
-    robot and its goal. Raises ValueError when they do not fit (bounded draws)."""
+    robot and its goal (when the route is full, ROUTE_FULL_AFTER failed draws in a row, the rest
+    of its share walk between free points). Raises ValueError when they do not fit (bounded
+    draws)."""
     from pymunk_bot.config import parse_scenario
     from pymunk_bot.planning.astar import astar
     from pymunk_bot.planning.grid import ClearanceGrid
@@ -185,16 +190,20 @@ def with_walkers(data: dict, walkers: int, policy: str, seed: int) -> dict:
     goal = np.asarray(robot.goal.position, dtype=float)
     people: list[dict] = []
     starts: list[np.ndarray] = []
+    route_failures = 0  # route draws failed in a row
     for _ in range(MAX_WALKER_DRAWS):
         if len(people) == walkers:
             break
-        on_route = len(people) < ON_ROUTE_SHARE * walkers and route.shape[0] >= 2
+        on_route = (len(people) < ON_ROUTE_SHARE * walkers and route.shape[0] >= 2
+                    and route_failures < ROUTE_FULL_AFTER)
         pool = route if on_route else free
         a, b = pool[rng.integers(pool.shape[0], size=2)]
         if (np.hypot(*(a - home)) < ROBOT_KEEP_OUT or np.hypot(*(a - goal)) < ROBOT_KEEP_OUT
                 or np.hypot(*(a - b)) < 2.0
                 or any(np.hypot(*(a - s)) < WALKER_SPACING for s in starts)):
+            route_failures += on_route
             continue
+        route_failures = 0
         starts.append(a)
         people.append({"type": "pedestrian", "center": a.round(3).tolist(),
                        "goals": [b.round(3).tolist(), a.round(3).tolist()], "mode": "loop",
