@@ -1,0 +1,122 @@
+"""Where SLAM's error enters, keyframe by keyframe, in one revisiting run of the robustness
+benchmark (issue 36).
+
+    python -m bench.slam_heading_probe FAMILY PROFILE SEED [--settings JSON] [--keyframes]
+    e.g. python -m bench.slam_heading_probe warehouse uncalibrated 5 --keyframes
+
+At each keyframe, as it is taken (before any later loop closure moves it): the estimate's
+heading error, its position error split along the robot's heading (forward: the direction an
+aisle or a corridor leaves to the odometry) and across it, the heading error of the step
+from the previous keyframe, and the front end's match: the std of its position along its
+worst and best axes and of its heading (a corridor: the worst axis near the odometry prior's).
+The summary says which dominates: a forward error entered where the scan could not pin the
+position along the route; a sideways error that grows with the distance driven, under a
+steady heading error, entered with the heading.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from typing import NoReturn
+
+import numpy as np
+
+from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, lidar_for,
+                                           odometry_for, tour_goals, world_for)
+from pymunk_bot.localization.se2 import between, wrap
+
+
+def _refuse(problem: str) -> NoReturn:
+    """One line on stderr, exit status 2."""
+    print(f"slam_heading_probe: {problem}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def probe(family: str, profile: str, seed: int, settings: dict | None = None) -> dict:
+    """Per keyframe figures (``keyframes``: a list of dicts, [deg] and [cm]) and a summary."""
+    from pymunk_bot.engine.simulation import Simulation
+
+    data = world_for(family, seed, revisit=True)
+    if data is None:
+        _refuse(f"the {family} map is not here")
+    goals = tour_goals(family, seed, data)[1:]
+    robot = data["robots"][0]
+    robot.update(lidar=lidar_for(seed), odometry=odometry_for(profile, seed),
+                 localization={"type": "slam", **(settings or {})})
+    data["seed"] = seed
+    data.setdefault("world", {})["duration"] = REVISIT_MAX_TIME
+    try:
+        sim = Simulation.from_dict(data)
+    except Exception as exc:  # e.g. a --settings key SLAM does not have: one line, not a traceback
+        _refuse(f"{family} {profile} seed {seed}: {type(exc).__name__}: {exc}".splitlines()[0])
+    r = sim.robots["r1"]
+    slam = r.localizer
+    rows: list[dict] = []
+    last_truth = last_pose = None
+    while sim.time < REVISIT_MAX_TIME:
+        sim.step()
+        if len(slam.keyframes) > len(rows) + (last_truth is None):
+            truth, pose = np.array(r.pose, dtype=float), np.array(slam.keyframes[-1], dtype=float)
+            if last_truth is not None:
+                c, s = math.cos(truth[2]), math.sin(truth[2])
+                d = pose[:2] - truth[:2]
+                cov = np.asarray(slam.covariance)
+                axes = np.sqrt(np.maximum(np.linalg.eigvalsh(cov[:2, :2]), 0.0))
+                rows.append({
+                    "time": round(sim.time, 2),
+                    "heading_error": math.degrees(float(wrap(pose[2] - truth[2]))),
+                    "forward_error": 100.0 * float(c * d[0] + s * d[1]),
+                    "sideways_error": 100.0 * float(-s * d[0] + c * d[1]),
+                    "step_heading_error": math.degrees(float(wrap(between(last_pose, pose)[2]
+                                                                  - between(last_truth, truth)[2]))),
+                    "match_std_worst": 100.0 * float(axes[1]), "match_std_best": 100.0 * float(axes[0]),
+                    "match_heading_std": math.degrees(math.sqrt(max(float(cov[2, 2]), 0.0)))})
+            last_truth, last_pose = truth, pose
+        if r.goal_reached:
+            if not goals:
+                break
+            r.set_goal(goals.pop(0))
+    if not rows:
+        _refuse(f"{family} {profile} seed {seed}: SLAM took no keyframe")
+    table = {k: np.array([row[k] for row in rows]) for k in rows[0]}
+    heading, forward, sideways = table["heading_error"], table["forward_error"], table["sideways_error"]
+    summary = {"keyframes": len(rows), "goal_reached": bool(r.goal_reached),
+               "heading_error_rms_deg": float(np.sqrt(np.mean(heading ** 2))),
+               "heading_error_max_deg": float(np.abs(heading).max()),
+               "forward_error_rms_cm": float(np.sqrt(np.mean(forward ** 2))),
+               "sideways_error_rms_cm": float(np.sqrt(np.mean(sideways ** 2))),
+               "step_heading_error_rms_deg": float(np.sqrt(np.mean(table["step_heading_error"] ** 2))),
+               "match_heading_std_median_deg": float(np.median(table["match_heading_std"])),
+               "match_std_worst_median_cm": float(np.median(table["match_std_worst"])),
+               "closures": len(slam.closures)}
+    return {"summary": summary, "keyframes": rows}
+
+
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("family", choices=FAMILIES)
+    parser.add_argument("profile", choices=("perfect", "typical", "uncalibrated"))
+    parser.add_argument("seed", type=int)
+    parser.add_argument("--settings", default="{}", metavar="JSON", help="extra SLAM keys")
+    parser.add_argument("--keyframes", action="store_true", help="a line for every keyframe")
+    args = parser.parse_args(argv)
+    if not 0 <= args.seed < MAX_SEEDS:
+        parser.error(f"seed must be 0..{MAX_SEEDS - 1} (got {args.seed})")
+    try:
+        settings = json.loads(args.settings)
+    except json.JSONDecodeError as exc:
+        parser.error(f"--settings: not JSON ({exc})")
+    if not isinstance(settings, dict):
+        parser.error("--settings: need a JSON object of SLAM keys")
+    out = probe(args.family, args.profile, args.seed, settings)
+    if args.keyframes:
+        for k, row in enumerate(out["keyframes"], start=1):
+            print(f"{k:4d} " + " ".join(f"{key} {value:.2f}" for key, value in row.items()))
+    print(json.dumps({k: (round(v, 3) if isinstance(v, float) else v) for k, v in out["summary"].items()}))
+
+
+if __name__ == "__main__":
+    main()
