@@ -142,9 +142,6 @@ class SlamConfig(Section):
     optimize_every: Annotated[Int, Field(ge=1, le=10_000)] = 1  # loop closures between optimizations
     max_keyframes: Annotated[Int, Field(ge=10, le=100_000)] = 20_000  # then odometry only
     margin: NonNegativeFloat = 1.0  # [m] map extent beyond the arena
-    # Hold the heading to long walls seen from older keyframes (walls.py). Off by default:
-    # on the warehouse map it did not help (docs/localization.md, "SLAM: the heading").
-    wall_heading: bool = False
 
 
 class MappingConfig(Section):

@@ -20,9 +20,6 @@
   (Cauchy's kernel of scale ``loop_kernel``, posegraph.py): a wrong one the rest of the graph
   contradicts weighs next to nothing. ``closures`` records each accepted one,
   ``closures_rejected`` counts candidates that failed verification.
-- **Heading held by long walls** (``wall_heading``, off by default: walls.py). A keyframe
-  that sees a long wall an older keyframe saw measures its heading against it; the front end
-  fuses that with the match and the graph gets a robust heading-only edge.
 - **Back end.** After a loop closure the graph is optimized (posegraph.py, sparse Gauss-Newton)
   and the map is rebuilt from every keyframe's scan at its optimized pose, when it is next read.
 The estimate starts at the true start pose, so the map and the pose live in the world frame.
@@ -46,7 +43,6 @@ from pymunk_bot.localization.posegraph import Edge, final_weights, optimize
 from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.scanmatch import Match, subsample
 from pymunk_bot.localization.se2 import between, compose, scan_points, transform_points, wrap
-from pymunk_bot.localization.walls import Wall, WallAnchors, fuse_heading, long_walls
 
 # [m^2, m^2, rad^2] added to every edge covariance. The heading's is 0.06 deg: the matches'
 # own heading std (0.05-0.6 deg a step; their step heading errors as large, instrumented
@@ -109,9 +105,6 @@ class SlamLocalizer(Localizer):
         self._map_stale = False  # the graph moved since the map was built
         self.uncertainty = ChainUncertainty()
         self.odometry_trust = OdometryTrust()  # the front end's odometry prior, learned
-        self.wall_anchors = WallAnchors()  # wall directions that hold the heading (walls.py)
-        self.wall_edges: list[Edge] = []  # heading-only edges from an anchor's keyframe
-        self.heading_variance = 0.0  # [rad^2] of the latest keyframe's heading, world frame
 
     @property
     def grid(self) -> OccupancyGrid:
@@ -139,7 +132,6 @@ class SlamLocalizer(Localizer):
         return {"keyframes": np.array(self.keyframes).reshape(-1, 3),
                 "loop_closures": list(self.loop_closures),
                 "closures_rejected": self.closures_rejected,
-                "wall_anchors": len(self.wall_anchors), "heading_fixes": len(self.wall_edges),
                 "keyframe_limit_reached": self.keyframe_limit_reached}
 
     # ------------------------------------------------------------------ update
@@ -150,7 +142,7 @@ class SlamLocalizer(Localizer):
         if not self.keyframes:
             if fresh:
                 self._add_keyframe(np.asarray(self.context.start_pose, dtype=float), odom, scan,
-                                   0.0, None, inputs.time, self._walls(scan))
+                                   0.0, None, inputs.time)
             return
         moved = between(self._odom[-1], odom)
         predicted, prior = self.odometry_trust.predict(self.keyframes[-1], moved)
@@ -167,25 +159,9 @@ class SlamLocalizer(Localizer):
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
             else:
                 pose, cov = predicted, np.diag([0.05, 0.05, 0.05]) ** 2
-            walls = self._walls(scan)
-            self.heading_variance += float(cov[2, 2])
-            fix = self.wall_anchors.fix(self.keyframes, walls, pose, self.heading_variance)
-            fused = pose
-            if fix is not None:
-                fused, self.heading_variance = fuse_heading(pose, cov, self.heading_variance, fix)
-                # The chain's edge keeps the match's covariance; the wall's is an edge of its
-                # own, added before the keyframe (a loop closure the keyframe finds optimizes)
-                self.wall_edges.append(Edge(fix.anchor, len(self.keyframes),
-                                            np.array([0.0, 0.0, fix.relative]),
-                                            np.diag([0.0, 0.0, 1.0 / fix.variance]),
-                                            robust=self.config.loop_kernel))
-            self._add_keyframe(fused, odom, scan, travel, cov, inputs.time, walls)
-            self.pose = fused
+            self._add_keyframe(pose, odom, scan, travel, cov, inputs.time)
+            self.pose = pose
             self.covariance = cov
-
-    def _walls(self, scan) -> list[Wall]:
-        """The long walls of a keyframe's scan, robot frame (none unless ``wall_heading``)."""
-        return long_walls(scan_points(scan)[0]) if self.config.wall_heading else []
 
     def _front_end_match(self, points: np.ndarray, predicted: np.ndarray, prior: np.ndarray) -> Match:
         """The new scan aligned with the latest keyframes' submap, from the odometry's
@@ -210,7 +186,7 @@ class SlamLocalizer(Localizer):
                     match = retry
         return match
 
-    def _add_keyframe(self, pose, odom, scan, travel, cov, time: float, walls: list[Wall]) -> None:
+    def _add_keyframe(self, pose, odom, scan, travel, cov, time: float) -> None:
         index = len(self.keyframes)
         self.keyframes.append(np.array(pose, dtype=float))
         self.keyframe_times.append(float(time))
@@ -226,7 +202,6 @@ class SlamLocalizer(Localizer):
         self.uncertainty.add(self.keyframes[index], np.zeros((3, 3)) if cov is None else cov + EDGE_FLOOR)
         if not self._map_stale:  # else the next read rebuilds it from every keyframe
             self.mapper.integrate(self.keyframes[index], scan)
-        self.wall_anchors.add(index, self.keyframes, walls, self.heading_variance)
         self._close_loop(index)
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
@@ -296,7 +271,7 @@ class SlamLocalizer(Localizer):
         return match if chi2 <= LOOP_CONSISTENCY else None
 
     def _optimize(self) -> None:
-        poses, _ = optimize(np.asarray(self.keyframes), self.edges + self.wall_edges)
+        poses, _ = optimize(np.asarray(self.keyframes), self.edges)
         self.keyframes = [p for p in poses]
         self.uncertainty.move(poses)
         self._map_stale = True
