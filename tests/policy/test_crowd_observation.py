@@ -118,11 +118,11 @@ def test_controller_drives_exactly_as_the_env_steps(tmp_path):
         stepped.append(env.sim.robots["r1"].pose)
         if terminated or truncated:
             break
-    data = pb.Simulation  # the episode's drawn scenario, its policy as the robot's controller
+    # the episode's drawn scenario, the policy as its robot's controller
     config = env.sim.config.model_dump(mode="json", exclude_unset=True)
     config["robots"][0]["controller"] = {"type": "policy", "path": str(tmp_path / "crowd.npz"),
                                          "rate": 4.0}
-    sim = data.from_dict(config, seed=info["sim_seed"])
+    sim = pb.Simulation.from_dict(config, seed=info["sim_seed"])
     driven = []
     for _ in stepped:
         for _ in range(env.episode.steps_per_action):
@@ -207,3 +207,25 @@ def test_crowdnav_reward_is_crowdnavs():
     assert rewards[-1] == pytest.approx(-0.25 * info["new_collisions"] - 0.1 * 0.25 * crowding)
     with pytest.raises(ValueError, match="preset"):
         NavigationEnv(scene, reward="crowdnv")
+
+
+def test_crowd_layouts_come_from_world_seeds():
+    """A trainer keeps clear of the test cases (seeds 0 to 499): randomize.world_seeds bounds
+    the layout seeds a crowd suite is drawn with."""
+    from pymunk_bot.benchmark.suite import episode_data
+
+    env = NavigationEnv(**{**CROWD_ENV, "randomize": {"crowd": "crowdnav",
+                                                      "world_seeds": [7, 8]}})
+    expected = [o["center"] for o in episode_data(load_suite_entry(), 7)["obstacles"]
+                if o.get("type") == "pedestrian"]
+    for seed in (0, 1):
+        env.reset(seed=seed)
+        starts = [list(o.center) for o in env.sim.config.obstacles
+                  if getattr(o, "type", None) == "pedestrian"]
+        np.testing.assert_allclose(starts, expected)
+
+
+def load_suite_entry():
+    from pymunk_bot.benchmark.suite import load_suite
+
+    return load_suite("crowdnav")[0]
