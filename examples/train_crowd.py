@@ -44,6 +44,7 @@ SCENARIO = {"name": "crowd_train", "world": {"size": [24.0, 24.0], "duration": 2
 TRAIN_LAYOUTS = [100_000, 1_000_000]  # layout seeds training draws (tests: 0 to 499)
 VALIDATION_LAYOUTS = [1_000_000, 1_100_000]
 CONTROL_PERIOD = 0.25  # [s] CrowdNav's time step
+ORCA_SUCCESS = 0.428  # crowdnav_orca on the 500 test cases (docs/benchmark.md), for the plot
 # CrowdNav's reward, 0.05 per metre of progress (a dense signal for the first generations,
 # when nothing arrives yet: the whole crossing pays 0.4, an arrival 1) and 0.004 per second
 # (of two arrivals the faster is better; a timeout, -0.1, stays better than a collision)
@@ -146,10 +147,13 @@ def plot(history: list[dict], out: Path, title: str) -> None:
     checked = [h for h in history if "validation" in h]
     ax.plot([h["generation"] for h in checked], [h["validation"] for h in checked], "o-",
             color="C2", label="mean policy, validation episodes (held out)")
+    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
+               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
+    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
     ax.set_ylim(0, 1)
     ax.set_xlabel(f"generation ({history[-1]['time'] / 60:.0f} min wall time in all)")
     ax.set_ylabel("success without collision")
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     fig.tight_layout()
