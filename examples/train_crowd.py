@@ -2,7 +2,7 @@
 machinery), seeing the humans' true states: the policy on the benchmark's leaderboard.
 
     pip install 'pymunk-bot[rl,es]'
-    python examples/train_crowd.py --generations 80 --workers 2 --seed 0 \\
+    python examples/train_crowd.py --generations 60 --workers 2 --seed 0 \\
         --out crowdnav.npz --plot learning_curve_crowd.png
     pymunk-bot benchmark crowdnav --controller scenarios/policies/crowdnav_policy.yaml \\
         --seeds 0:500 --out episodes.csv          # CrowdNav's 500 test cases
@@ -63,7 +63,7 @@ def env_kwargs(layouts: list[int], suite: str = "crowdnav") -> dict:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--generations", type=int, default=80,
+    parser.add_argument("--generations", type=int, default=60,
                         help="CMA-ES generations: the budget (the same seed, the same policy)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--hidden", type=int, default=8, help="hidden tanh units (0: linear)")
@@ -74,8 +74,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--backend", choices=["process", "dask", "ray"], default="process")
     parser.add_argument("--address", default=None)
-    parser.add_argument("--validation-episodes", type=int, default=100)
-    parser.add_argument("--validate-every", type=int, default=10,
+    parser.add_argument("--validation-episodes", type=int, default=60)
+    parser.add_argument("--validate-every", type=int, default=5,
                         help="generations between validations (and after the last)")
     parser.add_argument("--out", type=Path, default=Path("crowdnav.npz"))
     parser.add_argument("--plot", type=Path, default=None)
