@@ -38,6 +38,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -84,9 +85,11 @@ def shapes(inputs: int, hidden: int, outputs: int = 2) -> list[tuple[int, int]]:
     return list(zip(sizes[:-1], sizes[1:]))
 
 
-def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bool = False):
+def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bool = False,
+              crowd_humans: int | None = None):
     """The MLP whose weights and biases are ``theta`` (layer after layer, W then b); ``guided``:
-    it records the default plan guidance it was trained with."""
+    it records the default plan guidance it was trained with; ``crowd_humans``: it records
+    the crowd_state observation of that many humans it was trained on."""
     from pymunk_bot.config.guidance import PlanGuidanceConfig
     from pymunk_bot.policy.files import MlpPolicy
 
@@ -96,17 +99,17 @@ def to_policy(theta: np.ndarray, layer_shapes: list[tuple[int, int]], guided: bo
         k += n_in * n_out
         biases.append(theta[k:k + n_out])
         k += n_out
-    return MlpPolicy(weights, biases, PlanGuidanceConfig() if guided else None)
+    return MlpPolicy(weights, biases, PlanGuidanceConfig() if guided else None, crowd_humans)
 
 
 def fitness(job: tuple) -> tuple[float, float]:
     """(mean return, contact-free success rate) of parameters ``theta`` over ``seeds``, on
-    the worker's kept training env (it keeps the generated worlds it drew)."""
+    the worker's kept env of ``kwargs`` (it keeps the generated worlds it drew)."""
     from pymunk_bot.envs.evaluation import kept_env, run_episodes
 
-    theta, layer_shapes, seeds, guided, kind, maps = job
-    runs = run_episodes(to_policy(theta, layer_shapes, guided), None, seeds,
-                        env=kept_env(env_kwargs(TRAIN_WORLDS, True, guided, kind, maps)))
+    theta, layer_shapes, seeds, kwargs, guided, crowd_humans = job
+    runs = run_episodes(to_policy(theta, layer_shapes, guided, crowd_humans), None, seeds,
+                        env=kept_env(kwargs))
     return (float(np.mean([r.episode_return for r in runs])),
             float(np.mean([r.success for r in runs])))
 
@@ -121,7 +124,10 @@ def episode_seeds(seed: int, generation: int, episodes: int) -> list[int]:
 def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 16,
           episodes: int = 8, sigma: float = 0.3, workers: int = 2, progress: bool = True,
           generations: int | None = None, backend: str = "process", address: str | None = None,
-          guided: bool = False, kind: str = "clutter", maps: tuple[str, ...] = ()
+          guided: bool = False, kind: str = "clutter", maps: tuple[str, ...] = (),
+          train_env: dict | None = None, crowd_humans: int | None = None,
+          validation: tuple[dict, list[int], int] | None = None,
+          checkpoint: Callable[[dict, np.ndarray, list[tuple[int, int]]], None] | None = None
           ) -> tuple[np.ndarray, list[tuple[int, int]], list[dict]]:
     """CMA-ES for ``minutes`` of wall time and/or ``generations`` (whichever ends first; at
     least one): (mean parameters, layer shapes, per-generation history of elapsed time, mean
@@ -130,7 +136,13 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
     of ``workers``). With ``generations`` alone the result depends on the seed only: the same
     bits on every backend, worker count and machine. ``guided``: plan-guided goal features;
     ``kind``: the generated worlds' (comma-separated: several); ``maps``: ROS maps drawn
-    among them."""
+    among them. ``train_env``: the training env's arguments instead (another task, e.g.
+    examples/train_crowd.py's); ``crowd_humans``: the policies record the crowd_state
+    observation of that many humans; ``validation``: (env arguments, episode seeds, every N
+    generations): the mean's contact-free success on those episodes, every N generations and
+    after the last, in the history as ``validation`` (played on the same backend);
+    ``checkpoint(history entry, mean, layer_shapes)`` is called at each validation: the mean
+    after g generations is what ``generations=g`` returns (nothing else depends on the total)."""
     import cma
     from tqdm import tqdm
 
@@ -140,9 +152,12 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
     if minutes is None and generations is None:
         raise ValueError("give --minutes or --generations (or both)")
 
-    probe = NavigationEnv(**env_kwargs(TRAIN_WORLDS, True, guided, kind, maps))
-    inputs = probe.episode.task.obs_size
-    layer_shapes = shapes(inputs, hidden)
+    kwargs = env_kwargs(TRAIN_WORLDS, True, guided, kind, maps) if train_env is None \
+        else train_env
+    probe = NavigationEnv(**kwargs)
+    inputs, outputs = probe.episode.task.obs_size, probe.episode.task.action_size
+    probe.close()
+    layer_shapes = shapes(inputs, hidden, outputs)
     size = sum(a * b + b for a, b in layer_shapes)
     # CMA samples from its own Generator seeded here, not from numpy's global state
     samples = np.random.default_rng(np.random.SeedSequence([seed, 1]))
@@ -160,8 +175,8 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
                                                           or len(history) < generations):
             seeds = episode_seeds(seed, len(history), episodes)  # the same for everyone
             candidates = es.ask()
-            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, guided, kind,
-                                          maps) for c in candidates])  # in candidate order
+            results = pool.map(fitness, [(np.asarray(c), layer_shapes, seeds, kwargs, guided,
+                                          crowd_humans) for c in candidates])  # in order
             es.tell(candidates, [-r[0] for r in results])
             elapsed = time.perf_counter() - started
             returns = [r[0] for r in results]
@@ -169,10 +184,28 @@ def train(minutes: float | None, seed: int = 0, hidden: int = 8, popsize: int = 
                             "mean_return": float(np.mean(returns)),
                             "best_return": float(np.max(returns)),
                             "success": float(np.mean([r[1] for r in results]))})
+            last = time.perf_counter() - started >= budget or len(history) == generations
+            if validation is not None and (len(history) % validation[2] == 0 or last):
+                history[-1]["validation"] = validate(pool, np.asarray(es.mean), layer_shapes,
+                                                     validation, guided, crowd_humans)
+                if checkpoint is not None:
+                    checkpoint(history[-1], np.asarray(es.mean), layer_shapes)
             bar.update(1 if minutes is None else min(round(elapsed), bar.total) - bar.n)
             bar.set_postfix(ret=f"{history[-1]['mean_return']:.1f}",
                             ok=f"{history[-1]['success']:.2f}")
     return np.asarray(es.mean), layer_shapes, history
+
+
+def validate(pool, theta: np.ndarray, layer_shapes: list[tuple[int, int]],
+             validation: tuple[dict, list[int], int], guided: bool,
+             crowd_humans: int | None) -> float:
+    """Contact-free success rate of ``theta`` on the validation episodes, played in chunks on
+    ``pool`` (the same rate whatever the chunks' order)."""
+    kwargs, seeds, _ = validation
+    chunks = [seeds[i:i + 10] for i in range(0, len(seeds), 10)]
+    results = pool.map(fitness, [(theta, layer_shapes, chunk, kwargs, guided, crowd_humans)
+                                 for chunk in chunks])
+    return float(sum(r[1] * len(c) for r, c in zip(results, chunks)) / len(seeds))
 
 
 def plot(history: list[dict], out: Path, title: str) -> None:

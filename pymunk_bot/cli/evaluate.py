@@ -134,7 +134,9 @@ def command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from pymunk_bot.envs.evaluation import evaluate_policy, format_summary, outcome_rows, summarize
     from pymunk_bot.envs.families import family_table, plot_families
-    from pymunk_bot.policy.files import PolicyFileError, check_runs_on, guidance_for, load_policy
+    from pymunk_bot.policy.files import (
+        PolicyFileError, check_runs_on, guidance_for, load_policy, observation_for,
+    )
 
     if args.out is not None:
         check_output("--out", args.out, (".csv",))
@@ -152,10 +154,13 @@ def command(args: argparse.Namespace) -> int:
     except PolicyFileError as exc:
         print(f"error: {args.policy}: {exc} (--plan-guidance)", file=sys.stderr)
         return EXIT_BAD_INPUT
+    # a policy trained on the crowd_state observation records it: it is evaluated on it
+    observation = observation_for(policy, None)
     runs = []
     for _, kind, world_map in rows:
         kwargs = env_kwargs(args, kind, world_map)
         kwargs["plan_guidance"] = guidance
+        kwargs["observation"] = observation
         try:
             env = NavigationEnv(**kwargs)
         except ValueError as exc:  # a bad option value (ScenarioError is raised as it is)

@@ -235,6 +235,9 @@ class PolicyControllerConfig(Section):
     # None: as the policy file records; true: on (the file's settings, or the defaults);
     # false: off; a mapping: on with these settings (PlanGuidanceConfig)
     plan_guidance: PlanGuidanceConfig | bool | None = None
+    # None: as the policy file records (an ONNX file: lidar); lidar; crowd_state (the nearest
+    # humans' true states, pymunk_bot/policy/crowd_io.py: the robot needs crowd_state)
+    observation: Literal["lidar", "crowd_state"] | None = None
     _base_dir: str | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -257,21 +260,27 @@ class PolicyControllerConfig(Section):
         """Why this policy cannot drive ``robot`` (a robot config), or None: it needs a LiDAR
         and a goal, takes the observation of the robot's beams and gives its action."""
         from pymunk_bot.policy.files import (
-            PolicyFileError, check_runs_on, guidance_for, load_policy,
+            PolicyFileError, check_runs_on, guidance_for, load_policy, observation_for,
         )
         from pymunk_bot.policy.io import action_size, observation_size
 
-        if robot.lidar is None:
-            return "a policy sees the LiDAR: add a 'lidar' to the robot"
         if self.goal is None and robot.goal is None:
             return "policy needs a goal: set controller.goal or the robot's goal"
         holonomic = getattr(robot, "drive", "diff") == "omni"
-        inputs = observation_size(robot.lidar.beams, holonomic)
         outputs = action_size(holonomic)
         try:
             policy = load_policy(self.resolved_path)
         except PolicyFileError as exc:
             return f"'{self.path}': {exc}"
+        try:
+            observation = observation_for(policy, self.observation)
+        except PolicyFileError as exc:
+            return f"'{self.path}' {exc}"
+        if observation == "crowd_state":
+            return self._crowd_misfit(policy, robot, holonomic, outputs)
+        if robot.lidar is None:
+            return "a policy sees the LiDAR: add a 'lidar' to the robot"
+        inputs = observation_size(robot.lidar.beams, holonomic)
         if policy.inputs is not None and policy.inputs != inputs:
             return (f"'{self.path}' takes {policy.inputs} inputs, but a robot with "
                     f"{robot.lidar.beams} LiDAR beams gives {inputs} (beams + "
@@ -286,6 +295,36 @@ class PolicyControllerConfig(Section):
             guidance_for(policy, self.plan_guidance)
         except PolicyFileError as exc:
             return f"'{self.path}' {exc}"
+        return None
+
+    def _crowd_misfit(self, policy, robot, holonomic: bool, outputs: int) -> str | None:
+        """Why a policy on the crowd_state observation cannot drive ``robot``, or None."""
+        from pymunk_bot.policy.crowd_io import crowd_observation_size, humans_of
+        from pymunk_bot.policy.files import PolicyFileError, check_runs_on
+
+        sensor = getattr(robot, "crowd_state", None)
+        if sensor is None:
+            return (f"'{self.path}' sees the crowd_state observation (the humans' true "
+                    "states): add 'crowd_state: {}' to the robot")
+        humans = policy.crowd_humans or humans_of(policy.inputs, holonomic)
+        if humans is None:
+            return (f"'{self.path}' takes {policy.inputs} inputs: no crowd_state observation "
+                    f"of a {robot.drive} drive has that size")
+        if sensor.max_humans < humans:
+            return (f"'{self.path}' sees the {humans} nearest humans, but the robot's "
+                    f"crowd_state.max_humans is {sensor.max_humans}")
+        if self.plan_guidance:
+            return f"'{self.path}' sees the crowd_state observation: plan_guidance does not apply"
+        inputs = crowd_observation_size(humans, holonomic)
+        if policy.inputs is not None and policy.inputs != inputs:
+            return (f"'{self.path}' takes {policy.inputs} inputs, but the crowd_state "
+                    f"observation of {humans} humans for a {robot.drive} drive has {inputs}")
+        if policy.outputs is not None and policy.outputs != outputs:
+            return f"'{self.path}' gives {policy.outputs} outputs; a {robot.drive} drive takes {outputs}"
+        try:
+            check_runs_on(policy, inputs, outputs)
+        except PolicyFileError as exc:
+            return f"'{self.path}': {exc}"
         return None
 
     def guidance(self) -> "PlanGuidanceConfig | None":

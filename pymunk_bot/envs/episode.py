@@ -60,12 +60,12 @@ class NavigationEpisode:
                  robot: str | None = None, control_period: float = 0.1,
                  max_episode_time: float | None = None,
                  lidar: Mapping[str, Any] | None = None,
-                 reward: RewardWeights | Mapping[str, float] | None = None,
+                 reward: RewardWeights | Mapping[str, float] | str | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False,
                  randomize: Mapping[str, Any] | Randomization | None = None,
-                 plan_guidance: bool | Mapping[str, float] | PlanGuidanceConfig | None = None
-                 ) -> None:
+                 plan_guidance: bool | Mapping[str, float] | PlanGuidanceConfig | None = None,
+                 observation: str = "lidar") -> None:
         guidance = PlanGuidanceConfig.of(plan_guidance)  # ValueError naming the key
         config, self.source = load_config(scenario)
         # control period and time limit [s]
@@ -78,7 +78,7 @@ class NavigationEpisode:
         self.terminate_on_collision = bool(terminate_on_collision)
         robot_config = next(r for r in self.config.robots if r.name == self.robot_name)
         self.task = RobotTask(robot_config, RewardWeights.from_any(reward), pose_source,
-                              guidance, self.control_period)
+                              guidance, self.control_period, observation)
         self._map: tuple[ScenarioConfig, MapInfo] | None = None  # the last world's, planned on
         self._lidar = dict(lidar or {})
         self._base = scenario_data(config, exclude_unset=True)  # what each draw starts from

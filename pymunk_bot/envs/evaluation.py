@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from pymunk_bot.policy.files import Policy, PolicyFileError, check_guidance, load_policy
+from pymunk_bot.policy.files import (
+    Policy, PolicyFileError, check_guidance, check_observation, load_policy,
+)
 
 MAX_EPISODES = 100_000
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -43,7 +45,8 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
     """Play the policy (or the policy file) for one episode per seed, in ``env`` if given
     (kept open: a trainer reuses it, and its generated worlds) or a new env of ``env_kwargs``;
     PolicyFileError if the policy returns a NaN or infinite action or fails to run, or records
-    that it was trained with plan guidance and the env has none (or the reverse)."""
+    that it was trained with plan guidance and the env has none (or the reverse), or on another
+    observation than the env's."""
     from pymunk_bot.envs.navigation import NavigationEnv
 
     agent = load_policy(policy) if isinstance(policy, (str, Path)) else policy
@@ -52,6 +55,7 @@ def run_episodes(policy: Policy | str | Path, env_kwargs: dict[str, Any] | None,
         env = NavigationEnv(**(env_kwargs or {}))
     try:
         check_guidance(agent, env.episode.task.plan_guidance)
+        check_observation(agent, env.episode.task.observation)
     except PolicyFileError:
         if own:
             env.close()

@@ -41,7 +41,8 @@ class MultiRobotEnv(ParallelEnv):
 
     Keyword arguments as :class:`~pymunk_bot.envs.NavigationEnv` (``lidar`` overrides apply
     to every robot, ``plan_guidance`` to every agent), except that there is no ``robot`` and
-    no ``random_goal`` nor ``randomize``; with no ``scenario``, the shipped ``crossing`` (four
+    no ``random_goal`` nor ``randomize`` (``observation="crowd_state"``: every robot needs the
+    ``crowd_state`` sensor); with no ``scenario``, the shipped ``crossing`` (four
     robots, DEFAULT_SCENARIO). With plan guidance each agent plans on the scenario's map; the
     other robots are not on it (its LiDAR sees them).
     """
@@ -53,10 +54,11 @@ class MultiRobotEnv(ParallelEnv):
                  render_mode: str | None = None, control_period: float = 0.1,
                  max_episode_time: float | None = None,
                  lidar: Mapping[str, Any] | None = None,
-                 reward: RewardWeights | Mapping[str, float] | None = None,
+                 reward: RewardWeights | Mapping[str, float] | str | None = None,
                  pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False,
-                 plan_guidance: bool | Mapping[str, float] | None = None) -> None:
+                 plan_guidance: bool | Mapping[str, float] | None = None,
+                 observation: str = "lidar") -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
@@ -68,8 +70,8 @@ class MultiRobotEnv(ParallelEnv):
         names = [r.name for r in config.robots]
         self.config, _ = prepare_scenario(config, self.source, names, lidar, self.control_period)
         weights = RewardWeights.from_any(reward)
-        self.tasks = {r.name: RobotTask(r, weights, pose_source, guidance, self.control_period)
-                      for r in self.config.robots}
+        self.tasks = {r.name: RobotTask(r, weights, pose_source, guidance, self.control_period,
+                                     observation) for r in self.config.robots}
         self.world_map = MapInfo.from_scenario(self.config) if guidance is not None else None
         self.terminate_on_collision = bool(terminate_on_collision)
         self.possible_agents = names

@@ -50,6 +50,9 @@ class NavigationEnv(gym.Env):
             ``off_path`` [m], ``resolution`` [m]: the observation's goal features point along
             an A* path on the scenario's map instead of at the goal (same observation size;
             :mod:`pymunk_bot.planning.guidance`, docs/learning.md). None or False: off.
+        observation: "lidar" (the default: :mod:`pymunk_bot.policy.io`) or "crowd_state": the
+            nearest humans' true states in the robot frame (:mod:`pymunk_bot.policy.crowd_io`;
+            the robot needs ``crowd_state: {...}``).
 
     ``info["is_success"]`` is true when the robot reached its goal without any contact on
     the way; ``info["contact_time"]`` counts the episode's seconds in contact.
@@ -61,17 +64,19 @@ class NavigationEnv(gym.Env):
                  render_mode: str | None = None, robot: str | None = None,
                  control_period: float = 0.1, max_episode_time: float | None = None,
                  lidar: Mapping[str, Any] | None = None,
-                 reward: RewardWeights | Mapping[str, float] | None = None,
+                 reward: RewardWeights | Mapping[str, float] | str | None = None,
                  random_goal: bool = False, pose_source: str = "ground_truth",
                  terminate_on_collision: bool = False,
                  randomize: Mapping[str, Any] | None = None,
-                 plan_guidance: bool | Mapping[str, float] | None = None) -> None:
+                 plan_guidance: bool | Mapping[str, float] | None = None,
+                 observation: str = "lidar") -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {RENDER_MODES} or None "
                              f"(got {render_mode!r})")
         self.episode = NavigationEpisode(scenario, robot, control_period, max_episode_time,
                                          lidar, reward, random_goal, pose_source,
-                                         terminate_on_collision, randomize, plan_guidance)
+                                         terminate_on_collision, randomize, plan_guidance,
+                                         observation)
         self.observation_space, self.action_space = make_spaces(self.episode.task)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.episode.control_period}

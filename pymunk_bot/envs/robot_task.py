@@ -7,7 +7,9 @@ plan guidance the observation's goal features come from :class:`~pymunk_bot.plan
 PlanGuide` (as the controller's do), and so does the reward's progress term: progress along
 the path (the guided distance: to the lookahead point plus the path beyond it), not the straight
 line, which would punish heading for a door. ``distance_to_goal``, arrival and termination keep
-the final goal's.
+the final goal's. With ``observation="crowd_state"`` the observation is
+:mod:`pymunk_bot.policy.crowd_io`'s (the humans' true states, no LiDAR) and the reward's
+clearance is the gap to the nearest human's body, what that observation sees.
 """
 from __future__ import annotations
 
@@ -19,6 +21,10 @@ from pymunk_bot.config.guidance import PlanGuidanceConfig
 from pymunk_bot.planning.guidance import PlanGuide
 from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.robots.command import STOP
+from pymunk_bot.policy.crowd_io import (
+    OBSERVATIONS, CrowdObservationBuilder, crowd_observation_bounds, crowd_observation_size,
+    nearest_gap,
+)
 from pymunk_bot.policy.io import (
     ActionScale, ObservationBuilder, action_size, goal_features, observation_bounds,
     observation_size,
@@ -52,11 +58,27 @@ class RobotTask:
     def __init__(self, robot_config, weights: RewardWeights,
                  pose_source: str = "ground_truth",
                  plan_guidance: PlanGuidanceConfig | None = None,
-                 control_period: float = 0.1) -> None:
+                 control_period: float = 0.1, observation: str = "lidar") -> None:
         """``plan_guidance``: goal features along a path (planned on the map :meth:`start`
-        is given); ``control_period`` [s] between observations (counts its replan period)."""
+        is given); ``control_period`` [s] between observations (counts its replan period);
+        ``observation``: "lidar" (:mod:`pymunk_bot.policy.io`) or "crowd_state"
+        (:mod:`pymunk_bot.policy.crowd_io`, needs the robot's ``crowd_state`` sensor)."""
         if pose_source not in ("ground_truth", "odometry"):
             raise ValueError(f"pose_source must be 'ground_truth' or 'odometry' (got {pose_source!r})")
+        if observation not in OBSERVATIONS:
+            raise ValueError(f"observation must be one of {OBSERVATIONS} (got {observation!r:.60})")
+        crowd_config = getattr(robot_config, "crowd_state", None)
+        if observation == "crowd_state":
+            if crowd_config is None:
+                raise ValueError(f"observation='crowd_state' reads robot '{robot_config.name}''s "
+                                 "crowd_state sensor: add `crowd_state: {}` to the robot")
+            if plan_guidance is not None:
+                raise ValueError("plan_guidance shapes the LiDAR observation's goal features: "
+                                 "it does not apply to observation='crowd_state'")
+        self.observation = observation
+        # humans of the crowd observation (0: the LiDAR observation)
+        self.humans = 0 if crowd_config is None or observation == "lidar" \
+            else int(crowd_config.max_humans)
         self.name = robot_config.name
         self.weights = weights
         self.weight_row = weights.as_array()  # what step_rows reads
@@ -65,12 +87,15 @@ class RobotTask:
         self.beams = robot_config.lidar.beams
         self.max_range = robot_config.lidar.max_range  # [m]
         self.action_size = action_size(self.holonomic)
-        self.obs_size = observation_size(self.beams, self.holonomic)
+        self.obs_size = (observation_size(self.beams, self.holonomic) if not self.humans
+                         else crowd_observation_size(self.humans, self.holonomic))
         self.robot: Robot | None = None  # bound by start()
         self.radius = 0.0  # [m] the robot's, from start()
         self._lidar: Any = None  # the robot's LiDAR, from start()
         self.scale: ActionScale | None = None  # the robot's limits, from start()
         self.builder: ObservationBuilder | None = None
+        self.crowd_builder: CrowdObservationBuilder | None = None  # crowd_state observation
+        self._crowd: Any = None  # the robot's crowd_state sensor, from start()
         self.previous = np.zeros((1, self.action_size))  # the last clipped action
         self.contact_time = 0.0  # [s] in contact this episode
         self._distance = 0.0  # [m] to the (guided) goal at the last observation
@@ -97,6 +122,8 @@ class RobotTask:
 
     def obs_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(low, high) of the observation (float32)."""
+        if self.humans:
+            return crowd_observation_bounds(self.humans, self.holonomic)
         return observation_bounds(self.beams, self.holonomic)
 
     # ------------------------------------------------------------------ episode
@@ -150,6 +177,12 @@ class RobotTask:
         angles = robot.lidar.angles
         if self.builder is None or not np.array_equal(self.builder.angles, angles):
             self.builder = ObservationBuilder(angles, self.max_range, self.holonomic)
+        if self.humans:
+            self._crowd = robot.sensor("crowd_state")
+            if self._crowd is None:  # a drawn scenario whose robot lost the sensor
+                raise ValueError(f"observation='crowd_state': robot '{self.name}' has no "
+                                 "crowd_state sensor")
+            self.crowd_builder = CrowdObservationBuilder(self.humans, self.scale, self.radius)
         self.previous[:] = 0.0
         self.contact_time = 0.0
         self._distance = self.goal_distance()
@@ -197,17 +230,38 @@ class RobotTask:
         assert ranges is not None  # a scan is taken at the start of every episode
         return ranges
 
+    def clearance_ranges(self) -> np.ndarray:
+        """What the reward's clearance is measured from [m]: the LiDAR ranges, or with the
+        crowd observation the distance from the robot's centre to the nearest human's body
+        (inf with none in sight), one number."""
+        if not self.humans:
+            return self.ranges()
+        x, y, _ = self.pose()
+        return np.array([nearest_gap((x, y), 0.0, self._crowd.reading)])
+
     def observe(self, out: np.ndarray | None = None, where: Where | None = None) -> np.ndarray:
-        """The observation (:mod:`pymunk_bot.policy.io`), written into ``out`` if given;
-        ``where``: :meth:`where`, if already read this step."""
+        """The observation (:mod:`pymunk_bot.policy.io`, or :mod:`pymunk_bot.policy.crowd_io`
+        with ``observation="crowd_state"``), written into ``out`` if given; ``where``:
+        :meth:`where`, if already read this step."""
         assert self.builder is not None, "call start() first"
         obs = np.empty(self.obs_size, dtype=np.float32) if out is None else out
         where = self.where() if where is None else where
         features = self.goal_seen(where, goal_features(*where))
         if self.guide is not None:  # progress is measured along the path from here
             self._distance = features[0]
-        self.builder.fill(obs[None], self.ranges()[None], [features], self.previous)
+        if self.crowd_builder is not None:
+            self.fill_crowd(obs, where, features)
+        else:
+            self.builder.fill(obs[None], self.ranges()[None], [features], self.previous)
         return obs
+
+    def fill_crowd(self, out: np.ndarray, where: Sequence[float],
+                   features: tuple[float, float, float]) -> None:
+        """Write the crowd observation into ``out`` (one row) from the pose and goal features
+        the task sees (``where``: x, y, theta first) and the crowd_state sensor's reading
+        now."""
+        assert self.crowd_builder is not None, "the crowd observation: call start() first"
+        self.crowd_builder.fill(out, where[:3], features, self.previous, self._crowd.reading)
 
     def goal_seen(self, where: Where, features: tuple[float, float, float]
                   ) -> tuple[float, float, float]:
@@ -266,7 +320,8 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
                        states["theta"].tolist(), states["goal_x"].tolist(),
                        states["goal_y"].tolist()), goals)]
         along = np.array([g[0] for g in seen])
-    ranges = np.array([task.ranges() for task in tasks])  # np.stack's own cost is 5 us
+    # np.stack's own cost is 5 us
+    ranges = np.array([task.clearance_ranges() for task in tasks])
     n = len(tasks)
     rewards, contact_time, clearance = np.empty(n), np.empty(n), np.empty(n)
     new_collisions = np.empty(n, dtype=np.int64)
@@ -278,7 +333,11 @@ def outcomes(tasks: list[RobotTask], states: dict[str, np.ndarray], elapsed: flo
     for task, d, c, t in zip(tasks, along.tolist(), collisions.tolist(),
                              contact_time.tolist()):
         task.remember(d, c, t)
-    if obs is not None:
+    if obs is not None and first.crowd_builder is not None:
+        for row, task, where, features in zip(obs, tasks, zip(
+                states["x"].tolist(), states["y"].tolist(), states["theta"].tolist()), seen):
+            task.fill_crowd(row, where, features)
+    elif obs is not None:
         first.builder.fill(obs, ranges, seen, np.concatenate([task.previous for task in tasks]))
     info = {"distance_to_goal": distance, "collisions": collisions,
             "new_collisions": new_collisions, "contact_time": contact_time,

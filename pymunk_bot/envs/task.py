@@ -48,12 +48,19 @@ class RewardWeights:
                          self.clearance_margin, self.time, self.success))
 
     @classmethod
-    def from_any(cls, value: "RewardWeights | Mapping[str, float] | None") -> "RewardWeights":
-        """Weights as given, from a mapping of some of their names, or the defaults (None)."""
+    def from_any(cls, value: "RewardWeights | Mapping[str, float] | str | None"
+                 ) -> "RewardWeights":
+        """Weights as given, from a mapping of some of their names, a preset's name
+        (``"crowdnav"``: CrowdNav's reward, :data:`CROWDNAV_REWARD`), or the defaults (None)."""
         if value is None:
             return cls()
         if isinstance(value, cls):
             return value
+        if isinstance(value, str):
+            if value not in REWARD_PRESETS:
+                raise ValueError(f"reward must be weights or a preset, one of "
+                                 f"{sorted(REWARD_PRESETS)} (got {value!r:.60})")
+            value = REWARD_PRESETS[value]
         if not isinstance(value, Mapping):
             raise TypeError(f"reward must be RewardWeights or a mapping of weights (got {value!r})")
         known = {f.name for f in fields(cls)}
@@ -66,6 +73,16 @@ class RewardWeights:
         if weights.get("clearance_margin", 1.0) <= 0:
             raise ValueError(f"clearance_margin must be > 0 m (got {weights['clearance_margin']})")
         return cls(**weights)
+
+
+# CrowdNav's reward (Chen et al. 2019; vita-epfl/CrowdNav crowd_sim/envs/crowd_sim.py and
+# configs/env.config: success_reward 1, collision_penalty -0.25, discomfort_dist 0.2,
+# discomfort_penalty_factor 0.5): +1 on arriving, -0.25 on a collision, and
+# (d - 0.2) * 0.5 * dt while the gap d to a body is under 0.2 m; nothing per second or metre.
+# As weights: clearance * dt * (1 - d / 0.2) = (d - 0.2) * 0.5 * dt with clearance = -0.1.
+CROWDNAV_REWARD = {"progress": 0.0, "contact": 0.0, "collision": -0.25, "clearance": -0.1,
+                   "clearance_margin": 0.2, "time": 0.0, "success": 1.0}
+REWARD_PRESETS = {"crowdnav": CROWDNAV_REWARD}
 
 
 def load_config(scenario: str | Path | dict | ScenarioConfig | None) -> tuple[ScenarioConfig, str]:

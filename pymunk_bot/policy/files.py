@@ -5,7 +5,9 @@ shape (outputs,): ``x = tanh(x @ W_i + b_i)`` for every layer but the last,
 ``action = clip(x @ W_last + b_last, -1, 1)``, in float64; a policy trained with plan-guided
 goal features also holds ``plan_guidance``, its settings as numbers
 (:meth:`~pymunk_bot.config.controllers.PlanGuidanceConfig.as_array`), so that whoever runs it
-turns the guidance on (:func:`guidance_for`). An ONNX model (what Stable-Baselines3
+turns the guidance on (:func:`guidance_for`); a policy trained on the ``crowd_state``
+observation (:mod:`pymunk_bot.policy.crowd_io`) holds ``crowd_state``, the number of humans it
+sees, so that whoever runs it builds that observation (:func:`observation_for`). An ONNX model (what Stable-Baselines3
 and PyTorch export) takes a float32 batch of observations (its first input) and returns
 actions (its first output), clipped to [-1, 1]; it runs on onnxruntime (the ``onnx`` extra).
 The observation and the action are :mod:`pymunk_bot.policy.io`'s.
@@ -25,6 +27,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from pymunk_bot.config.guidance import PlanGuidanceConfig
+from pymunk_bot.policy.crowd_io import MAX_HUMANS_OBSERVED
 from pymunk_bot.policy.npz_bounded import NpzError, first_line, read_npz
 from pymunk_bot.outcomes.results import write_atomic
 
@@ -34,6 +37,7 @@ MAX_LAYERS = 64
 ONNX_FLOAT_TYPES = ("tensor(float)", "tensor(double)", "tensor(float16)")  # action outputs
 _NAME = re.compile(r"^([Wb])(\d+)$")
 GUIDANCE_ARRAY = "plan_guidance"  # an .npz MLP's record of its plan guidance settings
+CROWD_ARRAY = "crowd_state"  # an .npz MLP's record of the humans its crowd observation holds
 ONNX_INSTALL = "pip install 'pymunk-bot[onnx]'"
 
 
@@ -48,6 +52,8 @@ class Policy(Protocol):
     outputs: int | None  # action length it gives (None: the file does not say)
     records_guidance: bool  # the file says whether it was trained with plan guidance
     plan_guidance: PlanGuidanceConfig | None  # what it was trained with (None: without)
+    crowd_humans: int | None  # humans of the crowd_state observation it was trained on
+    # (None: the LiDAR observation, or an ONNX file, which records nothing)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n x outputs, float64, in [-1, 1]) of observations (n x inputs, float32)."""
@@ -60,8 +66,11 @@ class MlpPolicy:
     records_guidance = True
 
     def __init__(self, weights: list[np.ndarray], biases: list[np.ndarray],
-                 plan_guidance: PlanGuidanceConfig | None = None) -> None:
+                 plan_guidance: PlanGuidanceConfig | None = None,
+                 crowd_humans: int | None = None) -> None:
         self.plan_guidance = plan_guidance  # what its observations were trained with
+        # the crowd_state observation's humans it was trained on (None: the LiDAR observation)
+        self.crowd_humans = crowd_humans
         if not weights or len(weights) != len(biases) or len(weights) > MAX_LAYERS:
             raise PolicyFileError(f"an MLP needs 1 to {MAX_LAYERS} layers, a bias for each "
                                   f"weight matrix (got {len(weights)} W and {len(biases)} b)")
@@ -92,12 +101,21 @@ class MlpPolicy:
                 guidance = PlanGuidanceConfig.from_array(arrays.pop(GUIDANCE_ARRAY).reshape(-1))
             except ValueError as exc:
                 raise PolicyFileError(f"array '{GUIDANCE_ARRAY}': {first_line(exc)}") from None
+        humans = None
+        if CROWD_ARRAY in arrays:
+            record = arrays.pop(CROWD_ARRAY).reshape(-1)
+            if record.size != 1 or not (1 <= record[0] <= MAX_HUMANS_OBSERVED) or (
+                    record[0] != int(record[0])):
+                raise PolicyFileError(f"array '{CROWD_ARRAY}' must hold one whole number of "
+                                      f"humans in [1, {MAX_HUMANS_OBSERVED}] (got "
+                                      f"{np.array2string(record[:4])})")
+            humans = int(record[0])
         numbered: dict[str, dict[int, np.ndarray]] = {"W": {}, "b": {}}
         for name, array in arrays.items():
             match = _NAME.match(name)
             if match is None:
                 raise PolicyFileError(f"unexpected array '{name}' (an MLP holds W0, b0, W1, "
-                                      f"b1, ... and maybe {GUIDANCE_ARRAY})")
+                                      f"b1, ... and maybe {GUIDANCE_ARRAY}, {CROWD_ARRAY})")
             numbered[match.group(1)][int(match.group(2))] = array
         count = len(numbered["W"])
         for kind in ("W", "b"):
@@ -105,7 +123,7 @@ class MlpPolicy:
                 raise PolicyFileError(f"the arrays must be W0..W{count - 1} and b0..b{count - 1} "
                                       f"(got {sorted(arrays)})")
         return cls([numbered["W"][i] for i in range(count)],
-                   [numbered["b"][i] for i in range(count)], guidance)
+                   [numbered["b"][i] for i in range(count)], guidance, humans)
 
     def save(self, path: str | Path) -> None:
         """Write the MLP as ``.npz`` (atomically: a reader never sees half a file)."""
@@ -114,6 +132,8 @@ class MlpPolicy:
             arrays[f"W{i}"], arrays[f"b{i}"] = w, b
         if self.plan_guidance is not None:
             arrays[GUIDANCE_ARRAY] = np.array(self.plan_guidance.as_array())
+        if self.crowd_humans is not None:
+            arrays[CROWD_ARRAY] = np.array([self.crowd_humans])
         data = io.BytesIO()
         np.savez(data, **arrays)
         write_atomic(path, data.getvalue())
@@ -132,6 +152,7 @@ class OnnxPolicy:
 
     records_guidance = False
     plan_guidance: PlanGuidanceConfig | None = None
+    crowd_humans: int | None = None
 
     def __init__(self, path: str | Path) -> None:
         try:
@@ -230,6 +251,33 @@ def guidance_mismatch(trained_with: bool) -> str:
                 f"records '{GUIDANCE_ARRAY}'): run it with plan guidance on")
     return ("was trained without plan guidance (its goal features are the final goal's): run "
             "it with plan_guidance off (false)")
+
+
+def observation_for(policy: Policy, setting: str | None) -> str:
+    """The observation a policy runs on, given a scenario's or a command's ``observation``
+    (None: as the file records, "lidar" for a file that records nothing). PolicyFileError if
+    the setting contradicts what the file records."""
+    recorded = "crowd_state" if policy.crowd_humans is not None else "lidar"
+    if setting is None:
+        return recorded
+    if policy.records_guidance and setting != recorded:
+        raise PolicyFileError(observation_mismatch(recorded))
+    return setting
+
+
+def check_observation(policy: Policy, observation: str) -> None:
+    """PolicyFileError if the policy records that it was trained on another observation than
+    ``observation`` ("lidar" or "crowd_state")."""
+    observation_for(policy, observation)
+
+
+def observation_mismatch(recorded: str) -> str:
+    """Why a policy trained on one observation cannot run on the other."""
+    if recorded == "crowd_state":
+        return (f"was trained on the crowd_state observation (the humans' true states; the "
+                f"file records '{CROWD_ARRAY}'): run it with observation crowd_state")
+    return ("was trained on the LiDAR observation (the file records no "
+            f"'{CROWD_ARRAY}'): run it with observation lidar")
 
 
 def load_policy(path: str | Path) -> MlpPolicy | OnnxPolicy:
