@@ -83,6 +83,22 @@ def test_social_force_walkers_crossing_a_square_in_four_groups_reach_their_goals
     assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
 
 
+# [s] ORCA walkers crossing the square must all arrive within this. Each walks 2 * 2.5 = 5 m,
+# 3.8 s at 1.3 m/s alone; social-force walkers arrive by 5.4 to 11.9 s (8 to 20 of them), and
+# ORCA slows down earlier (it avoids anything it could meet within its 5 s horizon): 20 s, five
+# free walks, leaves room for that, and none for a jam that holds them in the middle (before
+# the fix, 12 and 16 walkers never arrived in 40 s and 8 took 36.9 s).
+ORCA_SQUARE_CROSSING_TIME = 20.0
+
+
+@pytest.mark.parametrize("n", [8, 12, 16, 20])
+def test_orca_walkers_crossing_a_square_in_four_groups_reach_their_goals_without_overlap(n):
+    reached, closest = crossing(n, "orca", ORCA_SQUARE_CROSSING_TIME, square_crossing)
+    assert reached, f"{n} ORCA walkers did not all reach their goals within " \
+                    f"{ORCA_SQUARE_CROSSING_TIME} s"
+    assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
+
+
 def test_the_perturbation_is_seeded():
     first = pb.Simulation.from_dict(circle_crossing(6, "orca"))
     second = pb.Simulation.from_dict(circle_crossing(6, "orca"))
