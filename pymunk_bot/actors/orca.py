@@ -13,7 +13,9 @@ takes the velocity closest to its wish inside all of them (``orca_lp.solve_all``
 the wish turned ``keep_right`` (default KEEP_RIGHT_ANGLE) to its right (see there). A walker's
 ``robot_share`` replaces ROBOT_SHARE (CrowdNav's humans that see the robot take half), and its
 ``orca_margin`` is added to every radius (CrowdNav's: 0.01 m). The cones are built for all
-walkers at once with numpy.
+walkers at once with numpy. A walker's seeded nudge then moves that answer within the same
+half-planes (:func:`nudged_within`): in an exactly symmetric crossing the answer is a corner of
+them that no turn of the wish moves, and ORCA alone jams there for good.
 """
 from __future__ import annotations
 

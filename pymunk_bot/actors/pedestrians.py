@@ -72,7 +72,7 @@ PERTURBATION = 1e-3
 # 40 s. The answer itself is nudged instead (within the half-planes, actors/orca.py); escaping the
 # jam is then a random walk whose pace grows with the nudge: 1 mm/s left 12 and 16 walkers in
 # the square jammed for 40 s and the circle took 25 to 36 s; 3 cm/s (2 % of walking speed)
-# brings 6 to 20 walkers through either in 5 to 14 s (seeds 0 to 4).
+# brings 6 to 20 walkers through either in 5 to 16 s (seeds 0 to 4).
 ORCA_PERTURBATION = 0.03
 
 
