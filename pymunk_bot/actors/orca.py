@@ -13,7 +13,9 @@ takes the velocity closest to its wish inside all of them (``orca_lp.solve_all``
 the wish turned ``keep_right`` (default KEEP_RIGHT_ANGLE) to its right (see there). A walker's
 ``robot_share`` replaces ROBOT_SHARE (CrowdNav's humans that see the robot take half), and its
 ``orca_margin`` is added to every radius (CrowdNav's: 0.01 m). The cones are built for all
-walkers at once with numpy.
+walkers at once with numpy. A walker's seeded nudge then moves that answer within the same
+half-planes (:func:`nudged_within`): in an exactly symmetric crossing the answer is a corner of
+them that no turn of the wish moves, and ORCA alone jams there for good.
 """
 from __future__ import annotations
 
@@ -77,6 +79,27 @@ def neighbour_lines(pos: np.ndarray, vel: np.ndarray, radius: np.ndarray, opos: 
     return q, n
 
 
+def nudged_within(q: np.ndarray, n: np.ndarray, ok: np.ndarray, hard: np.ndarray,
+                  vmax: np.ndarray, chosen: np.ndarray, nudge: np.ndarray) -> np.ndarray:
+    """``chosen`` (k, 2) [m/s] with each agent's ``nudge`` (k, 2) [m/s]: the velocity closest to
+    chosen + nudge inside the agent's half-planes ``q``, ``n`` (k, L, 2), ``ok`` (k, L) which
+    count (first), the first ``hard`` (k,) of them walls, within ``vmax`` (k,) [m/s]. An agent
+    with no nudge, or whose half-planes leave no room, keeps its velocity bit for bit."""
+    from pymunk_bot.actors.orca_lp import EPS, solve_all
+
+    out = chosen.copy()
+    agents = np.flatnonzero((nudge != 0.0).any(axis=1))
+    if not len(agents):
+        return out
+    q, n, ok = q[agents], n[agents], ok[agents]
+    moved = solve_all(q, n, ok.sum(axis=1).astype(np.int64), hard[agents], vmax[agents],
+                      chosen[agents] + nudge[agents])
+    kept = (((moved[:, None, :] - q) * n).sum(axis=-1) >= -EPS) | ~ok
+    fits = kept.all(axis=1)
+    out[agents[fits]] = moved[fits]
+    return out
+
+
 class Orca:
     """ORCA velocities for the walkers ``agents`` (indices into the crowd)."""
 
@@ -102,10 +125,12 @@ class Orca:
         ``visible`` (k, m): who each agent takes into account (not itself); ``dt`` [s]: the
         step each agent's velocity is held for (one, or (k,)); ``walls``: per
         agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
-        nearest first, (k, MAX_WALL_LINES, 3), and how many (k,). ``nudge`` (k, 2) [m/s]: added
-        to each agent's answer where the nudged velocity still keeps to every half-plane (an
-        answer on a corner of them, the same for every agent of a symmetric crowd, does not
-        move when the wish does; a nudge outside them could bring a walker into contact)."""
+        nearest first, (k, MAX_WALL_LINES, 3), and how many (k,). ``nudge`` (k, 2) [m/s]: each
+        agent then takes the velocity closest to its answer plus its nudge inside its
+        half-planes (an answer on a corner of them, the same for every agent of a symmetric
+        crowd, does not move when the wish does; the nudge moves it, along the borders where
+        it points out of them, so it never brings a walker into contact). An agent whose
+        half-planes leave no room keeps its least-violating answer."""
         from pymunk_bot.actors.orca_lp import solve_all
 
         c, s = np.cos(self.keep_right), np.sin(self.keep_right)
@@ -133,15 +158,12 @@ class Orca:
         first = np.argsort(~ok, axis=1, kind="stable")  # valid half-planes first, walls first
         q = np.ascontiguousarray(np.take_along_axis(q, first[..., None], axis=1))
         n = np.ascontiguousarray(np.take_along_axis(n, first[..., None], axis=1))
-        chosen = solve_all(q, n, ok.sum(axis=1).astype(np.int64),
-                           wall_valid.sum(axis=1).astype(np.int64),
-                           np.ascontiguousarray(vmax, dtype=float),
-                           np.ascontiguousarray(pref, dtype=float))
+        counts = ok.sum(axis=1).astype(np.int64)
+        hard = wall_valid.sum(axis=1).astype(np.int64)
+        vmax = np.ascontiguousarray(vmax, dtype=float)
+        chosen = solve_all(q, n, counts, hard, vmax, np.ascontiguousarray(pref, dtype=float))
         if nudge is not None:
             ok_sorted = np.take_along_axis(ok, first, axis=1)
-            nudged = chosen + nudge
-            kept = (((nudged[:, None, :] - q) * n).sum(axis=-1) >= 0.0) | ~ok_sorted
-            fits = kept.all(axis=1) & ((nudged ** 2).sum(axis=1) <= vmax ** 2)
-            chosen[fits] = nudged[fits]
+            chosen = nudged_within(q, n, ok_sorted, hard, vmax, chosen, nudge)
         return chosen
 

@@ -13,11 +13,11 @@ Per unit mass, walker a feels
   repulsion U0 / R exp(-d / R) away from its nearest surface (d from the centre, less the
   walker's size beyond NOMINAL_RADIUS);
 - optionally a random fluctuation, from the run's seeded generator;
-- a tiny perturbation (by default: a walker's ``perturbation`` sets it, CrowdNav's humans
-  have none), at most PERTURBATION in a random direction, drawn afresh each
-  tick from a generator spawned from the crowd's (runs stay deterministic): of the wished
-  velocity in the driving term, and of the velocity ORCA chooses (where it keeps to ORCA's
-  half-planes). It breaks exact symmetries
+- a small perturbation (by default: a walker's ``perturbation`` sets it, CrowdNav's humans
+  have none), at most PERTURBATION (an ORCA walker: ORCA_PERTURBATION) in a random direction,
+  drawn afresh each tick from a generator spawned from the crowd's (runs stay deterministic):
+  of the wished velocity in the driving term, and of the velocity ORCA chooses (kept within
+  ORCA's half-planes). It breaks exact symmetries
   (walkers swapping places across a circle) that otherwise hold every ORCA walker still in the
   middle for ever, as RVO2's own examples perturb theirs;
 - a keep-right rule (not in the 1995 paper): KEEP_RIGHT of the social force that holds a
@@ -61,12 +61,19 @@ WALKER_CATEGORY = 1 << physics.MAX_REPLICAS
 WALKER_CATEGORIES = ((1 << physics.MAX_REPLICAS) - 1) << physics.MAX_REPLICAS
 GROUP_SPACING = 0.8  # [m] a companion's share of the group's spread (two walk ~0.8 m apart)
 GROUP_PULL = 1.0  # [1/s] wished speed toward the group's centre per metre strayed beyond it
-# [m/s] the largest perturbation of a walker's velocity, drawn afresh every tick. RVO2's examples
-# nudge the preferred velocity by up to 1e-4 m/s; here ORCA's answer usually sits on a corner of
-# its constraints, which a nudged wish does not move, so the chosen velocity is nudged, and
-# 1e-4 m/s left six walkers crossing a 2.5 m circle still jammed after 30 s, 1e-3 m/s did not.
-# A thousandth of walking speed: no metric or view shows it.
+# [m/s] the largest perturbation of a social-force walker's velocity, drawn afresh every tick
+# (the default of its ``perturbation``). A thousandth of walking speed: no metric or view shows it.
 PERTURBATION = 1e-3
+# [m/s] ... of an ORCA walker's. RVO2's examples (Blocks.cc) nudge the preferred velocity by up
+# to 1e-4 of a unit speed every step. In a symmetric crossing ORCA's answer sits on a corner of
+# the half-planes of the neighbours pressing in, and the wish lies in that corner's normal cone
+# (within +-60 deg of straight ahead in a ring of six), so no nudge of the wish moves it: even
+# 0.1 m/s left six to twenty walkers crossing a circle, or a square in four groups, jammed for
+# 40 s. The answer itself is nudged instead (within the half-planes, actors/orca.py); escaping the
+# jam is then a random walk whose pace grows with the nudge: 1 mm/s left 12 and 16 walkers in
+# the square jammed for 40 s and the circle took 25 to 36 s; 3 cm/s (2 % of walking speed)
+# brings 6 to 20 walkers through either in 5 to 16 s (seeds 0 to 4).
+ORCA_PERTURBATION = 0.03
 
 
 def walker_filter(given: pymunk.ShapeFilter) -> pymunk.ShapeFilter:
@@ -156,8 +163,9 @@ class Crowd:
         self._held = np.zeros((n, 2))  # [m/s] the velocity each holds until then
         self._slow = np.array([c.slow_within for c in cfg])  # [m]
         self._slows = bool(self._slow.any())
-        self._nudge_size = np.array([PERTURBATION if c.perturbation is None else c.perturbation
-                                     for c in cfg])  # [m/s]
+        self._nudge_size = np.array([
+            (ORCA_PERTURBATION if c.policy == "orca" else PERTURBATION)
+            if c.perturbation is None else c.perturbation for c in cfg])  # [m/s]
         self._wish = self.desired.copy()  # [m/s] the speed wished: 0 once done
         self._no_pull = np.zeros((n, 2))
         self._fluctuates = bool(self.fluctuation.any())
@@ -268,7 +276,7 @@ class Crowd:
 
     def _perturbation(self, n: int) -> np.ndarray:
         """Each walker's nudge [m/s], (n, 2): uniform over the disc of radius its
-        ``perturbation`` (PERTURBATION by default)."""
+        ``perturbation`` (by default PERTURBATION, or ORCA_PERTURBATION for an ORCA walker)."""
         draws = self._perturbation_rng.random((n, 2))
         size = self._nudge_size * np.sqrt(draws[:, 0])
         angle = 2.0 * np.pi * draws[:, 1]

@@ -80,4 +80,5 @@ class PedestrianObstacle(Section):
     # radius the walker's ORCA uses [CrowdNav: 0.01]
     perturbation: Annotated[NonNegativeFloat, Field(le=0.1)] | None = None  # [m/s] the
     # largest random nudge of the walker's velocity each tick, which breaks exact symmetries;
-    # None: actors/pedestrians.py's PERTURBATION, 0.001 [CrowdNav: 0, none]
+    # None: actors/pedestrians.py's ORCA_PERTURBATION, 0.03, for an ORCA walker, else its
+    # PERTURBATION, 0.001 [CrowdNav: 0, none]

@@ -1,5 +1,5 @@
 """Walkers swapping places across a circle (exactly symmetric: RVO2's classic case), or crossing a
-square in four groups, reach their goals without overlapping: a tiny seeded perturbation breaks
+square in four groups, reach their goals without overlapping: a small seeded perturbation breaks
 the symmetry that held ORCA walkers still in the middle for the whole run, and social-force
 walkers' velocities close no gap within a tick (actors/clearance.py) (issue 33)."""
 from __future__ import annotations
@@ -13,6 +13,13 @@ import pymunk_bot as pb
 from pymunk_bot.actors.pedestrians import Crowd
 
 OVERLAP = -0.001  # [m] disc clearance below this is an overlap
+# [s] ORCA walkers crossing the circle or the square must all arrive within this. Each walks
+# 2 * 2.5 = 5 m, 3.8 s at 1.3 m/s alone; social-force walkers crossing the square arrive by 5.4
+# to 11.9 s (8 to 20 of them), and ORCA slows down earlier (it avoids anything it could meet
+# within its 5 s horizon): 20 s, five free walks, leaves room for that, and none for a jam that
+# holds them in the middle (before issue 33's fix, 12 and 16 walkers never left the square's in
+# 40 s, and walkers crossing the circle took 25 to 36 s).
+ORCA_CROSSING_TIME = 20.0
 
 
 def circle_crossing(n: int, policy: str, radius: float = 2.5) -> dict:
@@ -62,10 +69,11 @@ def crossing(n: int, policy: str, seconds: float = 40.0,
     return bool(np.all(crowd.done)), closest  # done: a "once" walker reached its last goal
 
 
-@pytest.mark.parametrize("n", [6, 12, 20])
+@pytest.mark.parametrize("n", [6, 8, 12, 16, 20])
 def test_orca_walkers_swapping_across_a_circle_reach_their_goals_without_overlap(n):
-    reached, closest = crossing(n, "orca")
-    assert reached, f"{n} ORCA walkers did not all reach their goals"
+    reached, closest = crossing(n, "orca", ORCA_CROSSING_TIME)
+    assert reached, f"{n} ORCA walkers did not all reach their goals within " \
+                    f"{ORCA_CROSSING_TIME} s"
     assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
 
 
@@ -80,6 +88,16 @@ def test_social_force_walkers_swapping_across_a_circle_reach_their_goals_without
 def test_social_force_walkers_crossing_a_square_in_four_groups_reach_their_goals_without_overlap(n):
     reached, closest = crossing(n, "social_force", 30.0, square_crossing)
     assert reached, f"{n} social-force walkers did not all reach their goals"
+    assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
+
+
+
+
+@pytest.mark.parametrize("n", [8, 12, 16, 20])
+def test_orca_walkers_crossing_a_square_in_four_groups_reach_their_goals_without_overlap(n):
+    reached, closest = crossing(n, "orca", ORCA_CROSSING_TIME, square_crossing)
+    assert reached, f"{n} ORCA walkers did not all reach their goals within " \
+                    f"{ORCA_CROSSING_TIME} s"
     assert closest >= OVERLAP, f"walkers overlapped by {-closest * 1000:.1f} mm"
 
 

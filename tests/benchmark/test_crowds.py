@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import pymunk_bot as pb
-from pymunk_bot.actors.orca import neighbour_lines
+from pymunk_bot.actors.orca import neighbour_lines, nudged_within
 from pymunk_bot.actors.orca_lp import solve_all
 
 
@@ -32,6 +32,29 @@ def test_lp_keeps_the_speed_limit_and_least_violation_when_infeasible():
                      np.array([[0.0, 3.0]]))
     assert np.hypot(*free[0]) == pytest.approx(1.0)  # the wish, cut to the speed limit
     assert free[0, 0] >= 0.5 - 1e-9
+
+
+def test_a_nudge_out_of_a_corner_slides_the_answer_along_its_border():
+    # A corner: v . (1/2, +-sqrt3/2) >= 0, the wedge within 30 deg of +x. The walker wishes -x,
+    # so its answer is the apex 0, and it stays there for any wish within 60 deg of -x.
+    s3 = math.sqrt(3.0)
+    n = np.array([[[0.5, s3 / 2], [0.5, -s3 / 2]]])
+    q = np.zeros((1, 2, 2))
+    ok, hard, vmax = np.ones((1, 2), dtype=bool), np.array([0]), np.array([1.5])
+    chosen = solve_all(q, n, np.array([2]), hard, vmax, np.array([[-1.3, 0.1]]))
+    assert chosen[0] == pytest.approx([0.0, 0.0], abs=1e-12)
+    # a nudge straight up points out of the wedge: the walker slides up its lower border
+    moved = nudged_within(q, n, ok, hard, vmax, chosen, np.array([[0.0, 0.01]]))
+    assert moved[0] == pytest.approx([0.01 * s3 / 4, 0.01 / 4])  # (0, 0.01) onto (s3/2, 1/2)
+    assert (moved[0] @ n[0].T >= -1e-12).all()  # still inside both half-planes
+    unmoved = nudged_within(q, n, ok, hard, vmax, chosen, np.zeros((1, 2)))
+    assert unmoved[0].tobytes() == chosen[0].tobytes()  # no nudge: bit for bit (CrowdNav's)
+    # no room (x >= 0.5 and x <= -0.5): the least-violating answer is kept as it is
+    n_tight = np.array([[[1.0, 0.0], [-1.0, 0.0]]])
+    q_tight = np.array([[[0.5, 0.0], [-0.5, 0.0]]])
+    least = solve_all(q_tight, n_tight, np.array([2]), hard, vmax, np.array([[0.0, 1.0]]))
+    kept = nudged_within(q_tight, n_tight, ok, hard, vmax, least, np.array([[0.01, 0.0]]))
+    assert kept[0].tobytes() == least[0].tobytes()
 
 
 def walkers(policy, extra=None, n=2):
