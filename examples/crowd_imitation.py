@@ -82,7 +82,14 @@ class Recorder:
             return self.scale.command(taught)
         driven = self.scale.clipped(self.student.act(row)[0])
         self.previous[0] = driven
-        return self.scale.command(driven)
+        command = self.scale.command(driven)
+        if hasattr(self.teacher, "last"):
+            # a crowd controller (controllers/crowd_nav.py) steers from the velocity it asked
+            # last [m/s, world frame]: that is now the student's, as the observation says
+            c, s = math.cos(theta), math.sin(theta)
+            self.teacher.last = np.array([c * command.v - s * command.vy,
+                                          s * command.v + c * command.vy])
+        return command
 
 
 def record_episode(teacher_block: dict, seed: int, humans: int, student: Any = None,
@@ -233,21 +240,21 @@ def success_rate(policy_path: str, seeds: list[int], workers: int = 2,
     return float(np.mean([r["success"] for r in rows]))
 
 
-def imitate(teacher: str, out: Any, humans: int, hidden: list[int], seed: int, demos: int,
+def imitate(teacher: dict, out: Any, humans: int, hidden: list[int], seed: int, demos: int,
             rounds: int, round_episodes: int, epochs: int, workers: int, train_layouts: list[int],
             validation_seeds: list[int]) -> list[dict]:
-    """Clone ``teacher`` (a controller type) into the policy file ``out``: ``demos`` teacher
+    """Clone ``teacher`` (a controller block) into the policy file ``out``: ``demos`` teacher
     episodes, then ``rounds`` DAgger rounds of ``round_episodes`` student episodes each, the
     network refitted on everything after each; the student's validation success after each
     fit (the history returned). Layout seeds are consecutive from ``train_layouts[0]``."""
     from pymunk_bot.policy.files import MlpPolicy
 
-    block = {"type": teacher, "rate": 4.0}  # the teacher acts at the policy's step, 0.25 s
+    block = dict(teacher, rate=4.0)  # the teacher acts at the policy's step, 0.25 s
     start = cpu_seconds()
     first = train_layouts[0]
     seeds = list(range(first, first + demos))
     data = record(block, seeds, humans, workers)
-    print(f"teacher '{teacher}': {data.successes}/{data.episodes} episodes succeeded, "
+    print(f"teacher {teacher}: {data.successes}/{data.episodes} episodes succeeded, "
           f"{len(data.observations)} pairs", flush=True)
     x, y = data.observations, data.actions
     history: list[dict] = []

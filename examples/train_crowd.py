@@ -81,7 +81,23 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--plot", type=Path, default=None)
     parser.add_argument("--checkpoints", action="store_true",
                         help="save the mean at every validation as OUT.gN.npz")
+    parser.add_argument("--imitate", default=None, metavar="CONTROLLER",
+                        help="clone this teacher (a controller type or a controller file, e.g. "
+                             "examples/crowd_teacher.yaml) by imitation and DAgger instead of "
+                             "CMA-ES (examples/crowd_imitation.py)")
+    parser.add_argument("--demos", type=int, default=400,
+                        help="--imitate: teacher episodes recorded first")
+    parser.add_argument("--dagger-rounds", type=int, default=4,
+                        help="--imitate: rounds in which the student drives and the teacher "
+                             "labels")
+    parser.add_argument("--dagger-episodes", type=int, default=200,
+                        help="--imitate: student episodes per DAgger round")
+    parser.add_argument("--epochs", type=int, default=40,
+                        help="--imitate: Adam passes over the pairs per fit")
     args = parser.parse_args(argv)
+    if args.imitate is not None:
+        imitate(args, parser)
+        return
     problem = None
     if not 1 <= args.generations <= train_es.MAX_GENERATIONS:
         problem = (f"--generations must be in [1, {train_es.MAX_GENERATIONS}] "
@@ -131,6 +147,48 @@ def main(argv: list[str] | None = None) -> None:
         plot(history, args.plot, f"CMA-ES on CrowdNav's circle crossing, MLP {args.hidden} "
              f"tanh units, {args.popsize} x {args.train_episodes} episodes per generation, "
              f"seed {args.seed}")
+
+
+def imitate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
+    """``--imitate``: clone the teacher into ``--out`` (examples/crowd_imitation.py)."""
+    import json
+    import time
+
+    import crowd_imitation
+    from pymunk_bot.benchmark.controllers import controller_choice
+    from pymunk_bot.config.errors import ScenarioError
+
+    problem = None
+    if not 1 <= args.demos <= 100_000 or not 0 <= args.dagger_rounds <= 100:
+        problem = "--demos must be in [1, 100000] and --dagger-rounds in [0, 100]"
+    elif not 1 <= args.dagger_episodes <= 100_000 or not 1 <= args.epochs <= 10_000:
+        problem = "--dagger-episodes must be in [1, 100000] and --epochs in [1, 10000]"
+    elif not 1 <= args.hidden <= 1024:
+        problem = f"--hidden must be in [1, 1024] with --imitate (got {args.hidden})"
+    elif not 1 <= args.workers <= 64:
+        problem = f"--workers must be in [1, 64] (got {args.workers})"
+    elif args.demos + args.dagger_rounds * args.dagger_episodes > TRAIN_LAYOUTS[1] - TRAIN_LAYOUTS[0]:
+        problem = "--demos + --dagger-rounds x --dagger-episodes exceeds the training layouts"
+    if problem is None:
+        try:
+            block = controller_choice(args.imitate).block
+        except ScenarioError as exc:  # names --controller: say --imitate
+            problem = f"--imitate: {exc.problem}" if exc.source == "--controller" else str(exc)
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)
+    start = time.time()
+    try:
+        history = crowd_imitation.imitate(
+            block, args.out, HUMANS, [args.hidden], args.seed, args.demos, args.dagger_rounds,
+            args.dagger_episodes, args.epochs, args.workers, TRAIN_LAYOUTS,
+            list(range(VALIDATION_LAYOUTS[0], VALIDATION_LAYOUTS[0] + args.validation_episodes)))
+    except (ValueError, ScenarioError) as exc:  # the teacher's block refused
+        print(f"error: --imitate {args.imitate}: {exc}", file=sys.stderr)
+        sys.exit(2)
+    print(f"saved {args.out}; {(time.time() - start) / 60:.1f} min of wall time, "
+          f"{history[-1]['cpu_minutes']:.1f} CPU-minutes")
+    print(json.dumps(history))
 
 
 def plot(history: list[dict], out: Path, title: str) -> None:
