@@ -189,6 +189,38 @@ def imitate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
     print(f"saved {args.out}; {(time.time() - start) / 60:.1f} min of wall time, "
           f"{history[-1]['cpu_minutes']:.1f} CPU-minutes")
     print(json.dumps(history))
+    if args.plot is not None:
+        plot_imitation(history, args.plot, f"Imitation of {block['type']} + DAgger on "
+                       f"CrowdNav's circle crossing, MLP {args.hidden} tanh units, seed "
+                       f"{args.seed}")
+
+
+def plot_imitation(history: list[dict], out: Path, title: str) -> None:
+    """Validation success after each fit (round 0: the teacher's demonstrations alone)
+    against the CPU time spent so far."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot([h["cpu_minutes"] for h in history], [h["validation"] for h in history], "o-",
+            color="C2", label="student, validation episodes (held out)")
+    for h in history:
+        ax.annotate(f"round {h['round']}", (h["cpu_minutes"], h["validation"]),
+                    textcoords="offset points", xytext=(0, -14), fontsize=7, ha="center")
+    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
+               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
+    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("CPU minutes (recording, fitting, validating)")
+    ax.set_ylabel("success without collision")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
 
 
 def plot(history: list[dict], out: Path, title: str) -> None:
