@@ -7,6 +7,10 @@ machinery), seeing the humans' true states: the policy on the benchmark's leader
     pymunk-bot benchmark crowdnav --controller scenarios/policies/crowdnav_policy.yaml \\
         --seeds 0:500 --out episodes.csv          # CrowdNav's 500 test cases
 
+``--imitate CONTROLLER`` trains instead by imitation of that teacher and DAgger
+(examples/crowd_imitation.py; the shipped policy: ``--imitate examples/crowd_teacher.yaml
+--hidden 64 --seed 0``): docs/learning.md.
+
 Every training episode is a CrowdNav circle crossing (the shipped ``crowdnav`` suite: 5 humans
 blind to the robot, 4 m circle, 25 s, ended at the first collision) whose layout seed is drawn
 from [100000, 1000000): never one of the 500 test cases (seeds 0 to 499) nor the validation
@@ -167,7 +171,8 @@ def imitate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
         problem = f"--hidden must be in [1, 1024] with --imitate (got {args.hidden})"
     elif not 1 <= args.workers <= 64:
         problem = f"--workers must be in [1, 64] (got {args.workers})"
-    elif args.demos + args.dagger_rounds * args.dagger_episodes > TRAIN_LAYOUTS[1] - TRAIN_LAYOUTS[0]:
+    elif (args.demos + args.dagger_rounds * args.dagger_episodes
+          > TRAIN_LAYOUTS[1] - TRAIN_LAYOUTS[0]):
         problem = "--demos + --dagger-rounds x --dagger-episodes exceeds the training layouts"
     if problem is None:
         try:

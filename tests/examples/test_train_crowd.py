@@ -52,6 +52,7 @@ def test_bad_options_are_one_line_and_exit_2(tmp_path, capsys, argv, message):
 TEACHER = SCRIPT.parent / "crowd_teacher.yaml"
 
 
+@pytest.mark.slow  # about 8 s: two runs, each recording, fitting and validating
 def test_imitation_runs_end_to_end_and_is_deterministic(tmp_path, capsys):
     """--imitate records the teacher, runs a DAgger round, fits and validates; the same seed
     gives the same policy file, bit for bit."""
