@@ -7,6 +7,10 @@ machinery), seeing the humans' true states: the policy on the benchmark's leader
     pymunk-bot benchmark crowdnav --controller scenarios/policies/crowdnav_policy.yaml \\
         --seeds 0:500 --out episodes.csv          # CrowdNav's 500 test cases
 
+``--imitate CONTROLLER`` trains instead by imitation of that teacher and DAgger
+(examples/crowd_imitation.py; the shipped policy: ``--imitate examples/crowd_teacher.yaml
+--hidden 64 --seed 0``): docs/learning.md.
+
 Every training episode is a CrowdNav circle crossing (the shipped ``crowdnav`` suite: 5 humans
 blind to the robot, 4 m circle, 25 s, ended at the first collision) whose layout seed is drawn
 from [100000, 1000000): never one of the 500 test cases (seeds 0 to 499) nor the validation
@@ -81,7 +85,23 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--plot", type=Path, default=None)
     parser.add_argument("--checkpoints", action="store_true",
                         help="save the mean at every validation as OUT.gN.npz")
+    parser.add_argument("--imitate", default=None, metavar="CONTROLLER",
+                        help="clone this teacher (a controller type or a controller file, e.g. "
+                             "examples/crowd_teacher.yaml) by imitation and DAgger instead of "
+                             "CMA-ES (examples/crowd_imitation.py)")
+    parser.add_argument("--demos", type=int, default=400,
+                        help="--imitate: teacher episodes recorded first")
+    parser.add_argument("--dagger-rounds", type=int, default=4,
+                        help="--imitate: rounds in which the student drives and the teacher "
+                             "labels")
+    parser.add_argument("--dagger-episodes", type=int, default=200,
+                        help="--imitate: student episodes per DAgger round")
+    parser.add_argument("--epochs", type=int, default=40,
+                        help="--imitate: Adam passes over the pairs per fit")
     args = parser.parse_args(argv)
+    if args.imitate is not None:
+        imitate(args, parser)
+        return
     problem = None
     if not 1 <= args.generations <= train_es.MAX_GENERATIONS:
         problem = (f"--generations must be in [1, {train_es.MAX_GENERATIONS}] "
@@ -131,6 +151,81 @@ def main(argv: list[str] | None = None) -> None:
         plot(history, args.plot, f"CMA-ES on CrowdNav's circle crossing, MLP {args.hidden} "
              f"tanh units, {args.popsize} x {args.train_episodes} episodes per generation, "
              f"seed {args.seed}")
+
+
+def imitate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
+    """``--imitate``: clone the teacher into ``--out`` (examples/crowd_imitation.py)."""
+    import json
+    import time
+
+    import crowd_imitation
+    from pymunk_bot.benchmark.controllers import controller_choice
+    from pymunk_bot.config.errors import ScenarioError
+
+    problem = None
+    if not 1 <= args.demos <= 100_000 or not 0 <= args.dagger_rounds <= 100:
+        problem = "--demos must be in [1, 100000] and --dagger-rounds in [0, 100]"
+    elif not 1 <= args.dagger_episodes <= 100_000 or not 1 <= args.epochs <= 10_000:
+        problem = "--dagger-episodes must be in [1, 100000] and --epochs in [1, 10000]"
+    elif not 1 <= args.hidden <= 1024:
+        problem = f"--hidden must be in [1, 1024] with --imitate (got {args.hidden})"
+    elif not 1 <= args.workers <= 64:
+        problem = f"--workers must be in [1, 64] (got {args.workers})"
+    elif (args.demos + args.dagger_rounds * args.dagger_episodes
+          > TRAIN_LAYOUTS[1] - TRAIN_LAYOUTS[0]):
+        problem = "--demos + --dagger-rounds x --dagger-episodes exceeds the training layouts"
+    if problem is None:
+        try:
+            block = controller_choice(args.imitate).block
+        except ScenarioError as exc:  # names --controller: say --imitate
+            problem = f"--imitate: {exc.problem}" if exc.source == "--controller" else str(exc)
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)
+    start = time.time()
+    try:
+        history = crowd_imitation.imitate(
+            block, args.out, HUMANS, [args.hidden], args.seed, args.demos, args.dagger_rounds,
+            args.dagger_episodes, args.epochs, args.workers, TRAIN_LAYOUTS,
+            list(range(VALIDATION_LAYOUTS[0], VALIDATION_LAYOUTS[0] + args.validation_episodes)))
+    except (ValueError, ScenarioError) as exc:  # the teacher's block refused
+        print(f"error: --imitate {args.imitate}: {exc}", file=sys.stderr)
+        sys.exit(2)
+    print(f"saved {args.out}; {(time.time() - start) / 60:.1f} min of wall time, "
+          f"{history[-1]['cpu_minutes']:.1f} CPU-minutes")
+    print(json.dumps(history))
+    if args.plot is not None:
+        plot_imitation(history, args.plot, f"Imitation of {block['type']} + DAgger on "
+                       f"CrowdNav's circle crossing, MLP {args.hidden} tanh units, seed "
+                       f"{args.seed}")
+
+
+def plot_imitation(history: list[dict], out: Path, title: str) -> None:
+    """Validation success after each fit (round 0: the teacher's demonstrations alone)
+    against the CPU time spent so far."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot([h["cpu_minutes"] for h in history], [h["validation"] for h in history], "o-",
+            color="C2", label="student, validation episodes (held out)")
+    for h in history:
+        ax.annotate(f"round {h['round']}", (h["cpu_minutes"], h["validation"]),
+                    textcoords="offset points", xytext=(0, -14), fontsize=7, ha="center")
+    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
+               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
+    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("CPU minutes (recording, fitting, validating)")
+    ax.set_ylabel("success without collision")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
 
 
 def plot(history: list[dict], out: Path, title: str) -> None:
