@@ -18,7 +18,8 @@ from pymunk_bot.config import parse_scenario  # noqa: E402
 
 def pytest_configure(config):
     """With pytest-xdist, numba's kernels that nearly every test runs (the tick's drives,
-    steering, bookkeeping, odometry, substeps and ray casting) are compiled here, once, before
+    steering, bookkeeping, odometry, substeps, ray casting and the walkers' social force,
+    clearances and ORCA) are compiled here, once, before
     the workers start: on a first run after installing, workers starting together would each
     compile them (5-10 s of CPU twice over). Later runs load them from numba's cache (about a
     second here)."""
@@ -29,7 +30,10 @@ def pytest_configure(config):
           "lidar": {"beams": 36, "noise_std": 0.01}, "odometry": {"wheel_noise_std": 0.01}},
          {"name": "r2", "pose": [1.0, 3.0, 0.0], "controller": {"type": "velocity", "v": 0.5,
                                                                "omega": 0.3}}],
-        [{"type": "box", "center": [2.5, 2.0], "size": [0.4, 0.4]}]), "warm-up"), seed=0)
+        [{"type": "box", "center": [2.5, 2.0], "size": [0.4, 0.4]},
+         {"type": "pedestrian", "center": [4.0, 3.5], "goals": [[4.5, 2.5]]},
+         {"type": "pedestrian", "center": [3.0, 0.5], "goals": [[4.5, 0.5]], "policy": "orca"}]),
+        "warm-up"), seed=0)
     sim.run(1.0)
 
 
