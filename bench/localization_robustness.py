@@ -577,6 +577,20 @@ def _convergence_verdicts(runs: list[Outcome], what: str) -> list[tuple[str, boo
     return out
 
 
+def settings_option(parser: Any, text: str, what: str) -> dict:
+    """``--settings``: a JSON object of extra ``what`` keys (the bench's and the probes');
+    anything else ends the command through ``parser.error`` (one line, exit 2)."""
+    import json
+
+    try:
+        settings = json.loads(text)
+    except json.JSONDecodeError as exc:
+        parser.error(f"--settings: not JSON ({exc})")
+    if not isinstance(settings, dict):
+        parser.error(f"--settings: need a JSON object of {what} keys (got {text})")
+    return settings
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """The command line: ``python -m bench.localization_robustness``."""
     import argparse
@@ -615,12 +629,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if bad or not names:
             parser.error(f"{option}: unknown {', '.join(bad) or 'empty list'}; valid: {', '.join(valid)}")
         picked[option] = names
-    try:
-        settings = json.loads(args.settings)
-    except json.JSONDecodeError as exc:
-        parser.error(f"--settings: not JSON ({exc})")
-    if not isinstance(settings, dict):
-        parser.error(f"--settings: need a JSON object of localization keys (got {args.settings})")
+    settings = settings_option(parser, args.settings, "localization")
     outcomes = run(picked["--localizers"], picked["--families"], picked["--profiles"], seeds,
                    args.verbose, settings)
     result = summary(outcomes)

@@ -19,7 +19,8 @@ from typing import NoReturn
 import numpy as np
 
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, MAX_TIME, PEOPLE_FAMILIES,
-                                           lidar_for, odometry_for, world_for)
+                                           lidar_for, odometry_for, settings_option,
+                                           world_for)
 from pymunk_bot.localization.se2 import transform_points, wrap
 
 PROBE_SPAN = math.radians(6.0)  # [rad] headings tried either side of the truth
@@ -102,12 +103,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if not 0 <= args.seed < MAX_SEEDS:
         parser.error(f"seed must be 0..{MAX_SEEDS - 1} (got {args.seed})")
-    try:
-        settings = json.loads(args.settings)
-    except json.JSONDecodeError as exc:
-        parser.error(f"--settings: not JSON ({exc})")
-    if not isinstance(settings, dict):
-        parser.error("--settings: need a JSON object of MCL keys")
+    settings = settings_option(parser, args.settings, "MCL")
     print(json.dumps({k: round(v, 3) for k, v in probe(args.family, args.profile, args.seed, settings).items()}))
 
 

@@ -23,7 +23,8 @@ from typing import NoReturn
 import numpy as np
 
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, lidar_for,
-                                           odometry_for, tour_goals, world_for)
+                                           odometry_for, settings_option, tour_goals,
+                                           world_for)
 from pymunk_bot.localization.se2 import between, wrap
 
 
@@ -105,12 +106,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if not 0 <= args.seed < MAX_SEEDS:
         parser.error(f"seed must be 0..{MAX_SEEDS - 1} (got {args.seed})")
-    try:
-        settings = json.loads(args.settings)
-    except json.JSONDecodeError as exc:
-        parser.error(f"--settings: not JSON ({exc})")
-    if not isinstance(settings, dict):
-        parser.error("--settings: need a JSON object of SLAM keys")
+    settings = settings_option(parser, args.settings, "SLAM")
     out = probe(args.family, args.profile, args.seed, settings)
     if args.keyframes:
         for k, row in enumerate(out["keyframes"], start=1):
