@@ -181,13 +181,13 @@ class EkfLocalizer(Localizer):
         nis = float(innovation @ s_inv @ innovation)
         if nis > c.gate:
             self.rejected += 1
-            self._correct_heading(innovation[2], r[2, 2])
             assert self._odom is not None  # a scan comes with the odometry of its tick
             self._refused.append((match.pose.copy(), r, self._odom.copy()))
-            if len(self._refused) < c.gate_patience:
-                return
-            if not self._refusals_agree():
-                self._refused.pop(0)  # the oldest leaves; the next match is tested with the rest
+            patience_out = len(self._refused) >= c.gate_patience
+            if not (patience_out and self._refusals_agree()):
+                if patience_out:
+                    self._refused.pop(0)  # the oldest leaves; the next is tested with the rest
+                self._correct_heading(innovation[2], r[2, 2])  # refused: its heading alone
                 return
             # The scans keep disagreeing with a confident filter: believe the disagreement.
             self.covariance = self.covariance + np.diag(np.square(innovation))
