@@ -200,60 +200,57 @@ def imitate(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
                        f"{args.seed}")
 
 
-def plot_imitation(history: list[dict], out: Path, title: str) -> None:
-    """Validation success after each fit (round 0: the teacher's demonstrations alone)
-    against the CPU time spent so far."""
+def _axes():
+    """A learning-curve figure and its axes (matplotlib headless)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 4))
+    return plt.subplots(figsize=(7, 4))
+
+
+def _finish(fig, ax, out: Path, title: str, top: float, legend: str) -> None:
+    """ORCA's and the issue's lines, labels and legend; the figure saved to ``out``."""
+    import matplotlib.pyplot as plt
+
+    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
+               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
+    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
+    ax.set_ylim(0, top)
+    ax.set_ylabel("success without collision")
+    ax.legend(loc=legend, fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def plot_imitation(history: list[dict], out: Path, title: str) -> None:
+    """Validation success after each fit (round 0: the teacher's demonstrations alone)
+    against the CPU time spent so far."""
+    fig, ax = _axes()
     ax.plot([h["cpu_minutes"] for h in history], [h["validation"] for h in history], "o-",
             color="C2", label="student, validation episodes (held out)")
     for h in history:
         ax.annotate(f"round {h['round']}", (h["cpu_minutes"], h["validation"]),
                     textcoords="offset points", xytext=(0, -14), fontsize=7, ha="center")
-    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
-               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
-    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
-    ax.set_ylim(0, 1.02)
     ax.set_xlabel("CPU minutes (recording, fitting, validating)")
-    ax.set_ylabel("success without collision")
-    ax.legend(loc="lower right", fontsize=8)
-    ax.set_title(title, fontsize=9)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    _finish(fig, ax, out, title, 1.02, "lower right")
 
 
 def plot(history: list[dict], out: Path, title: str) -> None:
     """Learning curve per generation: the validation success of the mean, and the population's
     success on its training episodes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = _axes()
     ax.plot([h["generation"] for h in history], [h["success"] for h in history], color="C0",
             alpha=0.4, label="population, training episodes")
     checked = [h for h in history if "validation" in h]
     ax.plot([h["generation"] for h in checked], [h["validation"] for h in checked], "o-",
             color="C2", label="mean policy, validation episodes (held out)")
-    ax.axhline(ORCA_SUCCESS, color="C3", linestyle="--", linewidth=1,
-               label=f"crowdnav_orca on the 500 test cases ({ORCA_SUCCESS})")
-    ax.axhline(0.9, color="0.5", linestyle=":", linewidth=1, label="the issue's target (0.90)")
-    ax.set_ylim(0, 1)
     ax.set_xlabel(f"generation ({history[-1]['time'] / 60:.0f} min wall time in all)")
-    ax.set_ylabel("success without collision")
-    ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(title, fontsize=9)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    _finish(fig, ax, out, title, 1.0, "upper left")
 
 
 if __name__ == "__main__":
