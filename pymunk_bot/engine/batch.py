@@ -159,6 +159,8 @@ class Batch:
             self.stack.bookkeep(self.propulsion.position_array(), nows)
             return nows
         positions = self.propulsion.positions()
+        if len(self.runs) == 1:  # a run of its own: every robot is its
+            return [self.runs[0].bookkeep(positions)]
         return [run.bookkeep(positions[start:stop])
                 for run, (start, stop) in zip(self.runs, self.spans)]
 

@@ -164,10 +164,15 @@ class Simulation:
         """Controllers whose period has come set commands; events fire; actors set their
         motion."""
         now = self.steps * self.dt  # self.time, inlined: this runs every tick
+        actors = self.world.actors
+        # Most ticks of a run without actors: no event and no controller due, nothing to do.
+        if not actors and now + TIME_TOLERANCE < min(self._events.next_at,
+                                                     self._control.earliest):
+            return
         if self._events.due(now):  # scenario events (teleports: engine/events.py)
             self._events.fire(now, self.robots)
         self._run_controllers(now)
-        for actor in self.world.actors:
+        for actor in actors:
             actor.before_step(now, self.dt)
 
     def bookkeep(self, positions: np.ndarray) -> float:

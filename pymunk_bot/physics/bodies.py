@@ -14,6 +14,19 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
+# A few robots' bodies are read one by one each tick through Chipmunk's own getters on their
+# handles (what pymunk's properties call; ``pymunk.cp`` is Chipmunk's library): a quarter of a
+# property's cost, which builds a Vec2d on every read. pymunk gives the handle no public name.
+get_position = pymunk.cp.cpBodyGetPosition
+get_angle = pymunk.cp.cpBodyGetAngle
+get_spin = pymunk.cp.cpBodyGetAngularVelocity
+
+
+def handles(bodies: Sequence[pymunk.Body]) -> list:
+    """Chipmunk's handle of each body, for :data:`get_position`, :data:`get_angle` and
+    :data:`get_spin` (valid while the body lives)."""
+    return [body._body for body in bodies]
+
 
 class BodyRows:
     """The bodies of ``space`` (and of a second Space, once :meth:`add` names it) as rows;

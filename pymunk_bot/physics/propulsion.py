@@ -28,7 +28,7 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
-from pymunk_bot.physics.bodies import BodyRows
+from pymunk_bot.physics.bodies import BodyRows, get_angle, get_position, get_spin, handles
 from pymunk_bot.robots.drives.base import SMALL_GROUP
 from pymunk_bot.robots.stacking import DriveUnits
 from pymunk_bot.physics.steering import aim, aim_rows, anchor, hold_rows
@@ -82,6 +82,7 @@ class Propulsion:
                  copies: bool = False) -> None:
         self.space = space
         self.bodies, self.controls = list(bodies), list(controls)
+        self._handles, self._control_handles = handles(self.bodies), handles(self.controls)
         # The bodies as rows of batch reads: of the contact Space, and of the one robots
         # nothing can reach step in (physics/apart.py), once they may.
         self.rows = BodyRows(space, self.bodies, self.controls)
@@ -350,10 +351,10 @@ class Propulsion:
         if self.batched:
             return self.position_array()
         xy = self._xy
-        for k, body in enumerate(self.bodies):
-            x, y = body.position  # two float writes: a third of a Vec2d row assignment's time
-            xy[k, 0] = x
-            xy[k, 1] = y
+        for k, handle in enumerate(self._handles):
+            position = get_position(handle)
+            xy[k, 0] = position.x  # two float writes: a third of a Vec2d row assignment's time
+            xy[k, 1] = position.y
         return xy
 
     def motion_array(self) -> np.ndarray:
@@ -369,13 +370,14 @@ class Propulsion:
         """Robot k's control body velocity for the next substep, of ``h_next`` [s], after this
         one of ``h`` (see the module docstring)."""
         ux, uy, omega = twist
-        body, control = self.bodies[k], self.controls[k]
+        control = self.controls[k]
         if self._anchored[k]:  # from holding: the anchor back to the centre
             self.pivots[k].anchor_a = (0.0, 0.0)
             self._anchored[k] = False
         self._held[k] = None
         cx, cy = self._cog[k]
-        vx, vy = aim(body.angle, body.angular_velocity, ux, uy, omega, h, h_next, cx, cy)
+        handle = self._handles[k]
+        vx, vy = aim(get_angle(handle), get_spin(handle), ux, uy, omega, h, h_next, cx, cy)
         last = self._given[k]
         if vx != last[0] or vy != last[1]:
             _SET_VELOCITY(control, (vx, vy))
@@ -407,10 +409,10 @@ class Propulsion:
             self.pivots[k].anchor_a = (ax, ay)
             self._anchored[k] = True
             self._held[k] = twist
-        body, control = self.bodies[k], self.controls[k]
+        handle = self._handles[k]
         # At each solve the control body's heading equals the robot's (both turn at omega);
         # in free space they already do, to the last bit, and the write is skipped.
-        heading = body.angle + (body.angular_velocity - omega) * h
-        if heading != control.angle:
-            _SET_ANGLE(control, heading)
+        heading = get_angle(handle) + (get_spin(handle) - omega) * h
+        if heading != get_angle(self._control_handles[k]):
+            _SET_ANGLE(self.controls[k], heading)
         return True
