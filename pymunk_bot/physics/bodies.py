@@ -20,11 +20,12 @@ import pymunk.batch as batch
 get_position = pymunk.cp.cpBodyGetPosition
 get_angle = pymunk.cp.cpBodyGetAngle
 get_spin = pymunk.cp.cpBodyGetAngularVelocity
+get_velocity = pymunk.cp.cpBodyGetVelocity
 
 
 def handles(bodies: Sequence[pymunk.Body]) -> list:
-    """Chipmunk's handle of each body, for :data:`get_position`, :data:`get_angle` and
-    :data:`get_spin` (valid while the body lives)."""
+    """Chipmunk's handle of each body, for :data:`get_position`, :data:`get_angle`,
+    :data:`get_spin` and :data:`get_velocity` (valid while the body lives)."""
     return [body._body for body in bodies]
 
 

@@ -48,6 +48,7 @@ import pymunk.batch as batch
 from scipy.spatial import cKDTree
 
 from pymunk_bot.config.substeps import SubstepNeed
+from pymunk_bot.physics.bodies import get_position, get_spin, get_velocity, handles
 
 HORIZON = 0.5  # [s] the farthest ahead one test looks: nearer shapes are all it queries
 # [s] the least clear time a test must find to grant single substeps: near shapes, where it
@@ -160,6 +161,7 @@ class SubstepGate:
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
+        self._handles = handles([m.body for m in self.movers])  # read one by one when few
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         # [m] cog to origin
         self._offset = np.array([abs(m.body.center_of_gravity) for m in self.movers])
@@ -256,10 +258,10 @@ class SubstepGate:
             return self.full
         # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
         # no faster than its pusher, but a contact may have just sped it up).
-        bodies = self.movers
-        if len(bodies) < _IN_ONE_READ:
-            linear = max([abs(m.body.velocity) for m in bodies], default=0.0)
-            turn = max([abs(m.body.angular_velocity) for m in bodies], default=0.0)
+        if len(self.movers) < _IN_ONE_READ:  # a few, one by one (|v| as pymunk's abs(Vec2d))
+            linear = max([math.sqrt(v.x ** 2 + v.y ** 2)
+                          for v in map(get_velocity, self._handles)], default=0.0)
+            turn = max([abs(get_spin(h)) for h in self._handles], default=0.0)
         else:  # every body of the space (other copies' too: they share the count)
             state = self._space_state()
             linear = float(np.hypot(state[:, 2], state[:, 3]).max(initial=0.0))
@@ -311,8 +313,10 @@ class SubstepGate:
         (see origin_speeds), or its top speed if that is more."""
         movers = self.movers
         if len(movers) < _IN_ONE_READ:
-            xy = np.array([tuple(m.body.position) for m in movers]).reshape(-1, 2)
-            motion = motions([m.body for m in movers])
+            xy = np.array([(p.x, p.y) for p in map(get_position, self._handles)]).reshape(-1, 2)
+            motion = np.array([(v.x, v.y, get_spin(h)) for h, v in
+                               zip(self._handles, map(get_velocity, self._handles))]
+                              ).reshape(-1, 3)
         else:  # the movers' rows of every body's state
             state = self._space_state()
             if state.shape[0] != self._space_rows:

@@ -1,6 +1,6 @@
 """The fleet's per-tick bookkeeping over rows, compiled: path length and goals reached.
 
-One pass over the robots' new positions instead of six numpy calls (a stack of 16 copies
+Passes over the robots' new positions instead of six numpy calls (a stack of 16 copies
 paid ~10 us a tick for them). The arithmetic is the arrays' to the bit: dx * dx + dy * dy
 (a sum of two is the same float either way round), IEEE sqrt, no fused multiply-adds.
 """
@@ -13,22 +13,25 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def advance_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray, pending: np.ndarray,
-                 goal: np.ndarray, tolerance2: np.ndarray, time: np.ndarray,
-                 time_to_goal: np.ndarray, distance_to_goal: np.ndarray,
-                 reached: np.ndarray) -> int:
+def travel_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray) -> None:
     """Add each robot's step from ``last`` to ``xy`` (n, 2) [m] to ``distance`` [m] and copy
-    ``xy`` into ``last`` (the fleet's positions change in place: copies' views stay live); of the
-    ``pending`` robots (their goals (p, 2) [m] and squared tolerances [m^2] in that order),
-    those now within tolerance get ``time`` [s] (each robot's, or one for all: shape (1,))
-    and their path length, and are flagged in ``reached`` (p,). Returns how many were
-    reached."""
-    one_time = time.shape[0] != xy.shape[0]
+    ``xy`` into ``last`` (the fleet's positions change in place: copies' views stay live)."""
     for i in range(xy.shape[0]):
         dx = xy[i, 0] - last[i, 0]
         dy = xy[i, 1] - last[i, 1]
         distance[i] += math.sqrt(dx * dx + dy * dy)
         last[i, 0], last[i, 1] = xy[i, 0], xy[i, 1]
+
+
+@numba.njit(cache=True)
+def reach_goals(xy: np.ndarray, distance: np.ndarray, pending: np.ndarray, goal: np.ndarray,
+                tolerance2: np.ndarray, time: np.ndarray, time_to_goal: np.ndarray,
+                distance_to_goal: np.ndarray, reached: np.ndarray) -> int:
+    """Of the ``pending`` robots (their goals (p, 2) [m] and squared tolerances [m^2] in that
+    order), those at ``xy`` (n, 2) [m] now within tolerance get ``time`` [s] (each robot's, or
+    one for all: shape (1,)) and their path length so far (``distance`` [m]), and are flagged
+    in ``reached`` (p,). Returns how many were reached."""
+    one_time = time.shape[0] != xy.shape[0]
     count = 0
     for j in range(pending.shape[0]):
         i = pending[j]

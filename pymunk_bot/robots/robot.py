@@ -11,7 +11,7 @@ import pymunk
 
 from pymunk_bot.robots.command import Command
 from pymunk_bot.config.schema import RobotConfig
-from pymunk_bot.robots.progress import advance_rows
+from pymunk_bot.robots.progress import reach_goals, travel_rows
 from pymunk_bot.robots.readings import RobotSpec
 from pymunk_bot.robots.stacking import join_rows, split_rows
 
@@ -43,7 +43,7 @@ class RobotsByName(dict):
 
 class Fleet:
     """Every robot's per-tick bookkeeping: distance, goal, contact episodes, as arrays indexed
-    by robot, advanced by one compiled pass (``fleet_rows.advance_rows``) however many."""
+    by robot, advanced by compiled passes (``robots/progress.py``) however many."""
 
     ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
             "distance_to_goal")
@@ -65,7 +65,7 @@ class Fleet:
                 self.tolerance[i] = c.goal.tolerance
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
-        self._now = np.zeros(1)  # [s] the tick's time, as advance_rows takes it
+        self._now = np.zeros(1)  # [s] the tick's time, as reach_goals takes it
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
         self._refresh_targets()
         self.advance(self.xy, 0.0)  # goals started inside are reached at t = 0
@@ -109,19 +109,23 @@ class Fleet:
         """The pending goals as ``advance`` reads them: their goals and squared tolerances."""
         p = self._pending
         self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
-        self._reached = np.empty(p.shape[0], dtype=np.bool_)  # advance_rows' flags
+        self._reached = np.empty(p.shape[0], dtype=np.bool_)  # reach_goals' flags
 
     def advance(self, xy: np.ndarray, time: Any) -> None:
         """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
         from every robot's new position, (n, 2) [m] (copied: the caller may reuse it)."""
+        travel_rows(xy, self.xy, self.distance)
+        p = self._pending
+        if not p.shape[0]:  # no goal left to reach
+            return
         if isinstance(time, np.ndarray):
             times = time
         else:
             times = self._now
             times[0] = time
-        p, reached = self._pending, self._reached
-        if advance_rows(xy, self.xy, self.distance, p, self._pending_goal, self._pending_tolerance2,
-                        times, self.time_to_goal, self.distance_to_goal, reached):
+        reached = self._reached
+        if reach_goals(xy, self.distance, p, self._pending_goal, self._pending_tolerance2, times,
+                       self.time_to_goal, self.distance_to_goal, reached):
             self._pending = p[~reached]
             self._refresh_targets()
 
