@@ -60,6 +60,7 @@ class Batch:
         self.runs = tuple(runs)
         self.ground, self.propulsion, self.stack = ground, propulsion, stack
         self.spans = list(spans)
+        self._count = len(self.runs)
         first = self.runs[0]
         self.dt, self.substeps = first.dt, first.substeps
         # Which runs have work before and after the physics: a tick skips the rest.
@@ -120,37 +121,44 @@ class Batch:
                 Lidar.scan_all(self.caster, due)
         for run in self.reading:
             run.read(run.time)
-        share = (wallclock.perf_counter() - started) / len(self.runs)
+        share = (wallclock.perf_counter() - started) / self._count
         for run in self.runs:
             run.finish(share)
 
     def _physics(self) -> None:
         """Phase 2: the drives and pymunk, with as many substeps as contacts need."""
         gate, split, propulsion, dt = self.gate, self.split, self.propulsion, self.dt
-        world = self.runs[0].world
-        if split is not None and split.apart.any() and split.layout != world.layout:
-            split.reset()  # someone gathered the robots (asked for the world's Space)
-            propulsion.relocated()
-            assert gate is not None
-            gate.relocated()
         if gate is None:
             propulsion.step(dt / self.substeps, self.substeps)
             return
-        if split is not None and world.can_split:  # physics/apart.py
-            disturbed = world.take_disturbed()
-            if disturbed:  # a teleport: every robot back, decided anew
-                split.settle(world, propulsion, gate, np.zeros(split.n, dtype=bool))
-                split.reset(teleported=True)
-            apart, following_apart = split.apart, split.next_apart(propulsion)
-            substeps, following = gate.counts_apart(
-                disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
-            propulsion.step(dt / substeps, substeps, dt / following, (apart, following_apart))
-            split.settle(world, propulsion, gate, following_apart)
-        else:  # one pymunk step where no contact can start (physics/substeps.py)
-            substeps, following = gate.counts()
-            propulsion.step(dt / substeps, substeps, dt / following)
-        for run in self.runs:  # what the bodies' velocities now move in, for the IMUs
-            run.world.substep = dt / following
+        if split is not None:  # physics/apart.py
+            world = self.runs[0].world
+            if split.apart.any() and split.layout != world.layout:
+                split.reset()  # someone gathered the robots (asked for the world's Space)
+                propulsion.relocated()
+                gate.relocated()
+            if world.can_split:
+                disturbed = world.take_disturbed()
+                if disturbed:  # a teleport: every robot back, decided anew
+                    split.settle(world, propulsion, gate, np.zeros(split.n, dtype=bool))
+                    split.reset(teleported=True)
+                apart, following_apart = split.apart, split.next_apart(propulsion)
+                substeps, following = gate.counts_apart(
+                    disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
+                propulsion.step(dt / substeps, substeps, dt / following,
+                                (apart, following_apart))
+                split.settle(world, propulsion, gate, following_apart)
+                self._substep_after(dt / following)
+                return
+        substeps, following = gate.counts()  # one pymunk step where no contact can start
+        propulsion.step(dt / substeps, substeps, dt / following)  # (physics/substeps.py)
+        self._substep_after(dt / following)
+
+    def _substep_after(self, substep: float) -> None:
+        """Every run's world learns the substep [s] the bodies' velocities now move in (for
+        the IMUs)."""
+        for run in self.runs:
+            run.world.substep = substep
 
     def _bookkeep(self) -> list[float]:
         """Phase 3: every run's clock, then distance, goals and odometry; the runs' times [s]."""
