@@ -18,6 +18,7 @@ from pymunk_bot.outcomes.expectations import Check, Verdict, evaluate, judge
 from pymunk_bot.localization.base import LocalizerInputs
 from pymunk_bot.localization.score import LocalizationScore
 from pymunk_bot.engine.observing import Observer, observe
+from pymunk_bot.robots.progress import odometry_feed
 from pymunk_bot.robots.readings import Observation
 from pymunk_bot.robots.robot import Robot, RobotsByName
 from pymunk_bot.sensors.schedule import TIME_TOLERANCE, ScheduleArray
@@ -77,7 +78,7 @@ class Simulation:
         self.steps = 0
         self.wall_time = 0.0  # [s] spent inside step()
         self._robots = list(self.robots.values())
-        self._odometry = [(drive, odometry) for (drive, _), (odometry, _)
+        self._odometry = [odometry_feed(drive, odometry) for (drive, _), (odometry, _)
                           in zip(built.drive_groups, built.odometry_groups)]
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
@@ -180,8 +181,8 @@ class Simulation:
         ((n, 2) [m]), odometry from the encoders. Returns the time now [s]."""
         now = self.tick_clock()
         self._built.fleet.advance(positions, now)
-        for drive, odometry in self._odometry:
-            odometry.update(drive.take_travel())
+        for feed in self._odometry:
+            feed()
         return now
 
     def tick_clock(self) -> float:

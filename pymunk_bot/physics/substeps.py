@@ -58,6 +58,7 @@ MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the con
 MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
 _PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
 _IN_ONE_READ = 8  # movers from which the bodies are read in one pymunk.batch call
+_EVERY_SHAPE = pymunk.ShapeFilter()  # what a test queries: every shape
 # (x, y, vx, vy, omega) of every body
 _STATE = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
@@ -259,9 +260,13 @@ class SubstepGate:
         # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
         # no faster than its pusher, but a contact may have just sped it up).
         if len(self.movers) < _IN_ONE_READ:  # a few, one by one (|v| as pymunk's abs(Vec2d))
-            linear = max([math.sqrt(v.x ** 2 + v.y ** 2)
-                          for v in map(get_velocity, self._handles)], default=0.0)
-            turn = max([abs(get_spin(h)) for h in self._handles], default=0.0)
+            linear = turn = every = 0.0  # every: the sum of all, NaN if one is (max drops it)
+            for handle in self._handles:
+                v, spin = get_velocity(handle), abs(get_spin(handle))
+                speed = math.sqrt(v.x ** 2 + v.y ** 2)
+                linear, turn, every = max(linear, speed), max(turn, spin), every + speed + spin
+            if every != every:
+                return self.full
         else:  # every body of the space (other copies' too: they share the count)
             state = self._space_state()
             linear = float(np.hypot(state[:, 2], state[:, 3]).max(initial=0.0))
@@ -278,7 +283,7 @@ class SubstepGate:
         if not movers:
             return HORIZON
         xy, speeds = self._origins_and_speeds()
-        if not (np.isfinite(xy).all() and np.isfinite(speeds).all()):
+        if not math.isfinite(float(xy.sum() + speeds.sum())):
             return 0.0  # a body thrown out of the world: no telling
         clear = self._clear_between_movers(xy, speeds)
         if clear < needed:
@@ -292,7 +297,7 @@ class SubstepGate:
                 continue
             speed = float(speeds[k])
             look = mover.reach + speed * min(clear, HORIZON) + MARGIN
-            for hit in self.space.point_query(origins[k], look, pymunk.ShapeFilter()):
+            for hit in self.space.point_query(origins[k], look, _EVERY_SHAPE):
                 shape = hit.shape
                 if shape is None or shape.sensor or shape.body in moving:
                     continue  # movers meet movers in _clear_between_movers
@@ -312,11 +317,13 @@ class SubstepGate:
         """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
         (see origin_speeds), or its top speed if that is more."""
         movers = self.movers
-        if len(movers) < _IN_ONE_READ:
-            xy = np.array([(p.x, p.y) for p in map(get_position, self._handles)]).reshape(-1, 2)
-            motion = np.array([(v.x, v.y, get_spin(h)) for h, v in
-                               zip(self._handles, map(get_velocity, self._handles))]
-                              ).reshape(-1, 3)
+        if len(movers) < _IN_ONE_READ:  # a few, one by one, into one array
+            rows = []
+            for handle in self._handles:
+                p, v = get_position(handle), get_velocity(handle)
+                rows.append((p.x, p.y, v.x, v.y, get_spin(handle)))
+            state = np.array(rows).reshape(-1, 5)
+            xy, motion = state[:, :2], state[:, 2:]
         else:  # the movers' rows of every body's state
             state = self._space_state()
             if state.shape[0] != self._space_rows:

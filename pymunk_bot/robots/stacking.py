@@ -17,6 +17,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from pymunk_bot.robots.progress import odometry_feed
+
 
 def join_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
     """Each of ``fields`` of ``whole`` becomes the parts' rows one after another, and each
@@ -74,6 +76,7 @@ class Stack:
             whole = type(drives[0]).stacked(drives)
             self.drive_groups.append((whole, members, starts))
             self.pairs.append((whole, type(odometries[0]).stacked(odometries)))
+        self._feeds = [odometry_feed(drive, odometry) for drive, odometry in self.pairs]
         # Robot (copy * per_copy + index in its copy) -> (its stacked drive group, its row).
         self.row_of = {robot: (whole, row) for whole, members, _ in self.drive_groups
                        for row, robot in enumerate(members)}
@@ -94,8 +97,8 @@ class Stack:
         [s], and odometry from the encoders."""
         times = np.repeat(nows, self.per_copy)  # each robot its copy's time
         self.fleet.advance(positions, times)
-        for drive, odometry in self.pairs:
-            odometry.update(drive.take_travel())
+        for feed in self._feeds:
+            feed()
 
     def split(self) -> None:
         """Every copy's objects back on arrays of their own (the stack is not used after)."""

@@ -75,11 +75,25 @@ class DiffOdometryGroup:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
         if not isinstance(travel, np.ndarray):
             travel = np.asarray(travel, dtype=float)
+        self._integrate(travel, False)
+
+    def take(self, travel: np.ndarray) -> None:
+        """:meth:`update` with the drive's accumulated ``travel`` (n, 2) [m], then zeroed in
+        place (``DriveGroup.travel``): one compiled call where the encoders only scale."""
+        self._integrate(travel, True)
+
+    def _integrate(self, travel: np.ndarray, taken: bool) -> None:
+        """Dead reckoning from ``travel`` (n, 2) [m], zeroed after if ``taken``."""
         if self._plain:
-            wheels, scale = travel, self.scale
+            _dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
+                         self._mid, taken)
+            wheels = travel  # (not read again: plain encoders have no noise to propagate)
         else:
-            wheels, scale = self.encoders.measure(travel), self._unit_scale
-        _dead_reckon(wheels, scale, self.believed_track, self.wheel_travel, self.pose, self._mid)
+            wheels = self.encoders.measure(travel)
+            if taken:
+                travel.fill(0.0)
+            _dead_reckon(wheels, self._unit_scale, self.believed_track, self.wheel_travel,
+                         self.pose, self._mid, False)
         if self._noisy:
             cos_h, sin_h, factor = self._mid
             ds = 0.5 * (wheels[:, 0] + wheels[:, 1])
@@ -152,12 +166,16 @@ def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
 
 @numba.njit(cache=True)
 def _dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
-                 wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray) -> None:
+                 wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray,
+                 taken: bool) -> None:
     """Each robot's encoder readings (n, 2) [m] (times ``scale``: encoders that only scale, or
     ones) added to its wheel travel, and its pose moved along the arc they make with the track
-    width it believes [m]; fills ``mid`` (3, n): the mid-step cos, sin and chord factors."""
+    width it believes [m]; fills ``mid`` (3, n): the mid-step cos, sin and chord factors.
+    ``taken``: ``wheels`` is zeroed once read (a drive's accumulator)."""
     for i in range(pose.shape[0]):
         left, right = wheels[i, 0] * scale[i, 0], wheels[i, 1] * scale[i, 1]
+        if taken:
+            wheels[i, 0] = wheels[i, 1] = 0.0
         wheel_travel[i, 0] += left
         wheel_travel[i, 1] += right
         mid[0, i], mid[1, i], mid[2, i] = arc_step(pose, i, 0.5 * (left + right), 0.0,

@@ -25,7 +25,7 @@ class AckermannDriveGroup(DriveGroup):
 
     name = "ackermann"
     ROWS = ("target_speed", "target_steer", "speed", "steer", "driven_speed", "driven_steer",
-            "_travel")
+            "travel")
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -44,7 +44,7 @@ class AckermannDriveGroup(DriveGroup):
         self.driven_steer = np.zeros(self.n)
         # Encoder input per robot: rear-left, rear-right travel [m] and the integral of
         # tan(delta) over the distance driven [m] (what a steering sensor sees along the way).
-        self._travel = np.zeros((self.n, 3))
+        self.travel = np.zeros((self.n, 3))
 
     # ------------------------------------------------------------------ commands
     def set_steering(self, i: int, speed: float, steer: float) -> None:
@@ -81,18 +81,14 @@ class AckermannDriveGroup(DriveGroup):
         ds = self.speed * h
         tan_steer = np.tan(self.steer)
         half_turn = 0.5 * self.track * tan_steer / self.wheelbase  # rear wheel offset ratio
-        self._travel[:, 0] += ds * (1.0 - half_turn)
-        self._travel[:, 1] += ds * (1.0 + half_turn)
-        self._travel[:, 2] += ds * tan_steer
+        self.travel[:, 0] += ds * (1.0 - half_turn)
+        self.travel[:, 1] += ds * (1.0 + half_turn)
+        self.travel[:, 2] += ds * tan_steer
         limit_step(self.speed, self.target_speed, self.max_accel * h)
         limit_step(self.steer, self.target_steer, self.steer_rate * h)
         omega = self.speed * np.tan(self.steer) / self.wheelbase
         return self.speed.copy(), np.zeros(self.n), omega
 
-    def take_travel(self) -> np.ndarray:
-        taken = self._travel.copy()
-        self._travel.fill(0.0)  # in place: see ROWS
-        return taken
 
     # ------------------------------------------------------------------ set-up
     def min_turn_radius(self, i: int) -> float:

@@ -30,6 +30,9 @@ class DriveGroup:
     # a scenario sharing a space then keep it stacked (see pymunk_bot.robots.stacking). Empty: a
     # group of its own per copy.
     ROWS: tuple[str, ...] = ()
+    # Encoder input accumulated since it was last taken (rows per robot, drive-specific
+    # columns), changed in place: what its odometry integrates after each tick.
+    travel: np.ndarray
 
     def __init__(self, configs: Sequence[Any]) -> None:
         self.configs = list(configs)
@@ -94,8 +97,11 @@ class DriveGroup:
 
     def take_travel(self) -> Any:
         """Encoder input accumulated since the last call (rows per robot, drive-specific columns),
-        then reset."""
-        raise NotImplementedError
+        then reset: ``travel``'s copy, ``travel`` zeroed. A drive whose encoders see something
+        else overrides it."""
+        taken = self.travel.copy()
+        self.travel.fill(0.0)  # in place: see ROWS
+        return taken
 
     # ------------------------------------------------------------------ set-up
     def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
@@ -133,3 +139,4 @@ def limit_step(current: np.ndarray, target: np.ndarray, step: np.ndarray | float
     np.clip(delta, -step, step, out=delta)
     current += delta
     return current
+

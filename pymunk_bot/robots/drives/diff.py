@@ -26,7 +26,7 @@ class DiffDriveGroup(DriveGroup):
     """Every differential-drive robot of a world; commands are wheel speeds or a :class:`Command`."""
 
     name = "diff"
-    ROWS = ("target", "commanded", "turning", "_travel")  # the per-robot state
+    ROWS = ("target", "commanded", "turning", "travel")  # the per-robot state
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -37,7 +37,7 @@ class DiffDriveGroup(DriveGroup):
         self.target = np.zeros((self.n, 2))  # commanded wheel speeds after the speed limit [m/s]
         self.commanded = np.zeros((self.n, 2))  # acceleration-limited speeds to the motors [m/s]
         self.turning = np.zeros((self.n, 2))  # speeds the wheels turn at in this substep [m/s]
-        self._travel = np.zeros((self.n, 2))  # wheel travel since take_travel [m]
+        self.travel = np.zeros((self.n, 2))  # wheel travel since it was last taken [m]
         # The same as floats: cheaper than numpy's scalars robot by robot.
         self._track = self.track.tolist()
         self._every = np.arange(self.n, dtype=np.intp)
@@ -78,7 +78,7 @@ class DiffDriveGroup(DriveGroup):
         copies, see :mod:`pymunk_bot.robots.stacking`)."""
         ux, uy, omega = self._twists_for(rows)
         _advance_rows(self._every if rows is None else rows, self.commanded, self.target,
-                      self.turning, self._travel, self.max_accel, self.track, h, ux, omega)
+                      self.turning, self.travel, self.max_accel, self.track, h, ux, omega)
         return ux, uy, omega
 
     def settled(self) -> bool:
@@ -99,14 +99,14 @@ class DiffDriveGroup(DriveGroup):
         ux, uy, omega = self._twists_for(rows)
         # [s] the wheels turn at their commanded speeds throughout
         _coast_rows(self._every if rows is None else rows, self.commanded, self.turning,
-                    self._travel, self.track, h * substeps, ux, omega)
+                    self.travel, self.track, h * substeps, ux, omega)
         return ux, uy, omega
 
     def coast_if_settled(self, h: float, substeps: int
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """See :meth:`DriveGroup.coast_if_settled`: one compiled call."""
         ux, uy, omega = self._twists
-        if _coast_settled(self.commanded, self.target, self.turning, self._travel, self.track,
+        if _coast_settled(self.commanded, self.target, self.turning, self.travel, self.track,
                           h * substeps, ux, omega):
             return self._twists
         return None
@@ -118,10 +118,6 @@ class DiffDriveGroup(DriveGroup):
             return self._twists
         return np.empty(rows.shape[0]), np.zeros(rows.shape[0]), np.empty(rows.shape[0])
 
-    def take_travel(self) -> np.ndarray:
-        taken = self._travel.copy()
-        self._travel.fill(0.0)  # in place: a stacked group's parts keep viewing its rows
-        return taken
 
     def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         # Force for the fastest allowed change of speed plus turns (the centripetal

@@ -39,7 +39,7 @@ class OmniDriveGroup(DriveGroup):
 
     name = "omni"
     holonomic = True
-    ROWS = ("target", "current", "_travel")
+    ROWS = ("target", "current", "travel")
 
     def __init__(self, configs: Sequence[Any]) -> None:
         super().__init__(configs)
@@ -50,7 +50,7 @@ class OmniDriveGroup(DriveGroup):
         self.wheels = np.array([wheel_matrix(c.wheels, c.wheel_distance) for c in configs])
         self.target = np.zeros((self.n, 3))  # (vx, vy, omega) after the limits
         self.current = np.zeros((self.n, 3))  # acceleration-limited twist
-        self._travel = np.zeros((self.n, 4))  # wheel rim travel since take_travel [m]
+        self.travel = np.zeros((self.n, 4))  # wheel rim travel since it was last taken [m]
 
     def set_command(self, i: int, command: Any) -> None:
         if not isinstance(command, Command):
@@ -67,7 +67,7 @@ class OmniDriveGroup(DriveGroup):
         return Command(float(vx), float(omega), float(vy))
 
     def advance(self, h: float) -> tuple[Any, Any, Any]:
-        self._travel += np.einsum("nkj,nj->nk", self.wheels, self.current) * h
+        self.travel += np.einsum("nkj,nj->nk", self.wheels, self.current) * h
         delta = self.target[:, :2] - self.current[:, :2]
         norm = np.hypot(delta[:, 0], delta[:, 1])
         step = self.max_accel * h
@@ -77,10 +77,6 @@ class OmniDriveGroup(DriveGroup):
         c = self.current
         return c[:, 0].copy(), c[:, 1].copy(), c[:, 2].copy()
 
-    def take_travel(self) -> np.ndarray:
-        taken = self._travel.copy()
-        self._travel.fill(0.0)  # in place: see ROWS
-        return taken
 
     def joint_limits(self, i: int, mass: float, moment: float) -> tuple[float, float]:
         reach = of_robot(self.configs[i]).bounding_radius
