@@ -60,7 +60,7 @@ def _each_twist(members: list[int], twists: tuple[Any, Any, Any]
     cost more than floats; one robot's without building lists)."""
     ux, uy, omega = twists
     if len(members) == 1:
-        return ((members[0], (float(ux[0]), float(uy[0]), float(omega[0]))),)
+        return ((members[0], (ux.item(0), uy.item(0), omega.item(0))),)
     if isinstance(ux, np.ndarray):
         ux, uy, omega = ux.tolist(), uy.tolist(), omega.tolist()
     return zip(members, zip(ux, uy, omega))
@@ -139,12 +139,15 @@ class Propulsion:
         # and coasted (not in a tick before another substep length: every substep is aimed).
         steady: list[tuple[int, tuple[float, float, float]]] = []  # held, yet aimed each substep
         loose: list[tuple[DriveUnits, list[int]]] = []
+        hold = self._hold
         for drives in self._drives:
             moving = drives.every_unit
             if h_last == h:
                 members, twists, moving = drives.coast_settled(moving, h, substeps)
-                if members:
-                    self._hold_each(members, twists, h, steady)
+                if members:  # each held, or aimed every substep (``steady``)
+                    for k, twist in _each_twist(members, twists):
+                        if not hold(k, twist, h):
+                            steady.append((k, twist))
             if moving:
                 loose.append((drives, moving))
         if not (steady or loose):  # every robot held: nothing to do between substeps
@@ -166,19 +169,12 @@ class Propulsion:
                 for drives, units in loose:
                     members, twists, moving = drives.coast_settled(units, h, left)
                     if members:
-                        self._hold_each(members, twists, h, steady)
+                        for k, twist in _each_twist(members, twists):
+                            if not hold(k, twist, h):
+                                steady.append((k, twist))
                     if moving:
                         still.append((drives, moving))
                 loose = still
-
-    def _hold_each(self, members: list[int], twists: Any, h: float,
-                   steady: list[tuple[int, tuple[float, float, float]]]) -> None:
-        """Hold each of these robots (settled, coasting: ``twists`` in their order) for the
-        step; those that must be aimed every substep instead go into ``steady`` with their
-        twists."""
-        for k, twist in _each_twist(members, twists):
-            if not self._hold(k, twist, h):
-                steady.append((k, twist))
 
     def _aim_members(self, members: list[int], member_rows: np.ndarray,
                      twists: tuple[Any, Any, Any], h: float, h_next: float) -> None:
@@ -389,11 +385,12 @@ class Propulsion:
         """Set robot k's control body to give ``twist`` for a whole step (see the module
         docstring); False if it must be aimed every substep instead (it was aimed for this
         one). A robot driving straight needs one aim for the step: True."""
-        ux, uy, omega = twist
+        omega = twist[2]
         if omega == 0.0:
             self._aim(k, twist, h, h)  # a constant velocity: one aim lasts the step
             return True
         if self._held[k] != twist:
+            ux, uy, _ = twist
             cx, cy = self._cog[k]
             ax, ay = anchor(ux, uy, omega, h, cx, cy)
             if not (abs(ax) <= _MAX_ANCHOR and abs(ay) <= _MAX_ANCHOR):
