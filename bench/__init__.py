@@ -101,12 +101,14 @@ def _crowds(quick: bool) -> list[Verdict]:
     print("crowd navigation: a LiDAR robot among pedestrians, the pedestrian policies, and a "
           "1,000-episode benchmark (estimated from a sample, CPU time)")
     result = crowds.main(quick=True)  # under a minute; `python -m ...crowds` for the full sample
-    env, estimate = result["env"], result["episodes"]["estimate_s"]
-    return [(f"1 robot, 360-beam LiDAR, 20 pedestrians: >= {crowds.ENV_TARGET:g} env steps/s "
-             f"(got {env['env_steps_per_s']:.0f})", env["env_steps_per_s"] >= crowds.ENV_TARGET),
-            (f"{crowds.EPISODES} 30 s episodes on {crowds.CORES} cores: <= "
-             f"{crowds.EPISODES_TARGET:g} s (estimated {estimate:.0f} s)",
-             estimate <= crowds.EPISODES_TARGET)]
+    env, episodes = result["env"], result["episodes"]
+    return [(f"1 robot, 360-beam LiDAR, 20 pedestrians: >= {crowds.ENV_TARGET:g}x the env steps "
+             f"per CPU second of the same scene by hand on bare pymunk (got {env['ratio']:.2f}x)",
+             env["ratio"] >= crowds.ENV_TARGET),
+            (f"{crowds.EPISODES} 30 s episodes: an average one <= {crowds.EPISODE_TARGET:g}x the "
+             f"CPU of 30 s of that loop (got {episodes['ratio']:.2f}x; about "
+             f"{episodes['estimate_s']:.0f} s on {crowds.CORES} cores here)",
+             episodes["ratio"] <= crowds.EPISODE_TARGET)]
 
 
 def _maps(quick: bool) -> list[Verdict]:
@@ -161,12 +163,11 @@ def _learning(quick: bool) -> list[Verdict]:
         (f"16 envs as a vector env: >= {learning.VECTOR_TARGET:g}x 16 separate envs "
          f"(got {result['vector_16_ratio']:.2f}x)",
          result["vector_16_ratio"] >= learning.VECTOR_TARGET),
-        (f"one env: >= {learning.ENV_RATE_TARGET:,.0f} env steps/s "
-         f"(got {result['env_steps_per_s']:,.0f})",
-         result["env_steps_per_s"] >= learning.ENV_RATE_TARGET),
-        (f"16 envs as a vector env, random actions: >= {learning.VECTOR_RATE_TARGET:,.0f} "
-         f"env steps/s (got {result['vector_16_random_rate']:,.0f})",
-         result["vector_16_random_rate"] >= learning.VECTOR_RATE_TARGET)]
+        (f"16 envs as a vector env, random actions: >= {learning.VECTOR_RATE_RATIO:.2f}x the "
+         f"env steps per CPU second of one env's loop on bare pymunk (got "
+         f"{result['vector_16_random_rate_ratio']:.2f}x, {result['vector_16_random_rate']:,.0f} "
+         "env steps/s)",
+         result["vector_16_random_rate_ratio"] >= learning.VECTOR_RATE_RATIO)]
     if "process_scaling" in result:
         verdicts.append((f"process sweep, 2 workers: >= {learning.SCALING_TARGET:g}x serial (got "
                          f"{result['process_scaling']:.2f}x)",

@@ -206,8 +206,14 @@ def sweep_backends(runs: int = 200, backends: Sequence[str] = ("serial", "proces
 
 ENV_TARGET = 3.0  # issue 12: one env >= 3x the same loop on bare pymunk
 VECTOR_TARGET = 2.0  # issue 12: 16 envs as one vector env >= 2x 16 separate envs
-VECTOR_RATE_TARGET = 10_000.0  # issue 23: the 16-env vector env, random actions [env steps/s]
-ENV_RATE_TARGET = 3_000.0  # issue 23: one env [env steps/s]
+# Issues 23 and 32 gave these in a machine's numbers: one env >= 3,000 env steps/s, the 16-env
+# vector env with random actions >= 10,000. Here they are ratios against the env's loop by hand
+# on bare pymunk (bare_pymunk_steps_per_second) in the same run, so the verdicts hold on any
+# machine: that loop made BARE_RATE_HERE env steps per CPU second on the machine they were
+# carried over on (2026-12-05, the project's 2-core machine), so 3,000 is 3000 / BARE_RATE_HERE
+# of it (below ENV_TARGET: the ratio above is the stricter demand) and 10,000 is VECTOR_RATE_RATIO.
+BARE_RATE_HERE = 1_470.0  # [env steps per CPU second]
+VECTOR_RATE_RATIO = 10_000.0 / BARE_RATE_HERE  # the vector env's rate / the bare loop's, at least
 SCALING_TARGET = 1.8  # issue 23: the process sweep on 2 workers against serial
 # Runs of the scaling sweep (about a minute serial): starting a worker costs about 1 s (0.6 s
 # of imports, 0.3 s for numba to load its compiled code), which a short sweep cannot amortise
@@ -227,7 +233,7 @@ def run(quick: bool = False) -> dict:
     env, bare = statistics.median(envs), statistics.median(bares)
     ratio = statistics.median(e / b for e, b in zip(envs, bares))  # pair by pair: see above
     print("Navigation-v0, 180-beam LiDAR, 10 Hz control (env steps per CPU second)")
-    print(f"  env {env:8.0f} (target >= {ENV_RATE_TARGET:,.0f})   bare pymunk + "
+    print(f"  env {env:8.0f}   bare pymunk + "
           f"segment_query_first {bare:8.0f}   ratio {ratio:.2f}x (target >= {ENV_TARGET:g}x)")
     results: dict[str, Any] = {"env_steps_per_s": env, "bare_pymunk_steps_per_s": bare,
                                "env_ratio": ratio}
@@ -241,9 +247,11 @@ def run(quick: bool = False) -> dict:
         results[key] = (vector, separate)
         results[f"{key}_ratio"] = ratio
     results["vector_16_random_rate"] = vector_rate(repeats=5 if quick else 15)
+    results["vector_16_random_rate_ratio"] = results["vector_16_random_rate"] / bare
     print(f"  16 envs, random actions, the vector env on its own: "
-          f"{results['vector_16_random_rate']:8.0f} env steps/s "
-          f"(target >= {VECTOR_RATE_TARGET:,.0f})")
+          f"{results['vector_16_random_rate']:8.0f} env steps/s, "
+          f"{results['vector_16_random_rate_ratio']:.2f}x the bare loop's (target >= "
+          f"{VECTOR_RATE_RATIO:.2f}x)")
     print(f"Sweep of {60 if quick else 200} runs (2 s simulated each), 2 workers "
           "(wall times include starting the workers)")
     sweep = sweep_backends(60 if quick else 200)
