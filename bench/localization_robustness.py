@@ -30,7 +30,8 @@ People worlds (``--families office_sf10,warehouse_orca30,...``, not in the defau
 office or warehouse tour with 10 or 30 pedestrians (social force or ORCA) on and around the
 robot's route; tracking succeeds at RMSE <= 8 cm (collisions are not held against it: the
 robot is bumped and pushed); a slam run also reports the share of walked-only cells its map
-holds occupied (<= 1 % to succeed). ``--localizers mapping`` (not in the default run): MCL
+holds occupied (<= 1 % to succeed), and its map precision counts the walkers standing in the
+world at the end as obstacles (they are: the map is right to hold them). ``--localizers mapping`` (not in the default run): MCL
 drives while the robot's ``mapping:`` section maps from the true pose (``--settings`` are then
 mapping keys); it succeeds with <= 1 % of walked-only cells occupied among people, else with a
 map precision >= 0.9.
@@ -370,14 +371,40 @@ def _score_map(out: Outcome, built, config, walked: list[np.ndarray], walkers: l
     """Precision and recall of the ``built`` map against the scenario's (at its resolution),
     and among people the share of walked-only cells it holds occupied, into ``out``."""
     from pymunk_bot.localization.metrics import map_scores
+    from pymunk_bot.maps.grid import OccupancyGrid
     from pymunk_bot.maps.rasterize import scenario_grid
 
     truth = scenario_grid(config, built.resolution)
-    scores = map_scores(built, truth)
-    out.map_precision, out.map_recall = scores["precision"], scores["recall"]
-    if walked:
-        out.people_occupied = walked_only_occupied(built, truth, np.concatenate(walked),
-                                                   walkers[0].config.radius, walked[-1])
+    out.map_recall = map_scores(built, truth)["recall"]
+    if not walked:
+        out.map_precision = map_scores(built, truth)["precision"]
+        return
+    # Among people the precision is against the world as it is at the end: the walkers
+    # standing there are obstacles the map is right to hold (not its static structure, so
+    # the recall stays the walls').
+    radius = walkers[0].config.radius
+    now = OccupancyGrid(np.where(_discs(truth, walked[-1], radius), np.int8(100), truth.data),
+                        truth.resolution, truth.origin)
+    out.map_precision = map_scores(built, now)["precision"]
+    out.people_occupied = walked_only_occupied(built, truth, np.concatenate(walked), radius,
+                                               walked[-1])
+
+
+def _discs(grid, centres: np.ndarray, reach_m: float) -> np.ndarray:
+    """Boolean (rows, cols) of ``grid``: cells whose centre lies within ``reach_m`` [m] of one
+    of ``centres`` (k, 2) [m]."""
+    rows, cols, res = grid.rows, grid.cols, grid.resolution
+    mask = np.zeros((rows, cols), dtype=bool)
+    reach = int(np.ceil(reach_m / res))
+    offsets = np.arange(-reach, reach + 1)
+    dr, dc = np.meshgrid(offsets, offsets, indexing="ij")
+    disc = np.hypot(dr, dc) * res <= reach_m
+    r0, c0 = grid.cell_of(centres)
+    r = (r0[:, None] + dr[disc][None, :]).ravel()
+    c = (c0[:, None] + dc[disc][None, :]).ravel()
+    inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+    mask[r[inside], c[inside]] = True
+    return mask
 
 
 def walked_only_occupied(built, truth, positions: np.ndarray, radius: float,
@@ -390,23 +417,9 @@ def walked_only_occupied(built, truth, positions: np.ndarray, radius: float,
 
     rows, cols = built.rows, built.cols
     res = built.resolution
-
-    def discs(centres: np.ndarray, reach_m: float) -> np.ndarray:
-        mask = np.zeros((rows, cols), dtype=bool)
-        reach = int(np.ceil(reach_m / res))
-        offsets = np.arange(-reach, reach + 1)
-        dr, dc = np.meshgrid(offsets, offsets, indexing="ij")
-        disc = np.hypot(dr, dc) * res <= reach_m
-        r0, c0 = built.cell_of(centres)
-        r = (r0[:, None] + dr[disc][None, :]).ravel()
-        c = (c0[:, None] + dc[disc][None, :]).ravel()
-        inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-        mask[r[inside], c[inside]] = True
-        return mask
-
-    walked = discs(positions, radius)
+    walked = _discs(built, positions, radius)
     if standing is not None and standing.shape[0]:
-        walked &= ~discs(standing, radius + 2 * res)
+        walked &= ~_discs(built, standing, radius + 2 * res)
     # the true map on the built grid: cell centres looked up in the truth (other origin)
     xs, ys = built.cell_centers()
     tr, tc = truth.cell_of(np.stack(np.meshgrid(xs, ys), axis=-1))
