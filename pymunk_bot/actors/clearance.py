@@ -35,14 +35,16 @@ SURFACE = -1  # the ``other`` of a wall, obstacle or robot footprint
 
 class Clearances:
     """Per walker, the nearest bodies it could reach before it chooses again, as the kernels
-    of :mod:`.social_forces` and :mod:`.surfaces` record them: ``near`` (n, MAX_CONTACTS, 4)
+    of :mod:`.social_forces` and :mod:`.surfaces` record them: ``near`` (n, ``contacts``, 4)
     holds each one's room [m] (clearance beyond CONTACT_MARGIN), the unit direction toward it
-    and the other walker's index (SURFACE for a surface), smallest room first; ``count`` (n,)
+    and the other walker's index (SURFACE for a surface), smallest room first (ORCA walkers'
+    pairs, :func:`.orca.closing_limits`: how far the pair may close along a direction, in
+    their neighbours' order); ``count`` (n,)
     how many (:func:`.social_forces.social_forces` starts each tick's afresh); ``reach`` (n,)
     [m] how far each walker can go in a step (its owner keeps it)."""
 
-    def __init__(self, walkers: int) -> None:
-        self.near = np.zeros((walkers, MAX_CONTACTS, 4))
+    def __init__(self, walkers: int, contacts: int = MAX_CONTACTS) -> None:
+        self.near = np.zeros((walkers, contacts, 4))
         self.count = np.zeros(walkers, dtype=np.int64)
         self.reach = np.zeros(walkers)  # [m]
 
