@@ -108,44 +108,55 @@ def nudged_within(q: np.ndarray, n: np.ndarray, ok: np.ndarray, hard: np.ndarray
 
 
 def closing_limits(agents: np.ndarray, pos: np.ndarray, vel: np.ndarray,
-                   radius: np.ndarray, step: np.ndarray,
+                   radius: np.ndarray, step: np.ndarray, reach: np.ndarray,
                    neighbours: tuple[np.ndarray, np.ndarray], partners: np.ndarray,
                    margin: float, near: np.ndarray, count: np.ndarray) -> bool:
     """For the k ``agents`` (indices into the walkers) and those of their ``neighbours``
-    (:meth:`Orca.nearest`) who are walkers and ``partners`` (n,): the linear bound on the pair's
+    (:meth:`Orca.nearest`) who are walkers and ``partners`` (n,) within their ``reach`` (n,)
+    [m] (how far each can go in a step) of each other: the linear bound on the pair's
     velocities under which their discs, moving straight, come no closer than ``margin`` [m]
-    within ``step`` [s] (per walker: the time it holds its velocity). It is the tangent, at the nearest point, of
-    the velocity obstacle whose horizon is that step (:func:`neighbour_lines`, the whole of u),
-    written for :func:`.clearance.limit_closing`: into ``near`` (n, K, 4) each agent's rows
-    (how far [m] the pair may close within the step along a unit direction, that direction,
-    the partner) and into ``count`` (n,) how many. Walkers at ``pos`` (n, 2) [m] with
-    velocities ``vel`` (n, 2) [m/s] and radii ``radius`` (n,) [m]. Returns whether any pair
-    breaks its bound (more than EPS). ORCA's answers do when its linear program has no room
-    and its least-violating answers bring walkers into each other; when it has, they do only
-    if twice the walkers' ``orca_margin`` is below ``margin`` (the obstacle of a step lies
-    inside that of ORCA's horizon, for radii at least as large)."""
+    within ``step`` (n,) [s] (the time each holds its velocity). It is the
+    tangent, at the nearest point, of the velocity obstacle whose horizon is that step
+    (:func:`neighbour_lines`, the whole of u), written for :func:`.clearance.limit_closing`:
+    into ``near`` (n, K, 4) each agent's rows (how far [m] the pair may close within the step
+    along a unit direction, that direction, the partner) and into ``count`` (n,) how many.
+    Walkers at ``pos`` (n, 2) [m] with velocities ``vel`` (n, 2) [m/s] and radii ``radius``
+    (n,) [m]. Returns whether any pair breaks its bound (more than EPS).
+    ORCA's answers do when its linear program has no room and its least-violating answers
+    bring walkers into each other; when it has, they do only if twice the walkers'
+    ``orca_margin`` is below ``margin`` (the obstacle of a step lies inside that of ORCA's
+    horizon, for radii at least as large)."""
     from pymunk_bot.actors.orca_lp import EPS
 
     order, valid = neighbours
     pair = valid & (order < len(pos))
     other = np.where(pair, order, 0)
     pair &= partners[other]
-    held = step[agents]
-    size = radius + 0.5 * margin
-    q, n = neighbour_lines(pos[agents], vel[agents], size[agents], pos[other], vel[other],
-                           size[other], np.ones(order.shape), held, held)
+    mine = np.broadcast_to(agents[:, None], order.shape)
+    towards = pos[other] - pos[mine]  # [m]
+    apart = np.sqrt((towards ** 2).sum(axis=-1))
+    room = apart - radius[mine] - radius[other] - margin  # [m]
+    pair &= room < reach[mine] + reach[other]
+    count[agents] = 0
+    # Moving straight, a pair comes no nearer within the step than its distance less its
+    # closing speed along the line between them times the step: most ticks, no pair closes in.
+    closing = ((vel[mine] - vel[other]) * towards).sum(axis=-1) / np.maximum(apart, 1e-12)
+    if not (pair & (closing * step[mine] > room)).any():
+        return False
+    a, b = mine[pair], other[pair]  # the pairs, agent by agent
+    held = step[a]
+    q, n = neighbour_lines(pos[a], vel[a], radius[a] + 0.5 * margin, pos[b][:, None, :],
+                           vel[b][:, None, :], (radius[b] + 0.5 * margin)[:, None],
+                           np.ones((len(a), 1)), held, held)
+    q, n = q[:, 0], n[:, 0]
     # (v_a - v_b) . n >= least [m/s] keeps the pair apart; they may close EPS faster (rounding)
-    least = ((q - vel[other]) * n).sum(axis=-1) - EPS
-    broken = pair & (((q - vel[agents][:, None, :]) * n).sum(axis=-1) > EPS)
-    first = np.argsort(~pair, axis=1, kind="stable")  # the pairs first
-    width = order.shape[1]
-    rows = near[agents]
-    rows[:, :width, 0] = np.take_along_axis(-least * held[:, None], first, axis=1)
-    rows[:, :width, 1:3] = -np.take_along_axis(n, first[..., None], axis=1)
-    rows[:, :width, 3] = np.take_along_axis(other, first, axis=1)
-    near[agents] = rows
+    least = ((q - vel[b]) * n).sum(axis=-1) - EPS
+    slot = np.cumsum(pair, axis=1)[pair] - 1  # each pair's row among its agent's
+    near[a, slot, 0] = -least * held
+    near[a, slot, 1:3] = -n
+    near[a, slot, 3] = b
     count[agents] = pair.sum(axis=1)
-    return bool(broken.any())
+    return bool((((q - vel[a]) * n).sum(axis=-1) > EPS).any())
 
 
 class Orca:

@@ -340,8 +340,9 @@ class Crowd:
         deciding = self._is_orca & due
         held = np.where(due[:, None], new, self._held) if self._holds else new.copy()
         apart = self._orca_apart
-        if closing_limits(self.orca.agents, pos, held, self.radius, step, neighbours,
-                          self._is_orca, CONTACT_MARGIN, apart.near, apart.count):
+        if closing_limits(self.orca.agents, pos, held, self.radius, step,
+                          self._clearances.reach, neighbours, self._is_orca, CONTACT_MARGIN,
+                          apart.near, apart.count):
             apart.limit(held, step, self._mass, deciding)
             new[deciding] = held[deciding]
 
