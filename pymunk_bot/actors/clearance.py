@@ -55,6 +55,18 @@ class Clearances:
         within ``step`` (n,) [s] (module doc)."""
         limit_closing(velocity, self.near, self.count, step, mass, bound)
 
+    def add_surfaces(self, source: "Clearances", walkers: np.ndarray) -> None:
+        """Append the surfaces ``source`` recorded for ``walkers`` (indices) to their rows here,
+        as many as there is room for."""
+        rows = source.near[walkers]
+        surface = (rows[..., 3] == SURFACE) & (
+            np.arange(rows.shape[1])[None, :] < source.count[walkers][:, None])
+        slot = self.count[walkers][:, None] + np.cumsum(surface, axis=1) - 1
+        keep = surface & (slot < self.near.shape[1])
+        whose = np.broadcast_to(walkers[:, None], keep.shape)[keep]
+        self.near[whose, slot[keep]] = rows[keep]
+        self.count[walkers] += keep.sum(axis=1)
+
 
 @numba.njit(cache=True, nogil=True)
 def record(near: np.ndarray, count: np.ndarray, i: int, clearance: float, ux: float,

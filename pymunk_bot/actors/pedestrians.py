@@ -50,7 +50,7 @@ from pymunk_bot.physics import settings as physics
 from pymunk_bot.config.motion import MAX_SPEED_FACTOR
 from pymunk_bot.physics.obstacles import Obstacle
 from pymunk_bot.actors.body_state import BodyStates
-from pymunk_bot.actors.clearance import CONTACT_MARGIN, Clearances
+from pymunk_bot.actors.clearance import CONTACT_MARGIN, MAX_CONTACTS, Clearances
 from pymunk_bot.actors.orca import MAX_WALL_LINES, Orca, closing_limits
 from pymunk_bot.actors.social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
 from pymunk_bot.actors.surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
@@ -190,7 +190,7 @@ class Crowd:
         if self.orca is not None:
             agents = self.orca.agents
             self._orca_reach = self.radius[agents] + self._cap[agents] * self.orca.wall_horizon
-            self._orca_apart = Clearances(n, int(self.orca.limit.max()))
+            self._orca_apart = Clearances(n, int(self.orca.limit.max()) + MAX_CONTACTS)
         # What walkers keep away from: the shapes they collide with, other walkers aside (felt
         # through the social force); the fixed ones read once, the moving ones every tick.
         own_filter = next(iter(mine)).filter if mine else pymunk.ShapeFilter()
@@ -332,10 +332,12 @@ class Crowd:
         than CONTACT_MARGIN within the ``step`` (n,) [s] they hold them (ORCA's linear program
         had no room, and its least-violating answers close gaps; or ORCA lets them touch), the
         pair's velocities change by equal and opposite amounts (their masses weigh them) until
-        they do not, as clearance.py's speculative contacts do, in place. Touching walkers would
-        meet pymunk's contacts, whose impulses within a tick's substeps push them into others.
+        they do not, as clearance.py's speculative contacts do, in place, and do not close on
+        the surfaces (and robots, if they react to them) their forces' kernels recorded. Touching
+        walkers would meet pymunk's contacts, whose impulses within a tick's substeps push them
+        into others.
         Only walkers whose decision is ``due`` (n,) change (others hold theirs).
-        Robots are left out: a walker that ignores the robot must not avoid it."""
+        A walker that ignores robots must not avoid them: no bound there."""
         assert self.orca is not None
         deciding = self._is_orca & due
         held = np.where(due[:, None], new, self._held) if self._holds else new.copy()
@@ -343,6 +345,8 @@ class Crowd:
         if closing_limits(self.orca.agents, pos, held, self.radius, step,
                           self._clearances.reach, neighbours, self._is_orca, CONTACT_MARGIN,
                           apart.near, apart.count):
+            # what the walkers keep clear of stays binding (walls, obstacles, robots they see)
+            apart.add_surfaces(self._clearances, self.orca.agents)
             apart.limit(held, step, self._mass, deciding)
             new[deciding] = held[deciding]
 
