@@ -35,14 +35,16 @@ SURFACE = -1  # the ``other`` of a wall, obstacle or robot footprint
 
 class Clearances:
     """Per walker, the nearest bodies it could reach before it chooses again, as the kernels
-    of :mod:`.social_forces` and :mod:`.surfaces` record them: ``near`` (n, MAX_CONTACTS, 4)
+    of :mod:`.social_forces` and :mod:`.surfaces` record them: ``near`` (n, ``contacts``, 4)
     holds each one's room [m] (clearance beyond CONTACT_MARGIN), the unit direction toward it
-    and the other walker's index (SURFACE for a surface), smallest room first; ``count`` (n,)
+    and the other walker's index (SURFACE for a surface), smallest room first (ORCA walkers'
+    pairs, :func:`.orca.closing_limits`: how far the pair may close along a direction, in
+    their neighbours' order); ``count`` (n,)
     how many (:func:`.social_forces.social_forces` starts each tick's afresh); ``reach`` (n,)
     [m] how far each walker can go in a step (its owner keeps it)."""
 
-    def __init__(self, walkers: int) -> None:
-        self.near = np.zeros((walkers, MAX_CONTACTS, 4))
+    def __init__(self, walkers: int, contacts: int = MAX_CONTACTS) -> None:
+        self.near = np.zeros((walkers, contacts, 4))
         self.count = np.zeros(walkers, dtype=np.int64)
         self.reach = np.zeros(walkers)  # [m]
 
@@ -52,6 +54,18 @@ class Clearances:
         held as they are), of ``mass`` (n,) [kg], in place, to what closes no recorded gap
         within ``step`` (n,) [s] (module doc)."""
         limit_closing(velocity, self.near, self.count, step, mass, bound)
+
+    def add_surfaces(self, source: "Clearances", walkers: np.ndarray) -> None:
+        """Append the surfaces ``source`` recorded for ``walkers`` (indices) to their rows here,
+        as many as there is room for."""
+        rows = source.near[walkers]
+        surface = (rows[..., 3] == SURFACE) & (
+            np.arange(rows.shape[1])[None, :] < source.count[walkers][:, None])
+        slot = self.count[walkers][:, None] + np.cumsum(surface, axis=1) - 1
+        keep = surface & (slot < self.near.shape[1])
+        whose = np.broadcast_to(walkers[:, None], keep.shape)[keep]
+        self.near[whose, slot[keep]] = rows[keep]
+        self.count[walkers] += keep.sum(axis=1)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -16,6 +16,13 @@ the wish turned ``keep_right`` (default KEEP_RIGHT_ANGLE) to its right (see ther
 walkers at once with numpy. A walker's seeded nudge then moves that answer within the same
 half-planes (:func:`nudged_within`): in an exactly symmetric crossing the answer is a corner of
 them that no turn of the wish moves, and ORCA alone jams there for good.
+
+ORCA's guarantee holds only while each walker's linear program has room. In a dense crowd (the
+middle of twenty walkers swapping places) it has none, and the least-violating answers brought
+pairs up to 1.75 mm into each other; the crowd then keeps ORCA walkers CONTACT_MARGIN apart
+over the step they hold their velocity (:func:`closing_limits`, solved like clearance.py's
+speculative contacts), which ORCA's answers with room and a margin at least as large (CrowdNav's
+humans: 2 x 1 cm) already do.
 """
 from __future__ import annotations
 
@@ -100,6 +107,58 @@ def nudged_within(q: np.ndarray, n: np.ndarray, ok: np.ndarray, hard: np.ndarray
     return out
 
 
+def closing_limits(agents: np.ndarray, pos: np.ndarray, vel: np.ndarray,
+                   radius: np.ndarray, step: np.ndarray, reach: np.ndarray,
+                   neighbours: tuple[np.ndarray, np.ndarray], partners: np.ndarray,
+                   margin: float, near: np.ndarray, count: np.ndarray) -> bool:
+    """For the k ``agents`` (indices into the walkers) and those of their ``neighbours``
+    (:meth:`Orca.nearest`) who are walkers and ``partners`` (n,) within their ``reach`` (n,)
+    [m] (how far each can go in a step) of each other: the linear bound on the pair's
+    velocities under which their discs, moving straight, come no closer than ``margin`` [m]
+    within ``step`` (n,) [s] (the time each holds its velocity). It is the
+    tangent, at the nearest point, of the velocity obstacle whose horizon is that step
+    (:func:`neighbour_lines`, the whole of u), written for :func:`.clearance.limit_closing`:
+    into ``near`` (n, K, 4) each agent's rows (how far [m] the pair may close within the step
+    along a unit direction, that direction, the partner) and into ``count`` (n,) how many.
+    Walkers at ``pos`` (n, 2) [m] with velocities ``vel`` (n, 2) [m/s] and radii ``radius``
+    (n,) [m]. Returns whether any pair breaks its bound (more than EPS).
+    ORCA's answers do when its linear program has no room and its least-violating answers
+    bring walkers into each other; when it has, they do only if twice the walkers'
+    ``orca_margin`` is below ``margin`` (the obstacle of a step lies inside that of ORCA's
+    horizon, for radii at least as large)."""
+    from pymunk_bot.actors.orca_lp import EPS
+
+    order, valid = neighbours
+    pair = valid & (order < len(pos))
+    other = np.where(pair, order, 0)
+    pair &= partners[other]
+    mine = np.broadcast_to(agents[:, None], order.shape)
+    towards = pos[other] - pos[mine]  # [m]
+    apart = np.sqrt((towards ** 2).sum(axis=-1))
+    room = apart - radius[mine] - radius[other] - margin  # [m]
+    pair &= room < reach[mine] + reach[other]
+    count[agents] = 0
+    # Moving straight, a pair comes no nearer within the step than its distance less its
+    # closing speed along the line between them times the step: most ticks, no pair closes in.
+    closing = ((vel[mine] - vel[other]) * towards).sum(axis=-1) / np.maximum(apart, 1e-12)
+    if not (pair & (closing * step[mine] > room)).any():
+        return False
+    a, b = mine[pair], other[pair]  # the pairs, agent by agent
+    held = step[a]
+    q, n = neighbour_lines(pos[a], vel[a], radius[a] + 0.5 * margin, pos[b][:, None, :],
+                           vel[b][:, None, :], (radius[b] + 0.5 * margin)[:, None],
+                           np.ones((len(a), 1)), held, held)
+    q, n = q[:, 0], n[:, 0]
+    # (v_a - v_b) . n >= least [m/s] keeps the pair apart; they may close EPS faster (rounding)
+    least = ((q - vel[b]) * n).sum(axis=-1) - EPS
+    slot = np.cumsum(pair, axis=1)[pair] - 1  # each pair's row among its agent's
+    near[a, slot, 0] = -least * held
+    near[a, slot, 1:3] = -n
+    near[a, slot, 3] = b
+    count[agents] = pair.sum(axis=1)
+    return bool((((q - vel[a]) * n).sum(axis=-1) > EPS).any())
+
+
 class Orca:
     """ORCA velocities for the walkers ``agents`` (indices into the crowd)."""
 
@@ -113,16 +172,30 @@ class Orca:
         self.robot_share = np.array([configs[i].robot_share for i in agents], dtype=float)
         self.margin = np.array([configs[i].orca_margin for i in agents], dtype=float)  # [m]
 
+    def nearest(self, pos: np.ndarray, others: np.ndarray,
+                visible: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each agent's neighbours, nearest first: ``order`` (k, K), indices into ``others``
+        (m, 2) [m], and ``valid`` (k, K), which of them count (``visible`` (k, m) to it, within
+        its neighbour distance, among its nearest max_neighbors)."""
+        m = len(others)
+        d2 = ((others[None, :, :] - pos[:, None, :]) ** 2).sum(axis=-1)
+        d2 = np.where(visible & (d2 <= (self.reach ** 2)[:, None]), d2, np.inf)
+        width = int(min(m, self.limit.max())) if m else 0
+        order = np.argsort(d2, axis=1, kind="stable")[:, :width]
+        valid = np.isfinite(np.take_along_axis(d2, order, axis=1))
+        valid &= np.arange(width)[None, :] < self.limit[:, None]
+        return order, valid
+
     def velocities(self, pos: np.ndarray, vel: np.ndarray, radius: np.ndarray,
                    others: tuple[np.ndarray, np.ndarray, np.ndarray], walkers: int,
-                   visible: np.ndarray, pref: np.ndarray, vmax: np.ndarray,
-                   dt: float | np.ndarray,
+                   neighbours: tuple[np.ndarray, np.ndarray], pref: np.ndarray,
+                   vmax: np.ndarray, dt: float | np.ndarray,
                    walls: tuple[np.ndarray, np.ndarray],
                    nudge: np.ndarray | None = None) -> np.ndarray:
         """New velocities (k, 2) [m/s] of the agents, at ``pos``, ``vel``, ``radius`` (k, ...),
         wishing ``pref`` (k, 2) within ``vmax`` (k,). ``others``: positions, velocities and
         radii of everything avoided (the first ``walkers`` are walkers, the rest robots);
-        ``visible`` (k, m): who each agent takes into account (not itself); ``dt`` [s]: the
+        ``neighbours``: whom each agent takes into account (:meth:`nearest`); ``dt`` [s]: the
         step each agent's velocity is held for (one, or (k,)); ``walls``: per
         agent, up to MAX_WALL_LINES (distance [m], gradient x, gradient y) of nearby surfaces,
         nearest first, (k, MAX_WALL_LINES, 3), and how many (k,). ``nudge`` (k, 2) [m/s]: each
@@ -136,13 +209,7 @@ class Orca:
         c, s = np.cos(self.keep_right), np.sin(self.keep_right)
         pref = np.column_stack([c * pref[:, 0] + s * pref[:, 1], -s * pref[:, 0] + c * pref[:, 1]])
         opos, ovel, orad = others
-        k, m = len(pos), len(opos)
-        d2 = ((opos[None, :, :] - pos[:, None, :]) ** 2).sum(axis=-1)
-        d2 = np.where(visible & (d2 <= (self.reach ** 2)[:, None]), d2, np.inf)
-        width = int(min(m, self.limit.max())) if m else 0
-        order = np.argsort(d2, axis=1, kind="stable")[:, :width]
-        valid = np.isfinite(np.take_along_axis(d2, order, axis=1))
-        valid &= np.arange(width)[None, :] < self.limit[:, None]
+        order, valid = neighbours
         share = np.where(order < walkers, WALKER_SHARE, self.robot_share[:, None])
         margin = self.margin
         q_n, n_n = neighbour_lines(pos, vel, radius + margin, opos[order], ovel[order],

@@ -33,7 +33,10 @@ surfaces are read once, when the crowd is made. Each walker is a dynamic disc: c
 it (and robots that bump it count a collision); its speed is capped at MAX_SPEED_FACTOR * v0,
 and a social-force walker's velocity then closes no gap to another body within the time it
 holds it (:mod:`.clearance`: the model is soft at contact, and walkers converging from several
-sides would otherwise meet and stay pressed together).
+sides would otherwise meet and stay pressed together). ORCA walkers keep CONTACT_MARGIN apart
+from each other the same way over the time they hold their velocity (:func:`.orca.closing_limits`:
+where ORCA's linear program has no room its answers close gaps); not from robots, which a walker
+that does not ``react_to_robot`` must not avoid.
 """
 from __future__ import annotations
 
@@ -47,8 +50,8 @@ from pymunk_bot.physics import settings as physics
 from pymunk_bot.config.motion import MAX_SPEED_FACTOR
 from pymunk_bot.physics.obstacles import Obstacle
 from pymunk_bot.actors.body_state import BodyStates
-from pymunk_bot.actors.clearance import Clearances
-from pymunk_bot.actors.orca import MAX_WALL_LINES, Orca
+from pymunk_bot.actors.clearance import CONTACT_MARGIN, MAX_CONTACTS, Clearances
+from pymunk_bot.actors.orca import MAX_WALL_LINES, Orca, closing_limits
 from pymunk_bot.actors.social_forces import NOMINAL_RADIUS, arrivals, cap_speeds, social_forces
 from pymunk_bot.actors.surfaces import CellIndex, Surfaces, nearest_walls, wall_forces
 
@@ -181,10 +184,13 @@ class Crowd:
         self._mass = np.array([c.mass for c in cfg], dtype=float)  # [kg]
         # the social-force walkers, whose velocity closes no gap within a step (.clearance)
         self._hard_core = ~orca
+        self._is_orca = orca
         self._orca_reach = np.zeros(0)  # [m]
+        self._orca_apart = Clearances(0)  # the ORCA walkers' pairs' bounds (closing_limits)
         if self.orca is not None:
             agents = self.orca.agents
             self._orca_reach = self.radius[agents] + self._cap[agents] * self.orca.wall_horizon
+            self._orca_apart = Clearances(n, int(self.orca.limit.max()) + MAX_CONTACTS)
         # What walkers keep away from: the shapes they collide with, other walkers aside (felt
         # through the social force); the fixed ones read once, the moving ones every tick.
         own_filter = next(iter(mine)).filter if mine else pymunk.ShapeFilter()
@@ -223,8 +229,8 @@ class Crowd:
         every_xy, every_v = np.ascontiguousarray(state[:, :2]), np.ascontiguousarray(state[:, 2:])
         pos, vel = every_xy[:n], every_v[:n]
         self._advance_goals(pos)
-        if self._holds and not (time >= self._next_decision - 1e-9).any() \
-                and (self._period > 0).all():  # nobody chooses this tick
+        due = time >= self._next_decision - 1e-9  # who chooses this tick (with no period: all)
+        if self._holds and not due.any() and (self._period > 0).all():  # nobody chooses
             self._states.set_velocities(self._held.copy())
             return
         pull = self._cohesion(pos) if self.groups else self._no_pull
@@ -250,11 +256,14 @@ class Crowd:
         if self.orca is not None:
             # ORCA's answer often sits on a corner of its constraints, which a nudged wish
             # does not move: the velocity it chooses is nudged instead, within them.
-            new[self.orca.agents] = self._orca(pos, vel, pref, state, poses, dt, nudge)
+            new[self.orca.agents], neighbours = self._orca(pos, vel, pref, state, poses, dt,
+                                                           nudge)
         cap_speeds(new, self._cap)
+        if self.orca is not None:
+            self._keep_orca_apart(pos, new, step, due, neighbours)
         clear.limit(new, step, self._mass, self._hard_core)
         if self._holds:
-            new = self._hold(time, new)
+            new = self._hold(due, new)
         self._states.set_velocities(new)
 
     def _step_for(self, dt: float) -> np.ndarray:
@@ -266,10 +275,9 @@ class Crowd:
             self._clearances.reach[:] = self._cap * self._step
         return self._step
 
-    def _hold(self, time: float, new: np.ndarray) -> np.ndarray:
-        """``new`` [m/s] where a walker's decision is due at ``time`` [s]; elsewhere the
-        velocity it chose last (drift-free: decisions at multiples of its period)."""
-        due = time >= self._next_decision - 1e-9
+    def _hold(self, due: np.ndarray, new: np.ndarray) -> np.ndarray:
+        """``new`` [m/s] where a walker's decision is ``due`` (n,); elsewhere the velocity it
+        chose last (drift-free: decisions at multiples of its period)."""
         self._held[due] = new[due]
         self._next_decision[due] += self._period[due]
         return self._held.copy()
@@ -293,9 +301,11 @@ class Crowd:
         return pull
 
     def _orca(self, pos: np.ndarray, vel: np.ndarray, pref: np.ndarray, state: np.ndarray,
-              poses: np.ndarray, dt: float, nudge: np.ndarray) -> np.ndarray:
-        """Velocities of the ORCA walkers (robots are neighbours or ignored, never walls);
-        ``state``: every walker's and robot's (BodyStates)."""
+              poses: np.ndarray, dt: float,
+              nudge: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """Velocities of the ORCA walkers (robots are neighbours or ignored, never walls), and
+        whom each took into account (:meth:`.orca.Orca.nearest`); ``state``: every walker's
+        and robot's (BodyStates)."""
         assert self.orca is not None
         agents = self.orca.agents
         others = (state[:, :2], state[:, 2:], self._all_radius)
@@ -310,9 +320,35 @@ class Crowd:
         nearest_walls(self.moving, poses, None, at, self._orca_reach, hits, count)
         # an overlap must be undone within the time the velocity is held
         step = np.where(self._period[agents] > 0, self._period[agents], dt)
-        return self.orca.velocities(at, vel[agents], self.radius[agents], others, n, visible,
-                                    pref[agents], self._cap[agents], step, (hits, count),
-                                    nudge[agents])
+        neighbours = self.orca.nearest(at, others[0], visible)
+        chosen = self.orca.velocities(at, vel[agents], self.radius[agents], others, n,
+                                      neighbours, pref[agents], self._cap[agents], step,
+                                      (hits, count), nudge[agents])
+        return chosen, neighbours
+
+    def _keep_orca_apart(self, pos: np.ndarray, new: np.ndarray, step: np.ndarray,
+                         due: np.ndarray, neighbours: tuple[np.ndarray, np.ndarray]) -> None:
+        """Where ORCA walkers' velocities ``new`` (n, 2) [m/s] would bring two of them closer
+        than CONTACT_MARGIN within the ``step`` (n,) [s] they hold them (ORCA's linear program
+        had no room, and its least-violating answers close gaps; or ORCA lets them touch), the
+        pair's velocities change by equal and opposite amounts (their masses weigh them) until
+        they do not, as clearance.py's speculative contacts do, in place, and do not close on
+        the surfaces (and robots, if they react to them) their forces' kernels recorded. Touching
+        walkers would meet pymunk's contacts, whose impulses within a tick's substeps push them
+        into others.
+        Only walkers whose decision is ``due`` (n,) change (others hold theirs).
+        A walker that ignores robots must not avoid them: no bound there."""
+        assert self.orca is not None
+        deciding = self._is_orca & due
+        held = np.where(due[:, None], new, self._held) if self._holds else new.copy()
+        apart = self._orca_apart
+        if closing_limits(self.orca.agents, pos, held, self.radius, step,
+                          self._clearances.reach, neighbours, self._is_orca, CONTACT_MARGIN,
+                          apart.near, apart.count):
+            # what the walkers keep clear of stays binding (walls, obstacles, robots they see)
+            apart.add_surfaces(self._clearances, self.orca.agents)
+            apart.limit(held, step, self._mass, deciding)
+            new[deciding] = held[deciding]
 
     def _advance_goals(self, pos: np.ndarray) -> None:
         # most ticks: nobody

@@ -15,15 +15,16 @@ OVERLAP = -0.001  # [m] a clearance below this is an overlap
 
 
 def counterflow(walkers: int, width: float, robot_x: float, seed: int = 0,
-                speed_std: float = 0.0) -> dict:
+                speed_std: float = 0.0, policy: str = "social_force") -> dict:
     """``walkers`` walking both ways down a 14 m corridor ``width`` wide, in queues 0.6 m
-    apart; a standing robot (radius 0.2 m) on the corridor's axis at ``robot_x``."""
+    apart, with ``policy``; a standing robot (radius 0.2 m) on the corridor's axis at
+    ``robot_x``."""
     people = []
     for k in range(walkers):
         y = 0.35 + (width - 0.7) * ((k * 0.37) % 1.0)
         start, goal = (0.5 + 0.6 * (k // 2), 11.5) if k % 2 else (11.5 - 0.6 * (k // 2), 0.5)
         people.append({"type": "pedestrian", "center": [start, y], "goals": [[goal, y]],
-                       "mode": "once", "speed_std": speed_std})
+                       "mode": "once", "speed_std": speed_std, "policy": policy})
     return {"name": "counterflow", "seed": seed,
             "world": {"size": [14.0, width], "duration": 40.0}, "obstacles": people,
             "robots": [{"name": "r1", "pose": [robot_x, width / 2, 0.0], "radius": 0.2,
@@ -61,6 +62,18 @@ def test_a_counterflow_in_a_narrow_corridor_gets_through_without_touching():
     assert seen["walls"] >= OVERLAP, f"a walker overlapped a wall by {-seen['walls'] * 1e3:.1f} mm"
     assert seen["arrived"] >= 11  # (before the clearance: 11; limiting each walker's own
     # velocity without impulses on the other froze this corridor: 0 to 9 arrived)
+
+
+def test_orca_walkers_in_a_narrow_counterflow_never_overlap_nor_walk_into_the_robot():
+    # ORCA's constraints leave no room here; its least-violating answers brought walkers 1.3 mm
+    # into each other and twice into the robot near the corridor's end (seed 2), before ORCA
+    # walkers were kept 5 mm apart, off the walls and off robots they see (actors/orca.py).
+    seen = clearances(counterflow(12, 1.6, robot_x=13.0, seed=2, speed_std=0.15,
+                                  policy="orca"), 30.0)
+    assert seen["walkers"] >= 0.0, f"walkers overlapped by {-seen['walkers'] * 1e3:.2f} mm"
+    assert seen["walls"] >= 0.0 and seen["robot"] >= 0.0
+    assert seen["collisions"] == 0
+    assert seen["arrived"] >= 9  # as many as before
 
 
 def test_walkers_squeezing_past_a_standing_robot_never_walk_into_it():
