@@ -144,7 +144,7 @@ class Propulsion:
             moving = drives.every_unit
             if h_last == h:
                 members, twists, moving = drives.coast_settled(moving, h, substeps)
-                if members:  # each held, or aimed every substep (``steady``)
+                if twists is not None:  # each held, or aimed every substep (``steady``)
                     for k, twist in _each_twist(members, twists):
                         if not hold(k, twist, h):
                             steady.append((k, twist))
@@ -168,7 +168,7 @@ class Propulsion:
                 still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
                     members, twists, moving = drives.coast_settled(units, h, left)
-                    if members:
+                    if twists is not None:
                         for k, twist in _each_twist(members, twists):
                             if not hold(k, twist, h):
                                 steady.append((k, twist))

@@ -318,18 +318,17 @@ class SubstepGate:
         (see origin_speeds), or its top speed if that is more."""
         movers = self.movers
         if len(movers) < _IN_ONE_READ:  # a few, one by one, into one array
-            rows = []
+            each = []
             for handle in self._handles:
                 p, v = get_position(handle), get_velocity(handle)
-                rows.append((p.x, p.y, v.x, v.y, get_spin(handle)))
-            state = np.array(rows).reshape(-1, 5)
-            xy, motion = state[:, :2], state[:, 2:]
+                each.append((p.x, p.y, v.x, v.y, get_spin(handle)))
+            rows = np.array(each).reshape(-1, 5)
         else:  # the movers' rows of every body's state
             state = self._space_state()
             if state.shape[0] != self._space_rows:
                 self._index(state.shape[0])
             rows = state[self._rows]
-            xy, motion = rows[:, :2], rows[:, 2:]
+        xy, motion = rows[:, :2], rows[:, 2:]
         now = origin_speeds(motion[:, 0], motion[:, 1], motion[:, 2], self._offset)
         return xy, np.maximum(now, self._top)
 
