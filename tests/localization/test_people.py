@@ -36,19 +36,18 @@ def test_short_returns_follow_the_sensor_mount_and_heading():
     assert short.tolist() == [True, False]
 
 
-def test_excused_fit_leaves_out_short_returns_and_says_nothing_on_too_few_left():
+def test_excused_fit_judges_only_the_returns_that_are_not_short():
     fits = np.array([True] * 6 + [False] * 4)
     none_short = np.zeros(10, dtype=bool)
-    assert excused_fit(fits, none_short, 5) == pytest.approx(0.6)
+    assert excused_fit(fits, none_short) == pytest.approx(0.6)
     four_short = np.array([False] * 6 + [True] * 4)  # the misfits were people
-    assert excused_fit(fits, four_short, 5) == pytest.approx(1.0)
+    assert excused_fit(fits, four_short) == pytest.approx(1.0)
     # most of the scan short (a robot wedged among people): the rest is judged alone
     many = np.array([True] * 5 + [False] * 15)
-    assert excused_fit(np.ones(20, dtype=bool), ~many, 5) == pytest.approx(1.0)
-    assert excused_fit(np.array([True] * 2 + [False] * 18), ~many, 5) == pytest.approx(0.4)
-    # fewer returns left than asked: the scan neither confirms nor contradicts
-    assert excused_fit(fits, np.array([True] * 6 + [False] * 4), 5) is None
-    assert excused_fit(np.zeros(0, dtype=bool), np.zeros(0, dtype=bool), 1) is None
+    assert excused_fit(np.ones(20, dtype=bool), ~many) == pytest.approx(1.0)
+    assert excused_fit(np.array([True] * 2 + [False] * 18), ~many) == pytest.approx(0.4)
+    assert excused_fit(fits, np.ones(10, dtype=bool)) == 1.0
+    assert excused_fit(np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)) == 1.0
 
 
 def _scan(ranges: np.ndarray, time: float) -> LaserScan:
@@ -158,10 +157,11 @@ def _room_scan(pose: np.ndarray, people: np.ndarray, time: float, beams: int = 3
                      offset=(0.0, 0.0, 0.0), time=time)
 
 
-def _track_among(people_bearings: np.ndarray) -> tuple[list[bool], float]:
+def _track_among(people_bearings: np.ndarray) -> tuple[list[bool], float, int]:
     """MCL (defaults, known start) driving 1.2 m along the room in 0.15 m steps, one scan each,
     with people 0.6 m away at ``people_bearings`` [rad] walking along with it: whether it said
-    ``localized`` after each update, and its worst position error [m]."""
+    ``localized`` after each update, its worst position error [m] and how many scans it left
+    unweighed."""
     from pymunk_bot.localization import MclConfig, MclLocalizer
     from pymunk_bot.localization.base import LocalizerContext, LocalizerInputs
     from pymunk_bot.robots.readings import RobotSpec
@@ -179,7 +179,7 @@ def _track_among(people_bearings: np.ndarray) -> tuple[list[bool], float]:
         mcl.update(LocalizerInputs(time, pose.copy(), _room_scan(pose, people, time)))
         said.append(mcl.localized)
         worst = max(worst, float(np.hypot(*(mcl.pose[:2] - pose[:2]))))
-    return said, worst
+    return said, worst, mcl.inconclusive_scans
 
 
 @pytest.mark.parametrize("people", [5, 6])
@@ -190,11 +190,12 @@ def test_mcl_wedged_among_people_keeps_tracking(people):
     counted as misfits: the fit fell below 0.7 on such a scan, the filter stopped saying
     ``localized`` and weighed the people (here: every other update with five people, lost by
     3.4 m with six; 12-17 m RMSE in those runs). Now the returns that are not short fit the
-    map (five people), or too few are left to say anything (six): it stays localized, within
-    a few centimetres."""
-    said, worst = _track_among(np.deg2rad(np.arange(people) * 60.0))
+    map (five people), or too few are left to say anything (six: the scans are not weighed):
+    it stays localized, within a few centimetres."""
+    said, worst, unweighed = _track_among(np.deg2rad(np.arange(people) * 60.0))
     assert all(said), said
     assert worst < 0.05
+    assert unweighed == (0 if people == 5 else len(said))
 
 
 def test_mcl_among_people_still_notices_a_kidnapping():
