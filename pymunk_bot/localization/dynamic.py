@@ -43,19 +43,22 @@ def short_returns(field: LikelihoodField, pose: np.ndarray, points: np.ndarray,
     return measured < expected - margin
 
 
-def excused_fit(fits: np.ndarray, short: np.ndarray) -> float:
+def excused_fit(fits: np.ndarray, short: np.ndarray, min_usable: int) -> float | None:
     """The share of returns that fit the map (``fits``, boolean per return) among those not
-    ``short``; 1.0 when every return is short (MCL judges no scan with too few left).
+    ``short``; None (the scan neither confirms nor contradicts the pose) when fewer than
+    ``min_usable`` returns are not short.
 
     However many are short, they are not held against the pose: a robot wedged among people
     has most beams on them (measured: 70-90 % of the used returns, all on walkers, the
     estimate within 5 cm). A wrong pose is told by the returns that are not short: they end
     at or beyond the map's surface along their beam, and beyond it they miss. (Until
     2026-12-06 short returns past 60 % of the scan counted as misfits, which made a robot
-    among people give up a right pose.)
+    among people give up a right pose.) A wrong pose from which nearly every return is short
+    (a hall on the map where the robot is in a small closed room) goes unnoticed until a
+    return that is not short shows up.
     """
     usable = ~np.asarray(short, dtype=bool)
     kept = int(np.count_nonzero(usable))
-    if kept == 0:
-        return 1.0
+    if kept < min_usable:
+        return None
     return int(np.count_nonzero(np.asarray(fits, dtype=bool) & usable)) / kept
