@@ -10,8 +10,9 @@ with ``z_short`` (an exponential density of returns shorter than expected, rate
 Here the test is done once per scan, from one pose (the tracked estimate): each beam's expected
 range is traced on the map's distance field (sphere tracing, explore.trace); a beam whose
 measured range is shorter than that by more than ``margin`` is *short* and left out of the
-weighting (MCL) or the match (EKF's scan matcher), and of MCL's scan fit (excused_fit). A return longer than expected is kept: no
-moving thing explains it, so it is evidence that the pose is wrong. A tracked estimate is within
+weighting (MCL) or the match (EKF's scan matcher), and of MCL's scan fit (excused_fit). A
+return longer than expected is kept: no moving thing explains it, so it is evidence that the
+pose is wrong. A tracked estimate is within
 centimetres, far inside ``margin``; from a wrong pose (a global start, a kidnapping) the test
 would hide the very beams that contradict it, so MCL applies it only while localized.
 """
