@@ -175,7 +175,8 @@ def _track_among(people_bearings: np.ndarray) -> tuple[list[bool], float, int]:
     said, worst = [], 0.0
     for k in range(1, 9):
         pose = start + np.array([0.15 * k, 0.0, 0.0])
-        people = pose[:2] + 0.6 * np.column_stack([np.cos(people_bearings), np.sin(people_bearings)])
+        around = np.column_stack([np.cos(people_bearings), np.sin(people_bearings)])
+        people = pose[:2] + 0.6 * around
         time = 0.2 * k
         mcl.update(LocalizerInputs(time, pose.copy(), _room_scan(pose, people, time)))
         said.append(mcl.localized)
