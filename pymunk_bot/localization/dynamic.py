@@ -10,8 +10,9 @@ with ``z_short`` (an exponential density of returns shorter than expected, rate
 Here the test is done once per scan, from one pose (the tracked estimate): each beam's expected
 range is traced on the map's distance field (sphere tracing, explore.trace); a beam whose
 measured range is shorter than that by more than ``margin`` is *short* and left out of the
-weighting (MCL) or the match (EKF's scan matcher). A return longer than expected is kept: no
-moving thing explains it, so it is evidence that the pose is wrong. A tracked estimate is within
+weighting (MCL) or the match (EKF's scan matcher), and of MCL's scan fit (excused_fit). A
+return longer than expected is kept: no moving thing explains it, so it is evidence that the
+pose is wrong. A tracked estimate is within
 centimetres, far inside ``margin``; from a wrong pose (a global start, a kidnapping) the test
 would hide the very beams that contradict it, so MCL applies it only while localized.
 """
@@ -23,10 +24,6 @@ from pymunk_bot.localization.explore import trace
 from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.se2 import transform_points
 
-# At most this share of a scan's returns is excused as short: past it, the map and the scan
-# disagree too much for people alone to explain (a wrong pose seeing a small room as a hall),
-# and the excess counts against the fit (see excused_fit).
-MAX_SHORT_SHARE = 0.6
 TRACE_TOLERANCE = 0.05  # [m] expected ranges are traced to within this (at most margin / 2)
 
 
@@ -47,12 +44,22 @@ def short_returns(field: LikelihoodField, pose: np.ndarray, points: np.ndarray,
     return measured < expected - margin
 
 
-def excused_fit(fits: np.ndarray, short: np.ndarray) -> float:
+def excused_fit(fits: np.ndarray, short: np.ndarray, min_usable: int) -> float | None:
     """The share of returns that fit the map (``fits``, boolean per return) among those not
-    ``short``; short ones beyond MAX_SHORT_SHARE of the scan count as misfits. 1.0 with none."""
-    total = fits.size
-    if total == 0:
-        return 1.0
-    kept = total - int(np.count_nonzero(short))
-    hits = int(np.count_nonzero(fits & ~short))
-    return hits / max(kept, (1.0 - MAX_SHORT_SHARE) * total)
+    ``short``; None (the scan neither confirms nor contradicts the pose) when fewer than
+    ``min_usable`` returns are not short.
+
+    However many are short, they are not held against the pose: a robot wedged among people
+    has most beams on them (measured: 70-90 % of the used returns, all on walkers, the
+    estimate within 5 cm). A wrong pose is told by the returns that are not short: they end
+    at or beyond the map's surface along their beam, and beyond it they miss. (Until
+    2026-12-06 short returns past 60 % of the scan counted as misfits, which made a robot
+    among people give up a right pose.) A wrong pose from which nearly every return is short
+    (a hall on the map where the robot is in a small closed room) goes unnoticed until a
+    return that is not short shows up.
+    """
+    usable = ~np.asarray(short, dtype=bool)
+    kept = int(np.count_nonzero(usable))
+    if kept < min_usable:
+        return None
+    return int(np.count_nonzero(np.asarray(fits, dtype=bool) & usable)) / kept
