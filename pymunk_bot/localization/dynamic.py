@@ -53,7 +53,7 @@ def excused_fit(fits: np.ndarray, short: np.ndarray, min_usable: int) -> float |
     has most beams on them (measured: 70-90 % of the used returns, all on walkers, the
     estimate within 5 cm). A wrong pose is told by the returns that are not short: they end
     at or beyond the map's surface along their beam, and beyond it they miss. (Until
-    2026-12-06 short returns past 60 % of the scan counted as misfits, which made a robot
+    2026-12-05 short returns past 60 % of the scan counted as misfits, which made a robot
     among people give up a right pose.) A wrong pose from which nearly every return is short
     (a hall on the map where the robot is in a small closed room) goes unnoticed until a
     return that is not short shows up.

@@ -188,7 +188,7 @@ def _track_among(people_bearings: np.ndarray) -> tuple[list[bool], float, int]:
 def test_mcl_wedged_among_people_keeps_tracking(people):
     """Five or six people 0.6 m around the robot hide 68 or 82 % of its beams (the warehouse
     with 30 ORCA walkers, seeds 2, 5, 18, 19: 70-75 % of the used returns short, all on
-    walkers, the estimate within 5 cm). Until 2026-12-06 short returns past 60 % of the scan
+    walkers, the estimate within 5 cm). Until 2026-12-05 short returns past 60 % of the scan
     counted as misfits: the fit fell below 0.7 on such a scan, the filter stopped saying
     ``localized`` and weighed the people (here: every other update with five people, lost by
     3.4 m with six; 12-17 m RMSE in those runs). Now the returns that are not short fit the
@@ -228,7 +228,7 @@ def test_mcl_among_people_still_notices_a_kidnapping():
 @pytest.mark.slow
 def test_mcl_tracks_while_wedged_among_thirty_walkers():
     """Issue 36: the warehouse with 30 ORCA walkers, seed 2: a scan with 13 of its 18 used
-    returns short, all on walkers, fitted 0.69 with the 60 % cap (until 2026-12-06): the filter
+    returns short, all on walkers, fitted 0.69 with the 60 % cap (until 2026-12-05): the filter
     gave up a pose 5 cm from the truth and ended 1453 cm RMSE off. Now 2.2 cm."""
     got = run_one("mcl", "warehouse_orca30", "typical", 2)
     assert got is not None and not got.error
