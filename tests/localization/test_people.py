@@ -111,13 +111,15 @@ def test_a_global_start_among_thirty_walkers_converges_on_the_right_pose():
     """Issue 36: a global start in the warehouse with 30 ORCA walkers (seed 3; seed 1 until
     the ORCA walkers' larger nudge changed the crowd). With every return weighed while
     localizing (reject_moving off, as before) MCL said `localized` on a wrong pose for 13.6 s
-    and converged only at 76.5 s; leaving out the returns of things that move (moving.py), it
-    converges at 10.6 s, never wrong."""
+    and converged only at 76.5 s (since ORCA walkers keep 5 mm apart, the crowd differs: it
+    converges at 33.2 s, past the bench's 20 s); leaving out the returns of things that move
+    (moving.py), it converged at 10.6 s, now at 3.6 s, never wrong."""
     got = run_one("mcl_global", "warehouse_orca30", "typical", 3)
     assert got is not None and not got.error
     assert got.converged_at <= GLOBAL_TIME and got.wrong_localized == 0.0, got.line()
     before = run_one("mcl_global", "warehouse_orca30", "typical", 3, {"reject_moving": False})
-    assert before is not None and before.wrong_localized > 0.0, before.line()
+    assert before is not None and (before.converged_at > GLOBAL_TIME
+                                   or before.wrong_localized > 0.0), before.line()
 
 
 @pytest.mark.slow
