@@ -107,6 +107,26 @@ class OccupancyMapper:
         self.scans += 1
         self._last_time = scan.time
 
+    def seen_free(self, xy: np.ndarray, radius: float) -> np.ndarray:
+        """Boolean (m,): which world points ``xy`` (m, 2) [m] lie in space the map has seen
+        free: every cell within ``radius`` [m] (a square of cells) observed and more likely free
+        than occupied. A point outside the grid is not."""
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        rows, cols = self.log_odds.shape
+        res = self.config.resolution
+        col = np.floor((xy[:, 0] - self.origin[0]) / res).astype(np.intp)
+        row = np.floor((xy[:, 1] - self.origin[1]) / res).astype(np.intp)
+        reach = int(np.ceil(radius / res))
+        offsets = np.arange(-reach, reach + 1)
+        near_rows = row[:, None, None] + offsets[None, :, None]
+        near_cols = col[:, None, None] + offsets[None, None, :]
+        in_grid = (near_rows >= 0) & (near_rows < rows) & (near_cols >= 0) & (near_cols < cols)
+        inside = np.all(in_grid.reshape(xy.shape[0], -1), axis=1)
+        near_rows = np.clip(near_rows, 0, rows - 1)
+        near_cols = np.clip(near_cols, 0, cols - 1)
+        free = self.observed[near_rows, near_cols] & (self.log_odds[near_rows, near_cols] < 0.0)
+        return inside & free.reshape(xy.shape[0], -1).all(axis=1)
+
     def _flat_cells(self, xy: np.ndarray) -> np.ndarray:
         rows, cols = self.log_odds.shape
         col = np.floor((xy[..., 0] - self.origin[0]) / self.config.resolution).astype(np.intp)
