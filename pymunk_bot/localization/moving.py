@@ -94,6 +94,10 @@ class MovingReturns:
         while self._kept and scan.time - self._kept[0].time > self.window:
             self._kept.popleft()
 
+    def forget(self) -> None:
+        """Drop every kept scan (their poses no longer hold, e.g. after a SLAM graph moved)."""
+        self._kept.clear()
+
     def flag(self, scan, odometry: np.ndarray) -> np.ndarray:
         """Boolean per return of ``scan`` (in ``scan_points`` order, max-range beams left out),
         taken at ``odometry``: which are moving. Compared with the kept scans older than it."""

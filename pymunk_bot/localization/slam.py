@@ -153,7 +153,7 @@ class SlamLocalizer(Localizer):
         fresh = scan is not None and abs(scan.time - inputs.time) < 1e-9
         self._update(odom, scan, fresh, inputs.time)
         if fresh and self.config.reject_moving:
-            self._moving.observe(scan, odom)
+            self._moving.observe(scan, self.pose)
 
     def _update(self, odom: np.ndarray, scan, fresh: bool, time: float) -> None:
         if not self.keyframes:
@@ -169,7 +169,7 @@ class SlamLocalizer(Localizer):
         if fresh and (np.hypot(moved[0], moved[1]) >= self.config.keyframe_d
                       or abs(moved[2]) >= self.config.keyframe_a):
             travel = self._travel[-1] + float(np.hypot(moved[0], moved[1]))
-            static = self.static_returns(scan, odom, predicted)
+            static = self.static_returns(scan, predicted)
             points = subsample(scan_points(scan)[0][static], self.config.max_beams)
             match = self._front_end_match(points, predicted, prior)
             if match.ok and match.inliers > 0.5:
@@ -181,22 +181,35 @@ class SlamLocalizer(Localizer):
             self.pose = pose
             self.covariance = cov
 
-    def static_returns(self, scan, odom: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        """Boolean per return of ``scan`` (``scan_points`` order), taken at odometry ``odom``
-        and predicted pose ``predicted`` [x, y, theta]: which are kept as the static world.
-        Left out: returns that entered space the recent scans saw free (``reject_moving``,
-        moving.py: a walker crossing or coming closer), and returns in space this map has seen
-        free, every cell within ``free_radius`` (``reject_free``: a walker where the robot saw
-        the floor before, walking away from it too). A free-space test that would leave fewer
-        than MIN_STATIC_SHARE of the returns is dropped: the prediction, not the world, is off."""
+    def static_returns(self, scan, predicted: np.ndarray) -> np.ndarray:
+        """Boolean per return of ``scan`` (``scan_points`` order) taken at the predicted pose
+        ``predicted`` [x, y, theta]: which are kept as the static world. Left out:
+
+        - *moving* (``reject_moving``, moving.py): the return entered space one of the last
+          ``moving_window`` seconds of scans saw free, each scan placed where this SLAM put it
+          (its keyframe and the odometry since: a second of raw odometry, a few degrees off in
+          a cluttered room, made walls look moving), unless this map holds a surface within
+          ``free_radius`` of it, hit by more than one keyframe (a thin pole one scan's beams
+          straddled, an edge seen anew);
+        - *in seen-free space* (``reject_free``): every cell within ``free_radius`` of it is
+          one this map has seen free (a walker where the robot saw the floor, walking away
+          from the robot too). A test that would leave fewer than MIN_STATIC_SHARE of the
+          returns is dropped: then the prediction, not the world, is off."""
         c = self.config
         points, _ = scan_points(scan)
         static = np.ones(points.shape[0], dtype=bool)
+        if not points.shape[0] or not (c.reject_moving or c.reject_free):
+            return static
+        self._refresh_map()
+        world = transform_points(predicted, points)
         if c.reject_moving:
-            static &= ~self._moving.flag(scan, odom)
-        if c.reject_free and points.shape[0]:
-            self._refresh_map()
-            seen_free = self.mapper.seen_free(transform_points(predicted, points), c.free_radius)
+            # a surface hit by more than one keyframe (a walker's cells get one hit, then misses)
+            held = self.mapper.near_surface(world, c.free_radius, self.mapper.config.hit_probability)
+            moving = self._moving.flag(scan, predicted) & ~held
+            if np.count_nonzero(~moving) >= MIN_STATIC_SHARE * points.shape[0]:
+                static &= ~moving
+        if c.reject_free:
+            seen_free = self.mapper.seen_free(world, c.free_radius)
             if np.count_nonzero(static & ~seen_free) >= MIN_STATIC_SHARE * points.shape[0]:
                 static &= ~seen_free
         return static
@@ -319,3 +332,4 @@ class SlamLocalizer(Localizer):
         self.keyframes = [p for p in poses]
         self.uncertainty.move(poses)
         self._map_stale = True
+        self._moving.forget()  # the recent scans were placed where the graph no longer is

@@ -71,7 +71,7 @@ def _drive(slam: SlamLocalizer, walker_at, seconds: float = 4.0) -> list[tuple]:
         walker = walker_at(t)
         scan = _scan(pose, t, walker)
         before = len(slam.keyframes)
-        static = slam.static_returns(scan, pose, pose) if slam.keyframes else None
+        static = slam.static_returns(scan, pose) if slam.keyframes else None
         slam.update(LocalizerInputs(time=t, odometry=pose, scan=scan))
         if len(slam.keyframes) > before and static is not None:
             seen.append((scan, pose, walker, static))
