@@ -107,13 +107,6 @@ class OccupancyMapper:
         self.scans += 1
         self._last_time = scan.time
 
-    def seen_free(self, xy: np.ndarray, radius: float) -> np.ndarray:
-        """Boolean (m,): which world points ``xy`` (m, 2) [m] lie in space the map has seen
-        free: every cell within ``radius`` [m] (a square of cells) observed and more likely free
-        than occupied. A point near the grid's edge is not."""
-        log_odds, observed, inside = self._around(xy, radius)
-        return inside & np.all(observed & (log_odds < 0.0), axis=1)
-
     def near_surface(self, xy: np.ndarray, radius: float, probability: float = 0.5) -> np.ndarray:
         """Boolean (m,): which world points ``xy`` (m, 2) [m] have a cell within ``radius`` [m]
         (a square of cells) that the map holds occupied with more than ``probability``."""

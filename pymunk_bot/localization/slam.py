@@ -111,6 +111,9 @@ class SlamLocalizer(Localizer):
         self.odometry_trust = OdometryTrust()  # the front end's odometry prior, learned
         # recent scans, to find returns of things that move (moving.py)
         self._moving = MovingReturns(config.moving_window, config.moving_margin, config.moving_blob)
+        # the front end's submap: the latest keyframes' scans, for the seen-free test
+        self._submap_scans = MovingReturns(math.inf, config.moving_margin, config.moving_blob,
+                                           scans=LOCAL_KEYFRAMES, spacing=0.0)
         self.returns_left_out = 0  # returns of keyframes left out as moving or seen free, in all
 
     @property
@@ -183,35 +186,37 @@ class SlamLocalizer(Localizer):
 
     def static_returns(self, scan, predicted: np.ndarray) -> np.ndarray:
         """Boolean per return of ``scan`` (``scan_points`` order) taken at the predicted pose
-        ``predicted`` [x, y, theta]: which are kept as the static world. Left out:
+        ``predicted`` [x, y, theta]: which are kept as the static world. Left out, both tests
+        moving.py's (a return where an earlier beam reached more than ``moving_margin`` beyond
+        it, and the rest of its blob), each earlier scan placed where this SLAM put it (its
+        keyframe and the odometry since: a second of raw odometry, a few degrees off in a
+        cluttered room, made walls look moving):
 
-        - *moving* (``reject_moving``, moving.py): the return entered space one of the last
-          ``moving_window`` seconds of scans saw free, each scan placed where this SLAM put it
-          (its keyframe and the odometry since: a second of raw odometry, a few degrees off in
-          a cluttered room, made walls look moving), unless this map holds a surface within
-          ``free_radius`` of it, hit by more than one keyframe (a thin pole one scan's beams
-          straddled, an edge seen anew);
-        - *in seen-free space* (``reject_free``): every cell within ``free_radius`` of it is
-          one this map has seen free (a walker where the robot saw the floor, walking away
-          from the robot too). A test that would leave fewer than MIN_STATIC_SHARE of the
-          returns is dropped: then the prediction, not the world, is off."""
+        - *moving* (``reject_moving``): it entered space one of the last ``moving_window``
+          seconds of scans saw free (a walker crossing or coming closer);
+        - *seen free* (``reject_free``): it lies in space one of the front end's submap
+          keyframes (the latest LOCAL_KEYFRAMES) saw free (a walker where the robot saw the
+          floor a few seconds ago, one walking away from it too). The submap's, not the whole
+          map's: an old pass's walls, a degree or two off where no loop has closed yet, made
+          the far walls look like they stood in free space.
+
+        Neither where this map holds a surface hit by more than one keyframe within
+        ``surface_radius`` (a thin pole one scan's beams straddled, an edge seen anew). A test
+        that would leave fewer than MIN_STATIC_SHARE of the returns is not applied: then the
+        prediction, not the world, is off."""
         c = self.config
         points, _ = scan_points(scan)
         static = np.ones(points.shape[0], dtype=bool)
         if not points.shape[0] or not (c.reject_moving or c.reject_free):
             return static
         self._refresh_map()
-        world = transform_points(predicted, points)
-        if c.reject_moving:
-            # a surface hit by more than one keyframe (a walker's cells get one hit, then misses)
-            held = self.mapper.near_surface(world, c.free_radius, self.mapper.config.hit_probability)
-            moving = self._moving.flag(scan, predicted) & ~held
-            if np.count_nonzero(~moving) >= MIN_STATIC_SHARE * points.shape[0]:
-                static &= ~moving
-        if c.reject_free:
-            seen_free = self.mapper.seen_free(world, c.free_radius)
-            if np.count_nonzero(static & ~seen_free) >= MIN_STATIC_SHARE * points.shape[0]:
-                static &= ~seen_free
+        held = self.mapper.near_surface(transform_points(predicted, points), c.surface_radius,
+                                        self.mapper.config.hit_probability)
+        for on, scans in ((c.reject_moving, self._moving), (c.reject_free, self._submap_scans)):
+            if on:
+                flagged = scans.flag(scan, predicted) & ~held
+                if np.count_nonzero(static & ~flagged) >= MIN_STATIC_SHARE * points.shape[0]:
+                    static &= ~flagged
         return static
 
     def _front_end_match(self, points: np.ndarray, predicted: np.ndarray, prior: np.ndarray) -> Match:
@@ -259,6 +264,7 @@ class SlamLocalizer(Localizer):
         self.uncertainty.add(self.keyframes[index], np.zeros((3, 3)) if cov is None else cov + EDGE_FLOOR)
         if not self._map_stale:  # else the next read rebuilds it from every keyframe
             self.mapper.integrate(self.keyframes[index], scan)
+        self._submap_scans.observe(scan, self.keyframes[index])
         self._close_loop(index)
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
@@ -333,3 +339,6 @@ class SlamLocalizer(Localizer):
         self.uncertainty.move(poses)
         self._map_stale = True
         self._moving.forget()  # the recent scans were placed where the graph no longer is
+        self._submap_scans.forget()
+        for k in range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES), len(self.keyframes)):
+            self._submap_scans.observe(self._scans[k], self.keyframes[k])
