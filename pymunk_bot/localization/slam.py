@@ -340,5 +340,5 @@ class SlamLocalizer(Localizer):
         self._map_stale = True
         self._moving.forget()  # the recent scans were placed where the graph no longer is
         self._submap_scans.forget()
-        for k in range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES), len(self.keyframes)):
-            self._submap_scans.observe(self._scans[k], self.keyframes[k])
+        for pose, scan in list(zip(self.keyframes, self._scans))[-LOCAL_KEYFRAMES:]:
+            self._submap_scans.observe(scan, pose)

@@ -7,7 +7,7 @@ Instrumented before (warehouse, 30 social-force walkers, seed 1, typical odometr
 6 m): 30-80 of a keyframe's 180 matched returns ended on walkers, half of whom walk the robot's
 route; matches slid 10-22 cm at a time with the crowd (keyframe-to-keyframe error against the
 truth) while their residuals stayed at 1.1-1.8 cm, and the estimate ended 2 m off (ATE 152.7
-cm). With the returns left out: ATE 2.5 cm.
+cm). With the returns left out: ATE 1.9 cm.
 """
 from __future__ import annotations
 
