@@ -142,6 +142,17 @@ class SlamConfig(Section):
     optimize_every: Annotated[Int, Field(ge=1, le=10_000)] = 1  # loop closures between optimizations
     max_keyframes: Annotated[Int, Field(ge=10, le=100_000)] = 20_000  # then odometry only
     margin: NonNegativeFloat = 1.0  # [m] map extent beyond the arena
+    # Returns of things that move (people) are left out of the keyframe's match and of what it
+    # adds to the front end's submaps (slam.py): returns that entered space the last
+    # moving_window seconds of scans saw free (reject_moving) or that lie in space the submap's
+    # keyframes saw free (reject_free), by moving.py's test (margin, blob: MCL's keys), unless
+    # SLAM's map holds a surface within surface_radius.
+    reject_moving: bool = True
+    moving_window: Annotated[Float, Field(gt=0.0, le=10.0)] = 1.0  # [s]
+    moving_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.2  # [m]
+    moving_blob: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.8  # [m]; 0: returns one by one
+    reject_free: bool = True
+    surface_radius: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [m]
 
 
 class MappingConfig(Section):

@@ -77,22 +77,30 @@ class MovingReturns:
     ``window`` [s]: how far back scans are compared (a walker at 1 m/s moves 0.5 m in 0.5 s);
     ``margin`` [m]: how far beyond a return an earlier beam must have reached; ``blob`` [m]: the
     largest outline flagged whole when one of its returns is moving (0: returns one by one).
+    ``scans``: how many are kept at most, ``spacing`` [s]: the least time between two kept
+    (default: ``window`` / ``scans``, so that they span the window).
     """
 
-    def __init__(self, window: float, margin: float, blob: float) -> None:
+    def __init__(self, window: float, margin: float, blob: float, scans: int = MAX_KEPT_SCANS,
+                 spacing: float | None = None) -> None:
         self.window = window
         self.margin = margin
         self.blob = blob
-        self._kept: deque[_Kept] = deque(maxlen=MAX_KEPT_SCANS)
+        self.spacing = window / scans if spacing is None else spacing
+        self._kept: deque[_Kept] = deque(maxlen=scans)
 
     def observe(self, scan, odometry: np.ndarray) -> None:
-        """Keep ``scan`` (taken at ``odometry`` [x, y, theta]) for the scans that follow; spaced
-        so that MAX_KEPT_SCANS of them span ``window``."""
-        if self._kept and scan.time - self._kept[-1].time < self.window / MAX_KEPT_SCANS:
+        """Keep ``scan`` (taken at ``odometry`` [x, y, theta]) for the scans that follow, at
+        least ``spacing`` after the last one kept."""
+        if self._kept and scan.time - self._kept[-1].time < self.spacing:
             return
         self._kept.append(_Kept(scan, odometry))
         while self._kept and scan.time - self._kept[0].time > self.window:
             self._kept.popleft()
+
+    def forget(self) -> None:
+        """Drop every kept scan (their poses no longer hold, e.g. after a SLAM graph moved)."""
+        self._kept.clear()
 
     def flag(self, scan, odometry: np.ndarray) -> np.ndarray:
         """Boolean per return of ``scan`` (in ``scan_points`` order, max-range beams left out),

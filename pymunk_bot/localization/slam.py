@@ -38,6 +38,7 @@ from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerI
 from pymunk_bot.localization.config import MappingConfig, SlamConfig
 from pymunk_bot.localization.loopsearch import ChainUncertainty, candidates
 from pymunk_bot.localization.mapping import OccupancyMapper
+from pymunk_bot.localization.moving import MovingReturns
 from pymunk_bot.localization.odometry_trust import OdometryTrust
 from pymunk_bot.localization.posegraph import Edge, final_weights, optimize
 from pymunk_bot.localization.icp import Reference, icp
@@ -64,6 +65,9 @@ LOOP_MAX_STD = 0.05  # [m] a closure's match: largest position std at most
 LOOP_MAX_HEADING_STD = math.radians(1.0)  # [rad] its heading std at most
 LOOP_CONSISTENCY = 16.27  # chi^2_3 (99.9 %) of the correction against the accumulated covariance
 OVERRULED_WEIGHT = 0.1  # a closure whose kernel weight falls below this is overruled
+# A keyframe keeps at least this share of its returns: past it, the prediction is too far off
+# for the free-space test (walls land in free space) and only the moving test counts.
+MIN_STATIC_SHARE = 0.4
 
 
 @dataclass(frozen=True)
@@ -105,16 +109,26 @@ class SlamLocalizer(Localizer):
         self._map_stale = False  # the graph moved since the map was built
         self.uncertainty = ChainUncertainty()
         self.odometry_trust = OdometryTrust()  # the front end's odometry prior, learned
+        # recent scans, to find returns of things that move (moving.py)
+        self._moving = MovingReturns(config.moving_window, config.moving_margin, config.moving_blob)
+        # the front end's submap: the latest keyframes' scans, for the seen-free test
+        self._submap_scans = MovingReturns(math.inf, config.moving_margin, config.moving_blob,
+                                           scans=LOCAL_KEYFRAMES, spacing=0.0)
+        self.returns_left_out = 0  # returns of keyframes left out as moving or seen free, in all
 
     @property
     def grid(self) -> OccupancyGrid:
         """The occupancy grid built from the keyframes at their (optimized) poses."""
+        self._refresh_map()
+        return self.mapper.grid
+
+    def _refresh_map(self) -> None:
+        """Rebuild the map from every keyframe's scan if the graph moved since it was built."""
         if self._map_stale:
             self.mapper.reset()
             for pose, scan in zip(self.keyframes, self._scans):
                 self.mapper.integrate(pose, scan)
             self._map_stale = False
-        return self.mapper.grid
 
     def closures_overruled(self) -> int:
         """Accepted closures the optimized graph has all but switched off (kernel weight below
@@ -132,6 +146,7 @@ class SlamLocalizer(Localizer):
         return {"keyframes": np.array(self.keyframes).reshape(-1, 3),
                 "loop_closures": list(self.loop_closures),
                 "closures_rejected": self.closures_rejected,
+                "returns_left_out": self.returns_left_out,
                 "keyframe_limit_reached": self.keyframe_limit_reached}
 
     # ------------------------------------------------------------------ update
@@ -139,10 +154,15 @@ class SlamLocalizer(Localizer):
         odom = np.asarray(inputs.odometry, dtype=float)
         scan = inputs.scan
         fresh = scan is not None and abs(scan.time - inputs.time) < 1e-9
+        self._update(odom, scan, fresh, inputs.time)
+        if fresh and self.config.reject_moving:
+            self._moving.observe(scan, self.pose)
+
+    def _update(self, odom: np.ndarray, scan, fresh: bool, time: float) -> None:
         if not self.keyframes:
             if fresh:
                 self._add_keyframe(np.asarray(self.context.start_pose, dtype=float), odom, scan,
-                                   0.0, None, inputs.time)
+                                   0.0, None, time)
             return
         moved = between(self._odom[-1], odom)
         predicted, prior = self.odometry_trust.predict(self.keyframes[-1], moved)
@@ -152,16 +172,52 @@ class SlamLocalizer(Localizer):
         if fresh and (np.hypot(moved[0], moved[1]) >= self.config.keyframe_d
                       or abs(moved[2]) >= self.config.keyframe_a):
             travel = self._travel[-1] + float(np.hypot(moved[0], moved[1]))
-            points = subsample(scan_points(scan)[0], self.config.max_beams)
+            static = self.static_returns(scan, predicted)
+            points = subsample(scan_points(scan)[0][static], self.config.max_beams)
             match = self._front_end_match(points, predicted, prior)
             if match.ok and match.inliers > 0.5:
                 pose, cov = match.pose, match.covariance
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
             else:
                 pose, cov = predicted, np.diag([0.05, 0.05, 0.05]) ** 2
-            self._add_keyframe(pose, odom, scan, travel, cov, inputs.time)
+            self._add_keyframe(pose, odom, scan, travel, cov, time, static)
             self.pose = pose
             self.covariance = cov
+
+    def static_returns(self, scan, predicted: np.ndarray) -> np.ndarray:
+        """Boolean per return of ``scan`` (``scan_points`` order) taken at the predicted pose
+        ``predicted`` [x, y, theta]: which are kept as the static world. Left out, both tests
+        moving.py's (a return where an earlier beam reached more than ``moving_margin`` beyond
+        it, and the rest of its blob), each earlier scan placed where this SLAM put it (its
+        keyframe and the odometry since: a second of raw odometry, a few degrees off in a
+        cluttered room, made walls look moving):
+
+        - *moving* (``reject_moving``): it entered space one of the last ``moving_window``
+          seconds of scans saw free (a walker crossing or coming closer);
+        - *seen free* (``reject_free``): it lies in space one of the front end's submap
+          keyframes (the latest LOCAL_KEYFRAMES) saw free (a walker where the robot saw the
+          floor a few seconds ago, one walking away from it too). The submap's, not the whole
+          map's: an old pass's walls, a degree or two off where no loop has closed yet, made
+          the far walls look like they stood in free space.
+
+        Neither where this map holds a surface hit by more than one keyframe within
+        ``surface_radius`` (a thin pole one scan's beams straddled, an edge seen anew). A test
+        that would leave fewer than MIN_STATIC_SHARE of the returns is not applied: then the
+        prediction, not the world, is off."""
+        c = self.config
+        points, _ = scan_points(scan)
+        static = np.ones(points.shape[0], dtype=bool)
+        if not points.shape[0] or not (c.reject_moving or c.reject_free):
+            return static
+        self._refresh_map()
+        held = self.mapper.near_surface(transform_points(predicted, points), c.surface_radius,
+                                        self.mapper.config.hit_probability)
+        for on, scans in ((c.reject_moving, self._moving), (c.reject_free, self._submap_scans)):
+            if on:
+                flagged = scans.flag(scan, predicted) & ~held
+                if np.count_nonzero(static & ~flagged) >= MIN_STATIC_SHARE * points.shape[0]:
+                    static &= ~flagged
+        return static
 
     def _front_end_match(self, points: np.ndarray, predicted: np.ndarray, prior: np.ndarray) -> Match:
         """The new scan aligned with the latest keyframes' submap, from the odometry's
@@ -186,12 +242,18 @@ class SlamLocalizer(Localizer):
                     match = retry
         return match
 
-    def _add_keyframe(self, pose, odom, scan, travel, cov, time: float) -> None:
+    def _add_keyframe(self, pose, odom, scan, travel, cov, time: float,
+                      static: np.ndarray | None = None) -> None:
+        """A keyframe at ``pose`` of ``scan``; ``static``: which returns its submaps keep
+        (all when None)."""
         index = len(self.keyframes)
         self.keyframes.append(np.array(pose, dtype=float))
         self.keyframe_times.append(float(time))
         self._scans.append(scan)
         points, _ = scan_points(scan)
+        if static is not None:
+            self.returns_left_out += int(np.count_nonzero(~static))
+            points = points[static]
         self._points.append(subsample(points, self.config.max_beams))
         self._local.append(points)
         self._odom.append(odom.copy())
@@ -202,6 +264,7 @@ class SlamLocalizer(Localizer):
         self.uncertainty.add(self.keyframes[index], np.zeros((3, 3)) if cov is None else cov + EDGE_FLOOR)
         if not self._map_stale:  # else the next read rebuilds it from every keyframe
             self.mapper.integrate(self.keyframes[index], scan)
+        self._submap_scans.observe(scan, self.keyframes[index])
         self._close_loop(index)
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
@@ -275,3 +338,7 @@ class SlamLocalizer(Localizer):
         self.keyframes = [p for p in poses]
         self.uncertainty.move(poses)
         self._map_stale = True
+        self._moving.forget()  # the recent scans were placed where the graph no longer is
+        self._submap_scans.forget()
+        for pose, scan in list(zip(self.keyframes, self._scans))[-LOCAL_KEYFRAMES:]:
+            self._submap_scans.observe(scan, pose)
