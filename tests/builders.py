@@ -1,6 +1,8 @@
 """Scenario mappings built in code for tests (import as ``from builders import robot``)."""
 from __future__ import annotations
 
+import math
+
 
 def scenario(robots: list[dict], obstacles: list[dict] | None = None, size=(20.0, 20.0),
              **extra) -> dict:
@@ -18,3 +20,33 @@ def robot(pose, **keys) -> dict:
 
 def wheels(left: float, right: float) -> dict:
     return {"type": "wheels", "left": left, "right": right}
+
+
+ROOM = (8.0, 5.0)  # [m] room_scan's walls at x = 0, 8 and y = 0, 5
+ROOM_RANGE = 6.0  # [m] room_scan's LiDAR range
+
+
+def room_scan(pose, time, walker=None, beams=360, fov=2 * math.pi, radius=0.25):
+    """A LiDAR's LaserScan at ``pose`` [x, y, theta] in an empty 8 x 5 m room (ROOM), with a
+    round walker of ``radius`` [m] at ``walker`` (x, y) if given; ranges capped at ROOM_RANGE."""
+    import numpy as np
+
+    from pymunk_bot.robots.readings import LaserScan
+    from pymunk_bot.sensors import beam_angles
+
+    angles = beam_angles(beams, fov)
+    world = pose[2] + angles
+    c, s = np.cos(world), np.sin(world)
+    with np.errstate(divide="ignore"):
+        tx = np.where(c > 0, (ROOM[0] - pose[0]) / c, np.where(c < 0, -pose[0] / c, np.inf))
+        ty = np.where(s > 0, (ROOM[1] - pose[1]) / s, np.where(s < 0, -pose[1] / s, np.inf))
+    ranges = np.minimum(tx, ty)
+    if walker is not None:  # ray-circle intersection
+        dx, dy = walker[0] - pose[0], walker[1] - pose[1]
+        along = dx * c + dy * s
+        miss2 = dx * dx + dy * dy - along * along
+        hit = (along > 0) & (miss2 < radius ** 2)
+        ranges = np.where(hit, np.minimum(ranges, along - np.sqrt(np.maximum(radius ** 2 - miss2,
+                                                                               0))), ranges)
+    return LaserScan(ranges=np.minimum(ranges, ROOM_RANGE), angles=angles, min_range=0.1,
+                     max_range=ROOM_RANGE, offset=(0.0, 0.0, 0.0), time=time)

@@ -4,32 +4,10 @@ import math
 import numpy as np
 
 from pymunk_bot.localization.moving import MovingReturns
+from builders import room_scan
 from pymunk_bot.localization.se2 import scan_points
-from pymunk_bot.robots.readings import LaserScan
-from pymunk_bot.sensors import beam_angles
 
-ROOM = (8.0, 5.0)  # [m] walls at x = 0, 8 and y = 0, 5
-MAX_RANGE = 6.0  # [m]
-
-
-def _scan(pose, time, walker=None, beams=360, fov=2 * math.pi, radius=0.25) -> LaserScan:
-    """A LiDAR at ``pose`` in the room, optionally with a round walker at ``walker`` (x, y)."""
-    angles = beam_angles(beams, fov)
-    world = pose[2] + angles
-    c, s = np.cos(world), np.sin(world)
-    with np.errstate(divide="ignore"):
-        tx = np.where(c > 0, (ROOM[0] - pose[0]) / c, np.where(c < 0, -pose[0] / c, np.inf))
-        ty = np.where(s > 0, (ROOM[1] - pose[1]) / s, np.where(s < 0, -pose[1] / s, np.inf))
-    ranges = np.minimum(tx, ty)
-    if walker is not None:  # ray-circle intersection
-        dx, dy = walker[0] - pose[0], walker[1] - pose[1]
-        along = dx * c + dy * s
-        miss2 = dx * dx + dy * dy - along * along
-        hit = (along > 0) & (miss2 < radius ** 2)
-        ranges = np.where(hit, np.minimum(ranges, along - np.sqrt(np.maximum(radius ** 2 - miss2, 0))), ranges)
-    ranges = np.where(ranges > MAX_RANGE, MAX_RANGE, ranges)
-    return LaserScan(ranges=ranges, angles=angles, min_range=0.1, max_range=MAX_RANGE,
-                     offset=(0.0, 0.0, 0.0), time=time)
+_scan = room_scan
 
 
 def _on_walker(scan, pose, walker, radius=0.25) -> np.ndarray:

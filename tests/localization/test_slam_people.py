@@ -19,33 +19,16 @@ import pytest
 from bench.localization_robustness import SLAM_ATE, run_one
 from pymunk_bot.localization import SlamConfig, SlamLocalizer
 from pymunk_bot.localization.base import LocalizerContext, LocalizerInputs
+from builders import ROOM, room_scan
 from pymunk_bot.localization.se2 import scan_points
 from pymunk_bot.robots.readings import LaserScan
-from pymunk_bot.sensors import beam_angles
 
-ROOM = (8.0, 5.0)  # [m] walls at x = 0, 8 and y = 0, 5
-MAX_RANGE = 6.0  # [m]
 WALKER_RADIUS = 0.25  # [m]
 
 
 def _scan(pose: np.ndarray, time: float, walker=None) -> LaserScan:
     """A 360-beam LiDAR at ``pose`` in the room, with a round walker at ``walker`` (x, y)."""
-    angles = beam_angles(360, 2 * math.pi)
-    world = pose[2] + angles
-    c, s = np.cos(world), np.sin(world)
-    with np.errstate(divide="ignore"):
-        tx = np.where(c > 0, (ROOM[0] - pose[0]) / c, np.where(c < 0, -pose[0] / c, np.inf))
-        ty = np.where(s > 0, (ROOM[1] - pose[1]) / s, np.where(s < 0, -pose[1] / s, np.inf))
-    ranges = np.minimum(tx, ty)
-    if walker is not None:  # ray-circle intersection
-        dx, dy = walker[0] - pose[0], walker[1] - pose[1]
-        along = dx * c + dy * s
-        miss2 = dx * dx + dy * dy - along * along
-        hit = (along > 0) & (miss2 < WALKER_RADIUS ** 2)
-        ranges = np.where(hit, np.minimum(ranges, along - np.sqrt(np.maximum(WALKER_RADIUS ** 2 - miss2, 0))),
-                          ranges)
-    return LaserScan(ranges=np.minimum(ranges, MAX_RANGE), angles=angles, min_range=0.1,
-                     max_range=MAX_RANGE, offset=(0.0, 0.0, 0.0), time=time)
+    return room_scan(pose, time, walker, radius=WALKER_RADIUS)
 
 
 def _on_walker(scan: LaserScan, pose: np.ndarray, walker) -> np.ndarray:
