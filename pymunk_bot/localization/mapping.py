@@ -109,27 +109,19 @@ class OccupancyMapper:
 
     def near_surface(self, xy: np.ndarray, radius: float, probability: float = 0.5) -> np.ndarray:
         """Boolean (m,): which world points ``xy`` (m, 2) [m] have a cell within ``radius`` [m]
-        (a square of cells) that the map holds occupied with more than ``probability``."""
-        log_odds, observed, _ = self._around(xy, radius)
-        return np.any(observed & (log_odds > logit(probability) + 1e-9), axis=1)
-
-    def _around(self, xy: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The log-odds and observed flags of the square of cells within ``radius`` [m] of each
-        world point ``xy`` (m, 2), as (m, k) arrays (cells off the grid read as its edge), and
-        whether the whole square lies on the grid (m,)."""
+        (a square of cells; cells off the grid read as its edge) that the map holds occupied
+        with more than ``probability``."""
         xy = np.asarray(xy, dtype=float).reshape(-1, 2)
         rows, cols = self.log_odds.shape
         res = self.config.resolution
+        reach = int(np.ceil(radius / res))
+        offsets = np.arange(-reach, reach + 1)
         col = np.floor((xy[:, 0] - self.origin[0]) / res).astype(np.intp)
         row = np.floor((xy[:, 1] - self.origin[1]) / res).astype(np.intp)
-        offsets = np.arange(-int(np.ceil(radius / res)), int(np.ceil(radius / res)) + 1)
-        near_rows = (row[:, None, None] + offsets[None, :, None]).repeat(offsets.size, axis=2)
-        near_cols = (col[:, None, None] + offsets[None, None, :]).repeat(offsets.size, axis=1)
-        near_rows, near_cols = near_rows.reshape(xy.shape[0], -1), near_cols.reshape(xy.shape[0], -1)
-        in_grid = (near_rows >= 0) & (near_rows < rows) & (near_cols >= 0) & (near_cols < cols)
-        near_rows, near_cols = np.clip(near_rows, 0, rows - 1), np.clip(near_cols, 0, cols - 1)
-        return (self.log_odds[near_rows, near_cols], self.observed[near_rows, near_cols],
-                np.all(in_grid, axis=1))
+        r = np.clip(row[:, None, None] + offsets[None, :, None], 0, rows - 1)  # (m, k, 1)
+        c = np.clip(col[:, None, None] + offsets[None, None, :], 0, cols - 1)  # (m, 1, k)
+        held = self.observed[r, c] & (self.log_odds[r, c] > logit(probability) + 1e-9)
+        return held.reshape(xy.shape[0], -1).any(axis=1)
 
     def _flat_cells(self, xy: np.ndarray) -> np.ndarray:
         rows, cols = self.log_odds.shape

@@ -118,17 +118,14 @@ class SlamLocalizer(Localizer):
 
     @property
     def grid(self) -> OccupancyGrid:
-        """The occupancy grid built from the keyframes at their (optimized) poses."""
-        self._refresh_map()
-        return self.mapper.grid
-
-    def _refresh_map(self) -> None:
-        """Rebuild the map from every keyframe's scan if the graph moved since it was built."""
+        """The occupancy grid built from the keyframes at their (optimized) poses (rebuilt
+        from every keyframe's scan if the graph moved since it was built)."""
         if self._map_stale:
             self.mapper.reset()
             for pose, scan in zip(self.keyframes, self._scans):
                 self.mapper.integrate(pose, scan)
             self._map_stale = False
+        return self.mapper.grid
 
     def closures_overruled(self) -> int:
         """Accepted closures the optimized graph has all but switched off (kernel weight below
