@@ -16,6 +16,7 @@ import numpy as np
 
 from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.sensors.lidar import Lidar
+from pymunk_bot.sensors.lidar_rows import LidarRows
 from pymunk_bot.physics.substeps import SubstepGate
 from pymunk_bot.physics.apart import SPLIT_FROM, SplitPlanner
 from pymunk_bot.physics.world import World
@@ -35,7 +36,7 @@ class Run(Protocol):
     substeps: int
     acts: bool  # work before the physics: controllers, actors, events
     reads: bool  # work after it: sensors other than LiDARs, localizers, maps, metrics
-    has_lidars: bool
+    lidars: list[Lidar]  # in robot order
     robots: dict[str, Any]
 
     @property
@@ -45,7 +46,7 @@ class Run(Protocol):
     def act(self) -> None: ...
     def tick_clock(self) -> float: ...
     def bookkeep(self, positions: np.ndarray) -> float: ...
-    def due_lidars(self, now: float) -> list[Any]: ...
+    def due_lidars(self, now: float) -> list[int]: ...
     def read(self, now: float) -> None: ...
     def finish(self, wall_time: float) -> None: ...
 
@@ -66,8 +67,15 @@ class Batch:
         # Which runs have work before and after the physics: a tick skips the rest.
         self.acting = tuple(run for run in self.runs if run.acts)
         self.reading = tuple(run for run in self.runs if run.reads)
-        self.caster = (first.world.ray_caster() if any(run.has_lidars for run in self.runs)
-                       else None)
+        # Every run's LiDARs as rows, each on its robot's row of the propulsion's bodies.
+        self.caster = None
+        self.lidars: LidarRows | None = None
+        if any(run.lidars for run in self.runs):
+            self.caster = first.world.ray_caster()
+            row_of = {id(body): k for k, body in enumerate(propulsion.bodies)}
+            every = [lidar for run in self.runs for lidar in run.lidars]
+            self.lidars = LidarRows(every, [row_of[id(lidar.body)] for lidar in every])
+            self._first_lidar = np.cumsum([0] + [len(run.lidars) for run in self.runs]).tolist()
         # Substeps where contacts can start (the default; None: every substep every tick).
         self.gate: SubstepGate | None = None
         if first.world.adaptive:
@@ -113,12 +121,10 @@ class Batch:
             run.act()
         self._physics()
         nows = self._bookkeep()
-        if self.caster is not None:
-            self.caster.begin_frame()  # every cast of this tick sees one scene
-            due = [(lidar, now) for run, now in zip(self.runs, nows)
-                   for lidar in run.due_lidars(now)]
-            if due:
-                Lidar.scan_all(self.caster, due)
+        if self.lidars is not None:
+            assert self.caster is not None
+            self.caster.begin_frame()  # every cast of this tick (on demand too) sees one scene
+            self._scan(nows)
         for run in self.reading:
             run.read(run.time)
         share = (wallclock.perf_counter() - started) / self._count
@@ -153,6 +159,20 @@ class Batch:
         substeps, following = gate.counts()  # one pymunk step where no contact can start
         propulsion.step(dt / substeps, substeps, dt / following)  # (physics/substeps.py)
         self._substep_after(dt / following)
+
+    def _scan(self, nows: list[float]) -> None:
+        """Phase 4's LiDARs: every one due, of every run, in one cast (``nows``: each run's
+        time [s])."""
+        due: list[int] = []
+        times: list[float] = []
+        for run, now, first in zip(self.runs, nows, self._first_lidar):
+            mine = run.due_lidars(now)
+            if mine:
+                due += [first + k for k in mine]
+                times += [now] * len(mine)
+        if due:
+            assert self.caster is not None and self.lidars is not None
+            self.lidars.scan(self.caster, due, times, self.propulsion.pose_array())
 
     def _substep_after(self, substep: float) -> None:
         """Every run's world learns the substep [s] the bodies' velocities now move in (for

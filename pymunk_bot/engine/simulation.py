@@ -83,9 +83,10 @@ class Simulation:
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
         self._observer = Observer(self._robots, built.fleet, built.odometry_groups)
-        self._lidars = [lidar for lidar in (r.sensor("lidar") for r in self._robots)
-                        if lidar is not None]
-        self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self._lidars])
+        # Its LiDARs, in robot order (the batch scans them as rows: sensors/lidar_rows.py).
+        self.lidars = [lidar for lidar in (r.sensor("lidar") for r in self._robots)
+                       if lidar is not None]
+        self._lidar_schedule = ScheduleArray([lidar.schedule for lidar in self.lidars])
         self._sensors = [s for r in self._robots for s in r.sensors
                          if s is not r.sensor("lidar") and not getattr(s, "passive", False)]
         self._localized = [r for r in self._robots if not getattr(r.localizer, "passive", False)]
@@ -106,8 +107,7 @@ class Simulation:
         self.acts = bool(self._controlled or self.world.actors or self.config.events)
         self.reads = bool(self._sensors or self._mapping or self._localized or self._scores
                           or built.metrics)
-        self.has_lidars = bool(self._lidars)
-        # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
+                # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
         self._batch = None if self._ground is not None else single(self)
 
     # ------------------------------------------------------------------ state
@@ -288,12 +288,12 @@ class Simulation:
             robot = robots[i]
             robot.follow(robot.controller.compute(next(observations) if looks else None))
 
-    def due_lidars(self, now: float) -> list[Any]:
-        """The LiDARs whose scan is due at ``now`` [s] (their schedules advance)."""
+    def due_lidars(self, now: float) -> list[int]:
+        """Which of ``lidars`` have a scan due at ``now`` [s] (their schedules advance)."""
         schedule = self._lidar_schedule
         if now + TIME_TOLERANCE < schedule.earliest:  # most ticks (and no LiDAR: never due)
             return []
-        return [self._lidars[k] for k in schedule.due(now)]
+        return schedule.due(now)
 
     def _score(self, now: float) -> None:
         for name, score in self._scores.items():

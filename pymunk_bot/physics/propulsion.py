@@ -45,6 +45,7 @@ _SET_SPIN = vars(pymunk.Body)["angular_velocity"].fset
 _SET_ANGLE = vars(pymunk.Body)["angle"].fset
 
 _READ = batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+_POSE = batch.BodyFields.POSITION | batch.BodyFields.ANGLE
 _WRITE = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
 # From this many robots aimed in one substep, the per-robot path reads, aims and writes them as
@@ -357,6 +358,10 @@ class Propulsion:
         """Every robot body's (angle [rad], vx, vy [m/s], omega [rad/s]) now, (n, 4), read in
         one call."""
         return self._read_state()[self.rows.robot]
+
+    def pose_array(self) -> np.ndarray:
+        """Every robot body's (x, y [m], angle [rad]) now, (n, 3), read in one call."""
+        return self.rows.read(_POSE, 3)[self.rows.robot]
 
     def position_array(self) -> np.ndarray:
         """Every robot body's position now, (n, 2) [m], read in one call."""

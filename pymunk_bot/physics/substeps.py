@@ -48,6 +48,7 @@ import pymunk.batch as batch
 from scipy.spatial import cKDTree
 
 from pymunk_bot.config.substeps import SubstepNeed
+from pymunk_bot.physics.static_cells import StaticCells
 from pymunk_bot.physics.bodies import get_position, get_spin, get_velocity, handles
 
 HORIZON = 0.5  # [s] the farthest ahead one test looks: nearer shapes are all it queries
@@ -162,6 +163,7 @@ class SubstepGate:
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
+        self._static = StaticCells(space, self._bodies)  # where the fixed shapes are
         self._handles = handles([m.body for m in self.movers])  # read one by one when few
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         # [m] cog to origin
@@ -193,6 +195,7 @@ class SubstepGate:
         now = self.ticks * self.dt
         self.ticks += 1
         if self.disturbed():  # the coming tick takes the full count; the next is tested anew
+            self._static.forget()
             self.clear_until = -math.inf
             self._planned = self.full
             self._wait = 0
@@ -239,6 +242,7 @@ class SubstepGate:
         stop stepping apart."""
         self.ticks += 1
         if disturbed:
+            self._static.forget()
             self._planned = self.full
         current = self._planned
         self.steps += current + int(apart)
@@ -288,20 +292,21 @@ class SubstepGate:
         clear = self._clear_between_movers(xy, speeds)
         if clear < needed:
             return clear
+        # Only movers that may have a fixed shape within reach are asked of pymunk.
+        look = self._reach + speeds * min(clear, HORIZON) + MARGIN  # [m]
+        asked = np.flatnonzero(self._dynamic & self._static.near(xy, look)).tolist()
+        if not asked:
+            return max(clear, 0.0)
+        first = bisect.bisect_left(asked, self._first)  # the last failure's mover first
         moving = self._bodies
         origins = xy.tolist()
-        order = list(range(self._first, len(movers))) + list(range(self._first))
-        for k in order:
-            mover = movers[k]
-            if not mover.collides_with_static:
-                continue
+        for k in asked[first:] + asked[:first]:
             speed = float(speeds[k])
-            look = mover.reach + speed * min(clear, HORIZON) + MARGIN
-            for hit in self.space.point_query(origins[k], look, _EVERY_SHAPE):
+            for hit in self.space.point_query(origins[k], float(look[k]), _EVERY_SHAPE):
                 shape = hit.shape
                 if shape is None or shape.sensor or shape.body in moving:
                     continue  # movers meet movers in _clear_between_movers
-                gap = hit.distance - mover.reach - MARGIN
+                gap = hit.distance - movers[k].reach - MARGIN
                 clear = min(clear, gap / speed if speed > 0.0 else (HORIZON if gap > 0 else 0.0))
                 if clear < needed:
                     self._first = k

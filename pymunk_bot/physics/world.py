@@ -167,8 +167,9 @@ class World:
         return physics.replica_filter(self.replica, group)
 
     def disturb(self) -> None:
-        """Bodies were moved outside the physics (a teleport): adaptive substeps look again
-        before a tick may skip them (on a shared ground, for every copy)."""
+        """Bodies were moved outside the physics (a teleport, or a fixed obstacle's body moved
+        by hand): adaptive substeps look again before a tick may skip them (on a shared
+        ground, for every copy)."""
         self._disturbed = True
         ground = getattr(self, "_ground", None)
         if ground is not None:

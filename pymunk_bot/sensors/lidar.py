@@ -9,7 +9,7 @@ A beam without a return reads max_range. Beam angles are fixed in the robot fram
 from __future__ import annotations
 
 import math
-from typing import Any, Protocol, Sequence
+from typing import Protocol
 
 import numpy as np
 import pymunk
@@ -74,7 +74,7 @@ class Lidar:
         angles = float(yaw) + beam_angles(config.beams, config.fov)
         angles.setflags(write=False)
         self._angles = angles
-        # The error model as floats, for record_all's arrays: (noise_std, min_range,
+        # The error model as floats, for LidarRows.store: (noise_std, min_range,
         # max_range, dropout).
         self.model = (float(config.noise_std), float(config.min_range),
                        float(config.max_range), float(config.dropout))
@@ -183,7 +183,7 @@ class Lidar:
         return ranges
 
     def periodic_normals(self, n: int) -> np.ndarray:
-        """``n`` standard normals of the periodic scans' noise stream (record_all draws a
+        """``n`` standard normals of the periodic scans' noise stream (LidarRows.store draws a
         batch of scans' noise through this, as each scan would)."""
         return self._normals(self._periodic_rng, n)
 
@@ -204,106 +204,3 @@ class Lidar:
             used = 0
         self._normals_used = used + n
         return block[used:used + n]
-
-    @staticmethod
-    def scan_all(caster: Any, due: list[tuple["Lidar", float]]) -> None:
-        """Every due LiDAR (with the time [s] its scan is recorded at) casts: one pass of
-        ``caster.cast_many`` for all of them."""
-        if len(due) > 1:
-            requests = Lidar.requests_all([lidar for lidar, _ in due])
-            Lidar.record_all(due, caster.cast_many(*requests))
-        elif due:
-            lidar, now = due[0]
-            lidar.record(now, lidar.true_ranges())
-
-    @staticmethod
-    def requests_all(lidars: Sequence["Lidar"]) -> tuple[list, Any, list, list]:
-        """:meth:`Lidar.cast_request` of many LiDARs, as the columns ``cast_many`` takes: the same
-        origins and beam angles, the angles as one (K, beams) array when the beam counts agree."""
-        origins, thetas, offsets, ranges, filters = [], [], [], [], []
-        for lidar in lidars:
-            origins.append(lidar.origin())
-            thetas.append(lidar.body.angle)
-            offsets.append(lidar.angles)
-            ranges.append(lidar.config.max_range)
-            filters.append(lidar.shape_filter)
-        if len({a.shape[0] for a in offsets}) == 1:
-            # body.angle + angles, row by row
-            angles: Any = np.array(thetas)[:, None] + np.stack(offsets)
-        else:
-            angles = [theta + a for theta, a in zip(thetas, offsets)]
-        return origins, angles, ranges, filters
-
-
-    @staticmethod
-    def record_all(due: Sequence[tuple["Lidar", float]],
-                   true_ranges: Sequence[np.ndarray] | np.ndarray) -> None:
-        """:meth:`Lidar.record` for many LiDARs (each with the time [s] of its scan): the same
-        floats from the same random streams, with the model's array work done once for all the
-        noisy ones, and once for all the exact ones, that share a beam count."""
-        if len(due) < 2 or not (isinstance(true_ranges, np.ndarray)  # one beam count: (K, n)
-                                or len({true.shape[0] for true in true_ranges}) == 1):
-            for (lidar, time), true in zip(due, true_ranges):
-                lidar.record(time, true)
-            return
-        models = [lidar.model for lidar, _ in due]
-        if all(noise_std > 0.0 for noise_std, _, _, _ in models):  # the usual case: all noisy
-            noisy = list(range(len(due)))
-            true = np.asarray(true_ranges)  # read only below: no copy of the caster's rows
-        else:
-            exact, noisy = [], []
-            for k, (noise_std, _, _, dropout) in enumerate(models):
-                if noise_std > 0.0:
-                    noisy.append(k)
-                elif dropout == 0.0:
-                    exact.append(k)
-                else:  # dropout alone: one by one
-                    lidar, time = due[k]
-                    lidar.record(time, true_ranges[k])
-            if exact:
-                Lidar.record_exact([due[k] for k in exact], [true_ranges[k] for k in exact])
-            if not noisy:
-                return
-            models = [models[k] for k in noisy]
-            true = np.stack([true_ranges[k] for k in noisy])
-        lidars = [due[k][0] for k in noisy]
-        model = np.array(models)
-        std, low, high = model[:, 0:1], model[:, 1:2], model[:, 2:3]
-        ranges = np.empty_like(true)
-        n = ranges.shape[1]
-        for row, lidar in zip(ranges, lidars):
-            row[:] = lidar.periodic_normals(n)
-        ranges *= std  # the single scan's true + std * noise, operand for operand
-        ranges += true
-        np.maximum(ranges, low, out=ranges)
-        np.minimum(ranges, high, out=ranges)
-        no_return = true < low
-        no_return |= true >= high
-        if any(dropout > 0.0 for _, _, _, dropout in models):
-            for row, lidar, (_, _, _, dropout) in zip(no_return, lidars, models):
-                if dropout > 0.0:
-                    row |= lidar.periodic_dropout(row.shape[0], dropout)
-        np.copyto(ranges, high, where=no_return)  # high broadcast along each row
-        ranges.setflags(write=False)
-        for row, k in zip(ranges, noisy):
-            lidar, time = due[k]
-            lidar.keep(time, row)
-
-
-    @staticmethod
-    def record_exact(due: Sequence[tuple["Lidar", float]],
-                      true_ranges: Sequence[np.ndarray]) -> None:
-        """record_all's exact LiDARs (no noise, no dropout): the limits only, as _apply_model."""
-        model = np.array([lidar.model for lidar, _ in due])
-        low, high = model[:, 1:2], model[:, 2:3]
-        ranges = np.stack(true_ranges)
-        np.minimum(ranges, high, out=ranges)
-        np.copyto(ranges, high, where=ranges < low)
-        ranges.setflags(write=False)
-        for row, (lidar, time) in zip(ranges, due):
-            lidar.keep(time, row)
-
-
-# The batched forms, by their module-level names.
-requests_all = Lidar.requests_all
-record_all = Lidar.record_all

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import pymunk
@@ -27,8 +27,9 @@ _TURNS = np.array([-TWO_PI, 0.0, TWO_PI])
 _SPACING = 8.0 * math.pi  # [rad] each origin's angles are shifted apart by this much
 
 
-def cast_many(caster: Any, origins: list[tuple[float, float]], angles: list[np.ndarray],
-              max_ranges: list[float], filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
+def cast_many(caster: Any, origins: Sequence[tuple[float, float]] | np.ndarray,
+              angles: Sequence[np.ndarray] | np.ndarray, max_ranges: Sequence[float] | np.ndarray,
+              filters: list[pymunk.ShapeFilter]) -> list[np.ndarray]:
     """Distances along every ray of every cast, as ``caster.cast`` gives them one by one
     (``caster``: the RayCaster, whose module calls this one)."""
     out: list[np.ndarray | None] = [None] * len(origins)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 import pymunk
@@ -94,19 +94,21 @@ class RayCaster:
                                              np.empty(k, dtype=np.intp))
         return found
 
-    def cast_many(self, origins: list[tuple[float, float]], angles: list[np.ndarray],
-                  max_ranges: list[float], filters: list[pymunk.ShapeFilter]
-                  ) -> list[np.ndarray] | np.ndarray:
+    def cast_many(self, origins: Sequence[tuple[float, float]] | np.ndarray,
+                  angles: Sequence[np.ndarray] | np.ndarray,
+                  max_ranges: Sequence[float] | np.ndarray, filters: list[pymunk.ShapeFilter],
+                  filter_rows: np.ndarray | None = None) -> list[np.ndarray] | np.ndarray:
         """Many casts at once: what :meth:`cast` gives for each, with less work per cast
         (compiled: one tracer call for every cast on the same table and ray count; numpy:
-        one pass for them all, see :mod:`.batch`)."""
+        one pass for them all, see :mod:`.batch`). ``filter_rows``: the filters as (K, 3)
+        uint64 rows (group, categories, mask), when the caller keeps them."""
         if self._kernel is None:
             from pymunk_bot.sensors.raycast.batch import cast_many
             return cast_many(self, origins, angles, max_ranges, filters)
         if len(origins) > 1:
             uniform = _uniform(origins, angles, max_ranges)
             if uniform is not None:
-                return self._cast_uniform(*uniform, list(filters))
+                return self._cast_uniform(*uniform, list(filters), filter_rows)
         out: list[np.ndarray | None] = []
         groups: dict[tuple[int, int], list[tuple[int, _Job]]] = {}
         for i, args in enumerate(zip(origins, angles, max_ranges, filters)):
@@ -121,7 +123,8 @@ class RayCaster:
         return [r if r is not None else np.empty(0) for r in out]
 
     def _cast_uniform(self, xy: np.ndarray, ang: np.ndarray, rng: np.ndarray,
-                      filters: list[pymunk.ShapeFilter]) -> list[np.ndarray] | np.ndarray:
+                      filters: list[pymunk.ShapeFilter], f_all: np.ndarray | None = None
+                      ) -> list[np.ndarray] | np.ndarray:
         """cast_many for checked casts with one ray count: the pymunk queries per origin, all
         else one array operation or one tracer call for them all."""
         assert self._kernel is not None
@@ -130,7 +133,8 @@ class RayCaster:
         ox, oy = xy[:, 0].copy(), xy[:, 1].copy()
         scale = 1.0 + np.abs(ox) + np.abs(oy) + rng  # [m] rounding errors are ~1e-16 of it
         sides, n_sides, cornered = sides_many(self._cache, ox, oy, scale)
-        f_all = np.array(filters, dtype=np.uint64).reshape(-1, 3)  # as _filter_row reads them
+        if f_all is None:
+            f_all = np.array(filters, dtype=np.uint64).reshape(-1, 3)  # as _filter_row reads them
         near = np.empty(k, dtype=np.bool_)  # pymunk is asked only about origins near a shape
         self._near_admitted(self._cache.static_boxes, bound, self._cache.shape_filters, ox, oy,
                             NEAR_SHAPE * scale, f_all, near)
@@ -322,7 +326,8 @@ class RayCaster:
         return out
 
 
-def _uniform(origins: list, angles: list, max_ranges: list
+def _uniform(origins: Sequence[tuple[float, float]] | np.ndarray,
+             angles: Sequence[np.ndarray] | np.ndarray, max_ranges: Sequence[float] | np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Casts as arrays (origins (K, 2), angles (K, n), ranges (K,)) if they share a ray
     count above COMPILED_REFERENCE_RAYS and pass check_args' checks; else None."""

@@ -1,0 +1,65 @@
+"""The substep gate's index of the fixed world never says a fixed shape is out of reach when
+pymunk's point query finds one, and keeps up when shapes come or go, and when told fixed bodies moved."""
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pytest
+
+from pymunk_bot.physics.static_cells import StaticCells
+
+
+def _world(rng: np.random.Generator) -> tuple[pymunk.Space, pymunk.Body]:
+    space = pymunk.Space()
+    for _ in range(15):
+        x, y = rng.uniform(-20.0, 20.0, 2)
+        kind = rng.integers(3)
+        if kind == 0:
+            shape: pymunk.Shape = pymunk.Circle(space.static_body, rng.uniform(0.05, 1.0), (x, y))
+        elif kind == 1:
+            shape = pymunk.Segment(space.static_body, (x, y), tuple(rng.uniform(-20.0, 20.0, 2)),
+                                   rng.uniform(0.0, 0.1))
+        else:
+            body = pymunk.Body(body_type=pymunk.Body.STATIC)
+            body.position, body.angle = (x, y), rng.uniform(0.0, 3.0)
+            space.add(body)
+            shape = pymunk.Poly.create_box(body, tuple(rng.uniform(0.1, 3.0, 2)))
+        space.add(shape)
+    robot = pymunk.Body(1.0, 1.0)
+    space.add(robot, pymunk.Circle(robot, 0.2))  # a mover: never counted as fixed
+    return space, robot
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_no_fixed_shape_within_reach_is_missed(seed):
+    rng = np.random.default_rng(seed)
+    space, robot = _world(rng)
+    cells = StaticCells(space, {robot})
+    xy = rng.uniform(-25.0, 25.0, (4000, 2))
+    look = rng.uniform(0.0, 3.0, 4000)
+    near = cells.near(xy, look)
+    for (x, y), r, maybe in zip(xy.tolist(), look.tolist(), near.tolist()):
+        found = [h for h in space.point_query((x, y), r, pymunk.ShapeFilter())
+                 if h.shape.body is not robot]
+        assert maybe or not found, (x, y, r)
+    assert near.mean() < 0.9  # and it does say "none" where the world is empty
+
+
+def test_the_index_follows_shapes_that_come_go_and_move():
+    space = pymunk.Space()
+    robot = pymunk.Body(1.0, 1.0)
+    space.add(robot, pymunk.Circle(robot, 0.2))
+    cells = StaticCells(space, {robot})
+    here, reach = np.array([[5.0, 5.0]]), np.array([0.5])
+    assert not cells.near(here, reach)[0]  # nothing fixed at all
+    box = pymunk.Body(body_type=pymunk.Body.STATIC)
+    box.position = (20.0, 20.0)
+    shape = pymunk.Poly.create_box(box, (1.0, 1.0))
+    space.add(box, shape)
+    assert not cells.near(here, reach)[0]
+    box.position = (5.6, 5.0)  # moved next to the point, and said so (World.disturb)
+    space.reindex_shapes_for_body(box)
+    cells.forget()
+    assert cells.near(here, reach)[0]
+    space.remove(shape)
+    assert not cells.near(here, reach)[0]
