@@ -56,10 +56,15 @@ def test_the_index_follows_shapes_that_come_go_and_move():
     box.position = (20.0, 20.0)
     shape = pymunk.Poly.create_box(box, (1.0, 1.0))
     space.add(box, shape)
+    cells.refresh()
     assert not cells.near(here, reach)[0]
     box.position = (5.6, 5.0)  # moved next to the point, and said so (World.disturb)
     space.reindex_shapes_for_body(box)
+    cells.refresh()
+    assert not cells.near(here, reach)[0]  # the same shapes: not looked at again
     cells.forget()
+    cells.refresh()
     assert cells.near(here, reach)[0]
     space.remove(shape)
+    cells.refresh()
     assert not cells.near(here, reach)[0]

@@ -15,7 +15,6 @@ import pytest
 from bench.fleet import swarm_scenario
 from pymunk_bot.engine import batch
 from pymunk_bot.engine.simulation import Simulation
-from pymunk_bot.physics.apart import FixedOutlines
 
 FLEET = 200  # robots
 
@@ -133,19 +132,3 @@ def test_a_robot_teleported_into_another_is_pushed_out() -> None:
     assert mover.shape in {hit.shape for hit in hits}  # back, where it landed
     sim.run(0.5)
     assert math.dist(mover.body.position, other.body.position) > mover.radius + other.radius - 0.01
-
-
-def test_outline_gaps_never_exceed_the_true_distance() -> None:
-    space = pymunk.Space()
-    turned = pymunk.Body(body_type=pymunk.Body.STATIC)
-    turned.position, turned.angle = (5.0, 5.0), 0.7
-    shapes = [pymunk.Poly.create_box(turned, (1.0, 0.5)),
-              pymunk.Segment(space.static_body, (0.0, 0.0), (10.0, 0.0), 0.05),
-              pymunk.Circle(space.static_body, 0.3, (8.0, 8.0))]
-    space.add(turned, *shapes)
-    points = np.random.default_rng(0).uniform(-1.0, 11.0, (2000, 2))
-    true = np.array([min(s.point_query(tuple(p)).distance for s in shapes) for p in points])
-    outside = true > 0.0  # inside a shape only a teleport puts an origin (checked by pymunk)
-    gaps = FixedOutlines(space).gaps(points, 20.0)
-    assert np.all(gaps[outside] <= true[outside] + 1e-12)
-    assert np.max(true[outside] - gaps[outside]) < 0.1  # and not far below it

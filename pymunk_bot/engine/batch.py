@@ -88,8 +88,8 @@ class Batch:
         if (self.gate is not None and propulsion.batched and ground.can_split
                 and propulsion.n >= SPLIT_FROM):
             assert ground.apart_space is not None
-            self.split = SplitPlanner(ground.contact_space, ground.apart_space,
-                                      propulsion.bodies, self.gate.movers, self.dt)
+            self.split = SplitPlanner(ground.apart_space, propulsion.bodies, self.gate.movers,
+                                      self.gate.fixed, self.dt)
             propulsion.step_apart_in(ground.apart_space)
 
     @property
@@ -147,7 +147,7 @@ class Batch:
                 disturbed = world.take_disturbed()
                 if disturbed:  # a teleport: every robot back, decided anew
                     split.settle(world, propulsion, gate, np.zeros(split.n, dtype=bool))
-                    split.reset(teleported=True)
+                    split.reset(disturbed=True)
                 apart, following_apart = split.apart, split.next_apart(propulsion)
                 substeps, following = gate.counts_apart(
                     disturbed, split.crowded or not following_apart.all(), bool(apart.any()))

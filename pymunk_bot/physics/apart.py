@@ -18,9 +18,11 @@ of those ticks ends, at their top speeds (or faster, if they go faster now):
 
 - two moving bodies: the distance between their origins less both reaches, over both speeds
   (a k-d tree finds the pairs that are near);
-- a fixed shape: the distance to points sampled along the outlines of the world's fixed
-  shapes (``SAMPLE_SPACING`` apart, so the true distance is at most half of that shorter;
-  a k-d tree of them, built once) less the shapes' rounding radius.
+- a fixed shape: the distance to the nearest one (pymunk's point query, asked only where the
+  substep gate's cells of the fixed world, physics/static_cells.py, cannot rule one out) less
+  the robot's reach. The fixed world cannot change while robots step apart (below), so the
+  cells the gate built stand; a robot that a teleport put inside a fixed shape (a negative
+  distance) stays.
 
 It plans only for fleets of ``SPLIT_FROM`` robots or more, steered as rows
 (``Propulsion.batched``), in a world of its own
@@ -31,7 +33,6 @@ world sees all of it. A teleport brings them back too, and the next tick plans a
 """
 from __future__ import annotations
 
-import math
 from typing import Sequence
 
 import numpy as np
@@ -39,6 +40,7 @@ import pymunk
 from scipy.spatial import cKDTree
 
 from pymunk_bot.physics.propulsion import Propulsion
+from pymunk_bot.physics.static_cells import StaticCells
 from pymunk_bot.physics.substeps import (MARGIN, Mover, SubstepGate, motions, origin_speeds,
                                          pair_gaps)
 from pymunk_bot.physics.world import World
@@ -50,77 +52,16 @@ PLAN_TICKS = 4  # ticks between two decisions
 # robots 5.97x against 4.54x, 5000 robots 2.05x against 1.21x; 100 robots, 3 s: 82x against
 # 109x).
 SPLIT_FROM = 2000
-SAMPLE_SPACING = 0.05  # [m] between the points sampled along fixed outlines
-
-
-class FixedOutlines:
-    """Points along the outlines of a Space's fixed shapes, for lower bounds of the distance
-    from any point to the nearest of them."""
-
-    def __init__(self, space: pymunk.Space) -> None:
-        points: list[np.ndarray] = []
-        rounding = 0.0  # [m] the largest rounding radius (segments, rounded polygons)
-        for shape in space.shapes:
-            body = shape.body
-            if body is None or not _fixed(shape) or shape.sensor:
-                continue
-            if isinstance(shape, pymunk.Circle):
-                turns = max(8, math.ceil(2 * math.pi * shape.radius / SAMPLE_SPACING))
-                angle = np.linspace(0.0, 2 * math.pi, turns, endpoint=False)
-                local = np.array(shape.offset) + shape.radius * np.column_stack(
-                    [np.cos(angle), np.sin(angle)])
-                points.append(_to_world(body, local))
-                continue
-            if isinstance(shape, pymunk.Segment):
-                corners = [tuple(shape.a), tuple(shape.b)]
-            elif isinstance(shape, pymunk.Poly):
-                corners = [tuple(v) for v in shape.get_vertices()]
-                corners.append(corners[0])
-            else:  # an unknown kind: its bounding box's outline (world frame: no transform)
-                bb = shape.bb
-                corners = [(bb.left, bb.bottom), (bb.right, bb.bottom), (bb.right, bb.top),
-                           (bb.left, bb.top), (bb.left, bb.bottom)]
-                body = None
-            rounding = max(rounding, float(getattr(shape, "radius", 0.0)))
-            for a, b in zip(corners, corners[1:]):
-                samples = max(2, math.ceil(math.dist(a, b) / SAMPLE_SPACING) + 1)
-                along = np.linspace(0.0, 1.0, samples)
-                local = np.array(a) + np.outer(along, np.subtract(b, a))
-                points.append(local if body is None else _to_world(body, local))
-        cloud = np.concatenate(points) if points else np.empty((0, 2))
-        self.tree = cKDTree(cloud) if cloud.shape[0] else None
-        self.slack = 0.5 * SAMPLE_SPACING + rounding  # [m] sample distance - true distance, at most
-
-    def gaps(self, xy: np.ndarray, look: float) -> np.ndarray:
-        """At most the distance [m] from each of ``xy`` (n, 2) to the nearest fixed shape, or
-        inf where none lies within ``look`` [m]."""
-        if self.tree is None:
-            return np.full(xy.shape[0], math.inf)
-        distance, _ = self.tree.query(xy, distance_upper_bound=look + self.slack)
-        return distance - self.slack
-
-
-def _fixed(shape: pymunk.Shape | None) -> bool:
-    """Whether ``shape`` is a fixed one (on a static body)."""
-    return shape is not None and shape.body is not None and \
-        shape.body.body_type == pymunk.Body.STATIC
-
-
-def _to_world(body: pymunk.Body, local: np.ndarray) -> np.ndarray:
-    """Body-frame points (n, 2) [m] in the world frame."""
-    c, s = math.cos(body.angle), math.sin(body.angle)
-    x, y = body.position
-    return np.column_stack([c * local[:, 0] - s * local[:, 1] + x,
-                            s * local[:, 0] + c * local[:, 1] + y])
 
 
 class SplitPlanner:
     """Which robots step apart (see the module docstring), from the contact Space ``space``
     to ``apart``. ``robots``: the fleet's bodies in Propulsion's order; ``movers``: every
-    moving body (the gate's); ``dt``: the tick [s]."""
+    moving body (the gate's); ``fixed``: where the fixed world is (the gate's); ``dt``: the
+    tick [s]."""
 
-    def __init__(self, space: pymunk.Space, apart: pymunk.Space, robots: Sequence[pymunk.Body],
-                 movers: Sequence[Mover], dt: float) -> None:
+    def __init__(self, apart: pymunk.Space, robots: Sequence[pymunk.Body],
+                 movers: Sequence[Mover], fixed: StaticCells, dt: float) -> None:
         self.dt = dt
         if all(b.center_of_gravity == (0, 0) for b in robots):
             # Each robot's joints pull through its centre of gravity (the pivot's anchor is
@@ -137,9 +78,7 @@ class SplitPlanner:
         self._reach = np.array([m.reach for m in rows])  # [m]
         self._top = np.array([m.speed or 0.0 for m in rows])  # [m/s] (0: only its speed now)
         self._offset = np.array([abs(m.body.center_of_gravity) for m in rows])  # [m] cog to origin
-        self._outlines = FixedOutlines(space)
-        self._space = space
-        self._inside_unknown = False  # a teleport may have put an origin inside a fixed shape
+        self._fixed = fixed
         self.apart = np.zeros(self.n, dtype=bool)  # stepping apart in this tick
         self._ticks_left = 0  # ticks until the next decision
         self.layout = -1  # World.layout after this planner's last move (-1: none yet)
@@ -149,13 +88,15 @@ class SplitPlanner:
         """Whether the contact Space holds moving bodies besides robots (each tick: substeps)."""
         return bool(self._others)
 
-    def reset(self, teleported: bool = False) -> None:
-        """Every robot back in the contact Space: the next tick decides anew. ``teleported``:
-        after a teleport, which may have put a robot's origin inside a fixed shape (the
-        outlines tell no inside from outside; the next decision asks pymunk, robot by robot)."""
+    def reset(self, disturbed: bool = False) -> None:
+        """Every robot back in the contact Space: the next tick decides anew, with the fixed
+        world looked at again (``disturbed``: bodies were moved outside the physics, a fixed
+        one may be among them)."""
         self.apart = np.zeros(self.n, dtype=bool)
         self._ticks_left = 0
-        self._inside_unknown = self._inside_unknown or teleported
+        if disturbed:
+            self._fixed.forget()
+        self._fixed.refresh()
 
     def next_apart(self, propulsion: Propulsion) -> np.ndarray:
         """Which robots step apart in the next tick (``propulsion``: the fleet's, which reads
@@ -206,13 +147,5 @@ class SplitPlanner:
             meet = gap <= travel[i] + travel[j]
             clear[i[meet]] = False
             clear[j[meet]] = False
-        look = float(reach[:n].max() + travel[:n].max()) + MARGIN
-        fixed = self._outlines.gaps(origins[:n], look) - reach[:n] - MARGIN  # [m]
-        out = clear[:n] & (fixed > travel[:n])
-        if self._inside_unknown:  # a robot inside a fixed shape stays where contacts push it out
-            self._inside_unknown = False
-            every = pymunk.ShapeFilter()
-            for k in np.flatnonzero(out).tolist():
-                out[k] = not any(_fixed(hit.shape) for hit in
-                                 self._space.point_query(tuple(origins[k]), 0.0, every))
-        return out
+        gaps = self._fixed.distances(origins[:n], reach[:n] + travel[:n] + MARGIN)  # [m]
+        return clear[:n] & (gaps - reach[:n] - MARGIN > travel[:n])

@@ -2,14 +2,18 @@
 
 The substep gate asks pymunk, mover by mover, how far the nearest fixed shape is (a point
 query). Most movers of a large fleet have none within reach; this index says which may, in
-one array operation for all of them: every cell that a fixed shape's bounding box overlaps
-is marked, and a point has no fixed shape within ``look`` [m] when no cell of the square of
-half-width ``look`` about it is marked (a summed-area table answers that in four reads). It
-only ever answers "maybe" too often, never "no" wrongly, so the gate's answers are the same.
+one compiled pass for all of them: every cell that a fixed shape covers (its outline grown by
+its rounding radius, shapely's test of each cell of its bounding box) is marked, and a point
+has no fixed shape within ``look`` [m] when no cell of the square of half-width ``look`` about
+it is marked (a summed-area table answers that in four reads). It only ever answers "maybe"
+too often (by at most a cell), never "no" wrongly, so the gate's answers are the same.
 
-The cells are built again when a shape comes or goes, and after :meth:`StaticCells.forget`
-(the gate calls it when bodies were moved outside the physics: ``World.disturb``); a fixed
-body moved by hand is not looked for at every test (that cost a microsecond per body).
+The cells are built at first, and again by :meth:`StaticCells.refresh` when a shape came or
+went since, or after :meth:`StaticCells.forget` (the gate calls it when bodies were moved
+outside the physics: ``World.disturb``; a fixed body moved by hand is not looked for at every
+test, which cost a microsecond per body). The substep gate refreshes before each test; the
+planner of robots that step apart (physics/apart.py) when it starts, as nothing fixed can
+change while they do.
 """
 from __future__ import annotations
 
@@ -19,9 +23,17 @@ from typing import Collection
 import numba
 import numpy as np
 import pymunk
+import shapely
 
+_EVERY_SHAPE = pymunk.ShapeFilter()  # what pymunk is asked about: every shape
 MAX_CELLS = 1 << 20  # cells of the grid at most (4 MB of counts)
-MIN_CELL = 0.5  # [m] the finest cell: about a robot's size
+MIN_CELL = 0.1  # [m] the finest cell: how much farther than asked "maybe" may reach
+# [m] added to every distance asked: far above the rounding of coordinates (1e-13 m at 1 km),
+# so a box point within the distance asked is always inside the square of cells read.
+SLACK = 1e-6
+# [m] what every fixed shape's outline is grown by before it marks cells: GEOS's arithmetic
+# and Chipmunk's may differ in the last bits of a point on the outline.
+OUTLINE_SLACK = 1e-6
 
 
 class StaticCells:
@@ -36,37 +48,44 @@ class StaticCells:
         self._cell = 1.0  # [m]
         self._table = np.zeros((1, 1), dtype=np.int32)  # summed-area table of marked cells
         self._everywhere = False  # a shape without bounds: every point may be near it
+        self.refresh()
 
     def near(self, xy: np.ndarray, look: np.ndarray) -> np.ndarray:
         """For each point of ``xy`` (n, 2) [m]: whether a fixed shape may lie within ``look``
-        (n,) [m] of it (False: certainly none does)."""
-        self._refresh()
+        (n,) [m] of it (False: certainly none does), as of the last :meth:`refresh`."""
         if self._everywhere:
             return np.ones(xy.shape[0], dtype=bool)
         near = np.empty(xy.shape[0], dtype=np.bool_)
         _near_cells(xy, look, self._table, self._origin[0], self._origin[1], self._cell, near)
         return near
 
+    def distances(self, xy: np.ndarray, look: np.ndarray) -> np.ndarray:
+        """The distance [m] from each point of ``xy`` (n, 2) [m] to the nearest fixed shape
+        (pymunk's point query; negative inside one), inf where none lies within ``look``
+        (n,) [m]: pymunk is asked only about the points :meth:`near` cannot rule out."""
+        out = np.full(xy.shape[0], math.inf)
+        moving = self._moving
+        for k in np.flatnonzero(self.near(xy, look)).tolist():
+            for hit in self.space.point_query((float(xy[k, 0]), float(xy[k, 1])),
+                                              float(look[k]), _EVERY_SHAPE):
+                shape = hit.shape
+                if shape is not None and not shape.sensor and shape.body not in moving:
+                    out[k] = min(out[k], hit.distance)
+        return out
+
     def forget(self) -> None:
-        """Fixed bodies may have moved: the cells are built again at the next question."""
+        """Fixed bodies may have moved: the next :meth:`refresh` builds the cells again."""
         self._key = None
 
-    def _refresh(self) -> None:
+    def refresh(self) -> None:
         """Build the cells again if a shape came or went (or after :meth:`forget`)."""
         key = tuple(self.space.shapes)
         if key == self._key:
             return
         self._key = key
-        boxes = []
-        for shape in key:
-            if shape.sensor or shape.body is None or shape.body in self._moving:
-                continue
-            bb = shape.cache_bb()
-            boxes.append((bb.left, bb.bottom, bb.right, bb.top))
-        self._build(np.array(boxes, dtype=float).reshape(-1, 4))
-
-    def _build(self, boxes: np.ndarray) -> None:
-        """Mark the cells each box (left, bottom, right, top) [m] overlaps."""
+        fixed = [shape for shape in key
+                 if not shape.sensor and shape.body is not None and shape.body not in self._moving]
+        boxes = np.array([tuple(shape.cache_bb()) for shape in fixed], dtype=float).reshape(-1, 4)
         self._everywhere = not np.isfinite(boxes).all()
         if boxes.shape[0] == 0 or self._everywhere:  # nothing fixed, or nothing to mark
             self._origin, self._cell = (0.0, 0.0), 1.0
@@ -76,39 +95,74 @@ class StaticCells:
         width = float(boxes[:, 2].max()) - left
         height = float(boxes[:, 3].max()) - bottom
         cell = max(MIN_CELL, math.sqrt(max(width * height, 1e-12) / MAX_CELLS))
-        cols = int(width / cell) + 1
-        rows = int(height / cell) + 1
+        cols, rows = int(width / cell) + 1, int(height / cell) + 1
         while cols * rows > MAX_CELLS:  # long thin worlds: coarser until it fits
             cell *= 1.5
             cols, rows = int(width / cell) + 1, int(height / cell) + 1
         grid = np.zeros((rows, cols), dtype=np.int32)
-        i0 = np.floor((boxes[:, 0] - left) / cell).astype(np.intp)
-        i1 = np.minimum(np.floor((boxes[:, 2] - left) / cell).astype(np.intp), cols - 1)
-        j0 = np.floor((boxes[:, 1] - bottom) / cell).astype(np.intp)
-        j1 = np.minimum(np.floor((boxes[:, 3] - bottom) / cell).astype(np.intp), rows - 1)
-        for a, b, c, d in zip(j0.tolist(), j1.tolist(), i0.tolist(), i1.tolist()):
-            grid[a:b + 1, c:d + 1] = 1
+        for shape, box in zip(fixed, boxes.tolist()):
+            _mark(grid, shape, box, left, bottom, cell)
         table = np.zeros((rows + 1, cols + 1), dtype=np.int32)
         table[1:, 1:] = grid.cumsum(axis=0).cumsum(axis=1)
         self._origin, self._cell, self._table = (left, bottom), cell, table
+
+
+def _mark(grid: np.ndarray, shape: pymunk.Shape, box: list[float], left: float, bottom: float,
+          cell: float) -> None:
+    """Mark the cells of ``grid`` (corner at (``left``, ``bottom``) [m], cells of ``cell``
+    [m]) that ``shape`` covers: those of its bounding box ``box`` (left, bottom, right, top)
+    [m] that its outline, grown by its rounding radius and OUTLINE_SLACK, meets."""
+    rows, cols = grid.shape
+    i0 = int(math.floor((box[0] - left) / cell))
+    i1 = min(int(math.floor((box[2] - left) / cell)), cols - 1)
+    j0 = int(math.floor((box[1] - bottom) / cell))
+    j1 = min(int(math.floor((box[3] - bottom) / cell)), rows - 1)
+    outline = _outline(shape)
+    if outline is None or (i1 - i0 + 1) * (j1 - j0 + 1) <= 4:  # its box is as good
+        grid[j0:j1 + 1, i0:i1 + 1] = 1
+        return
+    i, j = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
+    x, y = left + i * cell, bottom + j * cell
+    with np.errstate(divide="ignore", invalid="ignore"):  # flags GEOS may leave raised
+        squares = shapely.box(x, y, x + cell, y + cell)
+        covered = shapely.intersects(squares, outline)
+    grid[j0:j1 + 1, i0:i1 + 1] |= covered.astype(np.int32)
+
+
+def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:
+    """What ``shape`` covers in the world frame (rounding radius and OUTLINE_SLACK included);
+    None for a kind of shape not known here (its bounding box stands for it)."""
+    body = shape.body
+    assert body is not None
+    if isinstance(shape, pymunk.Circle):
+        centre = body.local_to_world(shape.offset)
+        return shapely.Point(centre.x, centre.y).buffer(shape.radius + OUTLINE_SLACK)
+    if isinstance(shape, pymunk.Segment):
+        a, b = body.local_to_world(shape.a), body.local_to_world(shape.b)
+        return shapely.LineString([(a.x, a.y), (b.x, b.y)]).buffer(shape.radius + OUTLINE_SLACK)
+    if isinstance(shape, pymunk.Poly):
+        corners = [body.local_to_world(v) for v in shape.get_vertices()]
+        hull = shapely.Polygon([(p.x, p.y) for p in corners])
+        return hull.buffer(shape.radius + OUTLINE_SLACK)
+    return None
 
 
 @numba.njit(cache=True)
 def _near_cells(xy: np.ndarray, look: np.ndarray, table: np.ndarray, left: float,
                 bottom: float, cell: float, near: np.ndarray) -> None:
     """``near[k]``: whether a marked cell lies in the square of half-width ``look[k]`` [m]
-    about ``xy[k]`` [m], or one cell beyond it (rounding at the cells' edges); True for a
-    point that is not finite. ``table``: the cells' summed-area table, the grid's corner at
+    (plus SLACK) about ``xy[k]`` [m]; True for a point that is not finite. ``table``: the cells' summed-area table, the grid's corner at
     (``left``, ``bottom``) [m], cells of ``cell`` [m]."""
     rows, cols = table.shape[0] - 1, table.shape[1] - 1
     for k in range(xy.shape[0]):
-        x, y, r = xy[k, 0], xy[k, 1], look[k]
+        x, y, r = xy[k, 0], xy[k, 1], look[k] + SLACK
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(r)):
             near[k] = True
             continue
-        i0 = min(max(math.floor((x - r - left) / cell) - 1, 0), cols)
-        i1 = min(max(math.floor((x + r - left) / cell) + 2, 0), cols)
-        j0 = min(max(math.floor((y - r - bottom) / cell) - 1, 0), rows)
-        j1 = min(max(math.floor((y + r - bottom) / cell) + 2, 0), rows)
+        # Cells i0 .. i1 - 1 and j0 .. j1 - 1 (the table's indices), clipped to the grid.
+        i0 = min(max(math.floor((x - r - left) / cell), 0), cols)
+        i1 = min(max(math.floor((x + r - left) / cell) + 1, 0), cols)
+        j0 = min(max(math.floor((y - r - bottom) / cell), 0), rows)
+        j1 = min(max(math.floor((y + r - bottom) / cell) + 1, 0), rows)
         near[k] = table[j1, i1] - table[j0, i1] - table[j1, i0] + table[j0, i0] > 0
 

@@ -59,7 +59,6 @@ MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the con
 MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
 _PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
 _IN_ONE_READ = 8  # movers from which the bodies are read in one pymunk.batch call
-_EVERY_SHAPE = pymunk.ShapeFilter()  # what a test queries: every shape
 # (x, y, vx, vy, omega) of every body
 _STATE = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
@@ -163,7 +162,7 @@ class SubstepGate:
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
-        self._static = StaticCells(space, self._bodies)  # where the fixed shapes are
+        self.fixed = StaticCells(space, self._bodies)  # where the fixed shapes are
         self._handles = handles([m.body for m in self.movers])  # read one by one when few
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         # [m] cog to origin
@@ -186,7 +185,6 @@ class SubstepGate:
         self._planned = full  # the count of the coming tick, chosen in the one before
         self._wait = 0  # ticks left before the next test
         self._failures = 0  # failed tests in a row
-        self._first = 0  # the mover that failed the last test: tested first next time
         self.single_ticks = 0  # ticks taken in one pymunk step (for results and benchmarks)
         self.steps = 0  # pymunk steps taken (for results and benchmarks)
 
@@ -195,7 +193,7 @@ class SubstepGate:
         now = self.ticks * self.dt
         self.ticks += 1
         if self.disturbed():  # the coming tick takes the full count; the next is tested anew
-            self._static.forget()
+            self.fixed.forget()
             self.clear_until = -math.inf
             self._planned = self.full
             self._wait = 0
@@ -242,7 +240,6 @@ class SubstepGate:
         stop stepping apart."""
         self.ticks += 1
         if disturbed:
-            self._static.forget()
             self._planned = self.full
         current = self._planned
         self.steps += current + int(apart)
@@ -282,7 +279,7 @@ class SubstepGate:
 
     def _clear_for(self, needed: float) -> float:
         """How long [s] (at most HORIZON) no two shapes can touch; stops early, returning
-        something below ``needed``, as soon as it is clear that they can within it."""
+        something below ``needed``, when two movers can touch within it."""
         movers = self.movers
         if not movers:
             return HORIZON
@@ -292,25 +289,16 @@ class SubstepGate:
         clear = self._clear_between_movers(xy, speeds)
         if clear < needed:
             return clear
-        # Only movers that may have a fixed shape within reach are asked of pymunk.
-        look = self._reach + speeds * min(clear, HORIZON) + MARGIN  # [m]
-        asked = np.flatnonzero(self._dynamic & self._static.near(xy, look)).tolist()
-        if not asked:
-            return max(clear, 0.0)
-        first = bisect.bisect_left(asked, self._first)  # the last failure's mover first
-        moving = self._bodies
-        origins = xy.tolist()
-        for k in asked[first:] + asked[:first]:
-            speed = float(speeds[k])
-            for hit in self.space.point_query(origins[k], float(look[k]), _EVERY_SHAPE):
-                shape = hit.shape
-                if shape is None or shape.sensor or shape.body in moving:
-                    continue  # movers meet movers in _clear_between_movers
-                gap = hit.distance - movers[k].reach - MARGIN
-                clear = min(clear, gap / speed if speed > 0.0 else (HORIZON if gap > 0 else 0.0))
-                if clear < needed:
-                    self._first = k
-                    return clear
+        # Movers against the fixed world: pymunk's distances, asked only where a fixed shape
+        # may be within reach (physics/static_cells.py).
+        self.fixed.refresh()
+        dynamic = self._dynamic
+        look = self._reach[dynamic] + speeds[dynamic] * min(clear, HORIZON) + MARGIN  # [m]
+        gaps = self.fixed.distances(xy[dynamic], look) - self._reach[dynamic] - MARGIN  # [m]
+        fast = speeds[dynamic]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            until = np.where(fast > 0.0, gaps / fast, np.where(gaps > 0.0, HORIZON, 0.0))
+        clear = min(clear, float(until.min(initial=HORIZON)))
         return max(clear, 0.0)
 
     def _meeting(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
