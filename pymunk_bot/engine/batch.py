@@ -9,6 +9,7 @@ phase methods (``act``, ``tick_clock``, ``bookkeep``, ``due_lidars``, ``read``, 
 """
 from __future__ import annotations
 
+import math
 import time as wallclock
 from typing import TYPE_CHECKING, Any, Protocol, Sequence
 
@@ -64,6 +65,7 @@ class Batch:
         self._count = len(self.runs)
         first = self.runs[0]
         self.dt, self.substeps = first.dt, first.substeps
+        self._substep = math.nan  # [s] the substep the worlds were last told of
         # Which runs have work before and after the physics: a tick skips the rest.
         self.acting = tuple(run for run in self.runs if run.acts)
         self.reading = tuple(run for run in self.runs if run.reads)
@@ -176,9 +178,11 @@ class Batch:
 
     def _substep_after(self, substep: float) -> None:
         """Every run's world learns the substep [s] the bodies' velocities now move in (for
-        the IMUs)."""
-        for run in self.runs:
-            run.world.substep = substep
+        the IMUs), when it changed."""
+        if substep != self._substep:
+            self._substep = substep
+            for run in self.runs:
+                run.world.substep = substep
 
     def _bookkeep(self) -> list[float]:
         """Phase 3: every run's clock, then distance, goals and odometry; the runs' times [s]."""

@@ -109,6 +109,8 @@ class Simulation:
                           or built.metrics)
                 # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
         self._batch = None if self._ground is not None else single(self)
+        # What step() calls: the batch's tick (bound once: a tick's calls are counted)
+        self._tick = self._batch.step if self._batch is not None else self._own_batch
 
     # ------------------------------------------------------------------ state
     @property
@@ -152,7 +154,7 @@ class Simulation:
     # ------------------------------------------------------------------ running
     def step(self) -> None:
         """Advance one physics step of ``dt``."""
-        self._own_batch().step()
+        self._tick()
 
     def _own_batch(self) -> Batch:
         """This run's batch of one (a copy on a shared ground has none: its Replicas ticks it)."""
@@ -220,7 +222,7 @@ class Simulation:
         if not (isinstance(duration, numbers.Real) and math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be a finite number >= 0 (got {duration!r})")
         for _ in range(round(duration / self.dt)):  # read anew each tick: an observer may reset
-            self._own_batch().step()
+            self._tick()
 
     def exclude_from_wall_time(self, seconds: float) -> None:
         """Take ``seconds`` [s] spent inside steps on something else than the steps (numba
