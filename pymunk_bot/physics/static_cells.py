@@ -59,13 +59,18 @@ class StaticCells:
         _near_cells(xy, look, self._table, self._origin[0], self._origin[1], self._cell, near)
         return near
 
-    def distances(self, xy: np.ndarray, look: np.ndarray) -> np.ndarray:
+    def distances(self, xy: np.ndarray, look: np.ndarray, which: np.ndarray | None = None
+                  ) -> np.ndarray:
         """The distance [m] from each point of ``xy`` (n, 2) [m] to the nearest fixed shape
         (pymunk's point query; negative inside one), inf where none lies within ``look``
-        (n,) [m]: pymunk is asked only about the points :meth:`near` cannot rule out."""
+        (n,) [m] or where ``which`` (n,) is False: pymunk is asked only about the points
+        :meth:`near` cannot rule out."""
         out = np.full(xy.shape[0], math.inf)
         moving = self._moving
-        for k in np.flatnonzero(self.near(xy, look)).tolist():
+        near = self.near(xy, look)
+        if which is not None:
+            near &= which
+        for k in np.flatnonzero(near).tolist():
             for hit in self.space.point_query((float(xy[k, 0]), float(xy[k, 1])),
                                               float(look[k]), _EVERY_SHAPE):
                 shape = hit.shape

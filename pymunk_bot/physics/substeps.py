@@ -292,13 +292,9 @@ class SubstepGate:
         # Movers against the fixed world: pymunk's distances, asked only where a fixed shape
         # may be within reach (physics/static_cells.py).
         self.fixed.refresh()
-        dynamic = self._dynamic
-        look = self._reach[dynamic] + speeds[dynamic] * min(clear, HORIZON) + MARGIN  # [m]
-        gaps = self.fixed.distances(xy[dynamic], look) - self._reach[dynamic] - MARGIN  # [m]
-        fast = speeds[dynamic]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            until = np.where(fast > 0.0, gaps / fast, np.where(gaps > 0.0, HORIZON, 0.0))
-        clear = min(clear, float(until.min(initial=HORIZON)))
+        look = self._reach + speeds * min(clear, HORIZON) + MARGIN  # [m]
+        gaps = self.fixed.distances(xy, look, self._dynamic)  # [m]
+        clear = min(clear, _fixed_clear(gaps, self._reach, speeds))
         return max(clear, 0.0)
 
     def _meeting(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -355,6 +351,20 @@ class SubstepGate:
         # contiguous: one array layout for the kernel (numba compiles it once)
         return _pairs_clear(np.ascontiguousarray(xy), reach, speeds, i.astype(np.intp),
                             j.astype(np.intp))
+
+
+@numba.njit(cache=True)
+def _fixed_clear(gaps: np.ndarray, reach: np.ndarray, speeds: np.ndarray) -> float:
+    """How long [s] (at most HORIZON) no mover (``reach`` [m], at most ``speeds`` [m/s]) can
+    touch a fixed shape ``gaps`` [m] from its origin (inf: none near), MARGIN kept."""
+    clear = HORIZON
+    for k in range(gaps.shape[0]):
+        if gaps[k] == math.inf:
+            continue
+        gap = gaps[k] - reach[k] - MARGIN
+        speed = speeds[k]
+        clear = min(clear, gap / speed if speed > 0.0 else (HORIZON if gap > 0.0 else 0.0))
+    return clear
 
 
 @numba.njit(cache=True)
