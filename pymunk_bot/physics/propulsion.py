@@ -102,7 +102,8 @@ class Propulsion:
         self._cog = [(float(x), float(y)) for x, y in self.cog.tolist()]  # the same, as floats
         self._everyone = np.arange(self.n, dtype=np.intp)
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
-        self._spins = [(group, spin[idx]) for group, idx in self.groups]  # each group's rows
+        # Each group's rows (copies' groups: each stacked group's, one call for all copies).
+        self._spins = [(drives.group, spin[drives.member_rows]) for drives in self._drives]
         self._anchors = np.zeros((self.n, 2))  # [m] the held anchors (batched)
         self._xy = np.zeros((self.n, 2))  # [m] positions read one by one (positions)
         self._holding = False  # the fleet is held as a whole (batched)
