@@ -107,9 +107,9 @@ class Simulation:
         self.acts = bool(self._controlled or self.world.actors or self.config.events)
         self.reads = bool(self._sensors or self._mapping or self._localized or self._scores
                           or built.metrics)
-                # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
+        # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
         self._batch = None if self._ground is not None else single(self)
-        # What step() calls: the batch's tick (bound once: a tick's calls are counted)
+        # What step() calls: its batch's tick (or, for a copy, the error above)
         self._tick = self._batch.step if self._batch is not None else self._own_batch
 
     # ------------------------------------------------------------------ state

@@ -55,8 +55,8 @@ SPLIT_FROM = 2000
 
 
 class SplitPlanner:
-    """Which robots step apart (see the module docstring), from the contact Space ``space``
-    to ``apart``. ``robots``: the fleet's bodies in Propulsion's order; ``movers``: every
+    """Which robots step apart (see the module docstring), from the contact Space to
+    ``apart``. ``robots``: the fleet's bodies in Propulsion's order; ``movers``: every
     moving body (the gate's); ``fixed``: where the fixed world is (the gate's); ``dt``: the
     tick [s]."""
 

@@ -80,7 +80,7 @@ class DiffOdometryGroup:
     def take(self, travel: np.ndarray) -> None:
         """:meth:`update` with the drive's accumulated ``travel`` (n, 2) [m], then zeroed in
         place (``DriveGroup.travel``): one compiled call where the encoders only scale."""
-        if self._plain and not self._noisy:  # the usual case: _integrate's first branch alone
+        if self._plain:  # the usual case (no noise, no quantising): _integrate's first branch
             _dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
                          self._mid, True)
             return
