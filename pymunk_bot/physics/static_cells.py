@@ -59,6 +59,16 @@ class StaticCells:
         _near_cells(xy, look, self._table, self._origin[0], self._origin[1], self._cell, near)
         return near
 
+    def clearance(self, xy: np.ndarray, most: np.ndarray) -> np.ndarray:
+        """For each point of ``xy`` (n, 2) [m]: a distance [m] within which no fixed shape
+        lies, at most ``most`` (n,) [m]: the cells tell it to within a cell or two."""
+        out = np.empty(xy.shape[0])
+        if self._everywhere:
+            out.fill(0.0)
+            return out
+        _clearance(xy, most, self._table, self._origin[0], self._origin[1], self._cell, out)
+        return out
+
     def distances(self, xy: np.ndarray, look: np.ndarray, which: np.ndarray | None = None
                   ) -> np.ndarray:
         """The distance [m] from each point of ``xy`` (n, 2) [m] to the nearest fixed shape
@@ -150,6 +160,33 @@ def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:
         hull = shapely.Polygon([(p.x, p.y) for p in corners])
         return hull.buffer(shape.radius + OUTLINE_SLACK)
     return None
+
+
+@numba.njit(cache=True)
+def _clearance(xy: np.ndarray, most: np.ndarray, table: np.ndarray, left: float,
+               bottom: float, cell: float, out: np.ndarray) -> None:
+    """``out[k]``: the half-width m * ``cell`` of the largest square block of cells about
+    ``xy[k]``'s cell with no marked cell (a shape outside the block is farther than that from
+    any point inside its middle cell), less SLACK, at most ``most[k]`` [m]; 0 for a point that
+    is not finite. ``table``: the cells' summed-area table (see :func:`_near_cells`)."""
+    rows, cols = table.shape[0] - 1, table.shape[1] - 1
+    for k in range(xy.shape[0]):
+        x, y = xy[k, 0], xy[k, 1]
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(most[k])):
+            out[k] = 0.0
+            continue
+        ci = math.floor((x - left) / cell)
+        cj = math.floor((y - bottom) / cell)
+        lo, hi = -1, int(most[k] / cell) + 1  # empty up to lo cells, not at hi (or beyond most)
+        while hi - lo > 1:
+            m = (lo + hi) // 2
+            i0, i1 = min(max(ci - m, 0), cols), min(max(ci + m + 1, 0), cols)
+            j0, j1 = min(max(cj - m, 0), rows), min(max(cj + m + 1, 0), rows)
+            if table[j1, i1] - table[j0, i1] - table[j1, i0] + table[j0, i0] > 0:
+                hi = m
+            else:
+                lo = m
+        out[k] = min(max(lo * cell - SLACK, 0.0), most[k])
 
 
 @numba.njit(cache=True)

@@ -51,7 +51,10 @@ from pymunk_bot.config.substeps import SubstepNeed
 from pymunk_bot.physics.static_cells import StaticCells
 from pymunk_bot.physics.bodies import get_position, get_spin, get_velocity, handles
 
-HORIZON = 0.5  # [s] the farthest ahead one test looks: nearer shapes are all it queries
+HORIZON = 2.0  # [s] the farthest ahead one test looks
+# [s] how far ahead a k-d tree looks for pairs of movers (fleets of _PAIRS_BY_TREE and more):
+# its search radius grows with it, and a crowd has near pairs anyway
+PAIR_HORIZON = 0.5
 # [s] the least clear time a test must find to grant single substeps: near shapes, where it
 # would grant only a tick or two, the full count is cheaper than testing again so soon.
 MIN_CLEAR = 0.1
@@ -289,12 +292,19 @@ class SubstepGate:
         clear = self._clear_between_movers(xy, speeds)
         if clear < needed:
             return clear
-        # Movers against the fixed world: pymunk's distances, asked only where a fixed shape
-        # may be within reach (physics/static_cells.py).
+        # Movers against the fixed world: the cells' bound of how near a fixed shape is, and
+        # pymunk's distance where that bound is too short to grant single steps.
         self.fixed.refresh()
-        look = self._reach + speeds * min(clear, HORIZON) + MARGIN  # [m]
-        gaps = self.fixed.distances(xy, look, self._dynamic)  # [m]
-        clear = min(clear, _fixed_clear(gaps, self._reach, speeds))
+        most = self._reach + speeds * clear + MARGIN  # [m] farther shapes change nothing
+        dynamic, reach = self._dynamic, self._reach
+        until = np.empty(len(movers))
+        _fixed_times(self.fixed.clearance(xy, most), reach, speeds, dynamic, until)
+        short = until < needed
+        if short.any():  # the cells are too coarse here: ask pymunk
+            exact = np.empty(len(movers))
+            _fixed_times(self.fixed.distances(xy, most, short), reach, speeds, short, exact)
+            until[short] = exact[short]
+        clear = min(clear, float(until.min()))
         return max(clear, 0.0)
 
     def _meeting(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -337,48 +347,54 @@ class SubstepGate:
 
     def _clear_between_movers(self, xy: np.ndarray, speeds: np.ndarray) -> float:
         """How long [s] no two movers of one copy (origins ``xy`` [m], at most ``speeds``
-        [m/s]) can touch (bounding discs), up to HORIZON."""
+        [m/s]) can touch (bounding discs), up to HORIZON (PAIR_HORIZON where a k-d tree finds
+        the pairs)."""
         n = len(self.movers)
         if n < 2:
             return HORIZON
         reach = self._reach
+        horizon = HORIZON
         if self._pairs is not None:
             i, j = self._pairs
         else:
-            near = 2.0 * (reach.max() + speeds.max() * HORIZON) + MARGIN
+            near = 2.0 * (reach.max() + speeds.max() * PAIR_HORIZON) + MARGIN
             found = cKDTree(xy).query_pairs(near, output_type="ndarray")
             i, j = self._meeting(found[:, 0], found[:, 1])
+            horizon = PAIR_HORIZON  # pairs farther apart were not looked at
         # contiguous: one array layout for the kernel (numba compiles it once)
         return _pairs_clear(np.ascontiguousarray(xy), reach, speeds, i.astype(np.intp),
-                            j.astype(np.intp))
+                            j.astype(np.intp), horizon)
 
 
 @numba.njit(cache=True)
-def _fixed_clear(gaps: np.ndarray, reach: np.ndarray, speeds: np.ndarray) -> float:
-    """How long [s] (at most HORIZON) no mover (``reach`` [m], at most ``speeds`` [m/s]) can
-    touch a fixed shape ``gaps`` [m] from its origin (inf: none near), MARGIN kept."""
-    clear = HORIZON
+def _fixed_times(gaps: np.ndarray, reach: np.ndarray, speeds: np.ndarray, which: np.ndarray,
+                 out: np.ndarray) -> None:
+    """``out[k]``: how long [s] mover k (``reach`` [m], at most ``speeds`` [m/s]) cannot touch
+    a fixed shape ``gaps[k]`` [m] from its origin (inf: none near), MARGIN kept; inf for the
+    movers not ``which``."""
     for k in range(gaps.shape[0]):
-        if gaps[k] == math.inf:
-            continue
         gap = gaps[k] - reach[k] - MARGIN
         speed = speeds[k]
-        clear = min(clear, gap / speed if speed > 0.0 else (HORIZON if gap > 0.0 else 0.0))
-    return clear
+        if not which[k] or gaps[k] == math.inf:
+            out[k] = math.inf
+        elif speed > 0.0:
+            out[k] = gap / speed
+        else:
+            out[k] = HORIZON if gap > 0.0 else 0.0
 
 
 @numba.njit(cache=True)
 def _pairs_clear(xy: np.ndarray, reach: np.ndarray, speeds: np.ndarray, i: np.ndarray,
-                 j: np.ndarray) -> float:
-    """How long [s] (at most HORIZON) none of the pairs (i, j) of discs (centres ``xy`` [m],
-    radii ``reach`` [m], moving at most ``speeds`` [m/s]) can touch, MARGIN kept."""
-    clear = HORIZON
+                 j: np.ndarray, horizon: float) -> float:
+    """How long [s] (at most ``horizon``) none of the pairs (i, j) of discs (centres ``xy``
+    [m], radii ``reach`` [m], moving at most ``speeds`` [m/s]) can touch, MARGIN kept."""
+    clear = horizon
     gaps = pair_gaps(xy, reach, i, j)
     for k in range(i.shape[0]):
         a, b = i[k], j[k]
         gap = gaps[k]
         closing = speeds[a] + speeds[b]
-        t = gap / closing if closing > 0.0 else (HORIZON if gap > 0.0 else 0.0)
+        t = gap / closing if closing > 0.0 else (horizon if gap > 0.0 else 0.0)
         if not t > 0.0:  # touching now (or NaN: a body thrown out of the world): not clear
             return 0.0
         clear = min(clear, t)
