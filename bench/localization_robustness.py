@@ -262,9 +262,9 @@ class Tour:
     """A revisiting tour's goals, given to the robot one at a time: the next one when the
     robot is at the current goal, in truth (``goal_reached``) or as its controller knows it
     (status ``"arrived"``: its estimate at the goal), as a robot's own mission would go on.
-    Waiting for the truth alone left a robot whose estimate was 0.3-0.8 m off at its first
-    goal standing there for the rest of the run (warehouse, uncalibrated odometry): its tour
-    never came back, so no loop could close (docs/localization.md)."""
+    Waiting for the truth alone left a robot whose estimate was 0.26-0.78 m off at a goal
+    standing there for the rest of the run (warehouse, uncalibrated odometry): its tour never
+    came back, so no loop could close (docs/localization.md)."""
 
     def __init__(self, goals: list[tuple[float, float]]) -> None:
         self.goals = list(goals)  # still to give, in turn

@@ -197,15 +197,14 @@ def test_a_closure_moves_the_keyframes_instead_of_bending_their_headings():
     assert out.ate <= 0.05, out.line()
 
 
-
 @pytest.mark.slow
 def test_a_tour_goes_on_where_the_robot_believes_it_has_arrived_and_comes_back_to_close_its_loop():
     # Warehouse loop around a shelf, uncalibrated odometry, seed 13 (360 beams, 8 m): the
-    # robot's controller says "arrived" at its first goal with the truth outside the goal's
-    # 0.25 m. The tour waited for the truth, so the robot stood there for the rest of the run,
-    # never came back over its start and no loop could close (ATE 9.7 cm, map precision
-    # 0.885). Given its next goal when it believes it has arrived, it drives the loop, closes
-    # it and ends within the bounds.
+    # robot's controller says "arrived" at its second goal with the truth 0.26 m away, outside
+    # the goal's 0.25 m. The tour waited for the truth, so the robot stood there for the rest
+    # of the run, never came back over its start and no loop could close (ATE 9.7 cm, map
+    # precision 0.885). Given its next goal when it believes it has arrived, it drives the
+    # loop, closes it and ends within the bounds.
     out = run_one("slam_revisit", "warehouse", "uncalibrated", 13)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")
