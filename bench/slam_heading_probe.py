@@ -22,9 +22,9 @@ from typing import NoReturn
 
 import numpy as np
 
-from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, lidar_for,
-                                           odometry_for, settings_option, tour_goals,
-                                           world_for)
+from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, Tour,
+                                           lidar_for, odometry_for, settings_option,
+                                           tour_goals, world_for)
 from pymunk_bot.localization.se2 import between, wrap
 
 
@@ -41,7 +41,7 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
     data = world_for(family, seed, revisit=True)
     if data is None:
         _refuse(f"the {family} map is not here")
-    goals = tour_goals(family, seed, data)[1:]
+    tour = Tour(tour_goals(family, seed, data)[1:])
     robot = data["robots"][0]
     robot.update(lidar=lidar_for(seed), odometry=odometry_for(profile, seed),
                  localization={"type": "slam", **(settings or {})})
@@ -74,10 +74,8 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
                     "match_std_worst": 100.0 * float(axes[1]), "match_std_best": 100.0 * float(axes[0]),
                     "match_heading_std": math.degrees(math.sqrt(max(float(cov[2, 2]), 0.0)))})
             last_truth, last_pose = truth, pose
-        if r.goal_reached:
-            if not goals:
-                break
-            r.set_goal(goals.pop(0))
+        if not tour.next_goal(r):
+            break
     if not rows:
         _refuse(f"{family} {profile} seed {seed}: SLAM took no keyframe")
     table = {k: np.array([row[k] for row in rows]) for k in rows[0]}
