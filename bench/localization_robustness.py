@@ -365,7 +365,8 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
             localized.append(bool(getattr(r.localizer, "localized", True)))
             if walkers:
                 walked.append(np.array([tuple(w.body.position) for w in walkers]))
-        if not goals.next_goal(r) if goals is not None else r.goal_reached:
+        done = not goals.next_goal(r) if goals is not None else r.goal_reached
+        if done:  # the tour is over (a goal alone: reached)
             break
     e, h = np.asarray(errors), np.asarray(headings)
     out.rmse = float(np.sqrt(np.mean(e ** 2)))
