@@ -1,10 +1,11 @@
-"""A fleet's bodies as rows: one ``pymunk.batch`` read per Space, and writes back.
+"""Bodies as rows: one ``pymunk.batch`` read per Space, and writes back.
 
-Propulsion reads every body of its Space (or of two: the contact Space, and the one where
-robots nothing can reach step apart, physics/apart.py) and writes control bodies back, each
-through one batch call per Space. Rows are pymunk's body order, the contact Space's first;
-where each robot's body and control body sits is looked up again whenever bodies come, go or
-move between the Spaces.
+The engine's one reader of many bodies: Propulsion reads every body of its Space (or of two:
+the contact Space, and the one where robots nothing can reach step apart, physics/apart.py)
+and writes control bodies back, each through one batch call per Space; the substep gate reads
+its movers' motion the same way. Rows are pymunk's body order, the contact Space's first;
+where each body and control body sits is looked up again whenever bodies come, go or move
+between the Spaces. A few bodies are read one by one through Chipmunk's getters instead.
 """
 from __future__ import annotations
 
@@ -66,10 +67,7 @@ class BodyRows:
              ) -> np.ndarray:
         """Every body's ``fields`` (``width`` floats each), the first Space's rows first
         (``first_only``: its rows alone, for robots known to be there)."""
-        buffer = self._reads[0]
-        buffer.clear()
-        batch.get_space_bodies(self.spaces[0], fields, buffer)
-        rows = np.frombuffer(buffer.float_buf()).reshape(-1, width)
+        rows = self.read_every(fields, width)
         if len(self.spaces) == 1:
             if rows.shape[0] != self._rows:
                 self._look_up([rows.shape[0]])
@@ -84,6 +82,14 @@ class BodyRows:
         if self._rows < 0 or counts != self._counts:  # bodies came, went or moved Space
             self._look_up(counts)
         return np.concatenate([rows, apart]) if apart.shape[0] else rows
+
+    def read_every(self, fields: batch.BodyFields, width: int) -> np.ndarray:
+        """Every body of the first Space's ``fields`` (``width`` floats each), whoever is in
+        it: no rows are looked up."""
+        buffer = self._reads[0]
+        buffer.clear()
+        batch.get_space_bodies(self.spaces[0], fields, buffer)
+        return np.frombuffer(buffer.float_buf()).reshape(-1, width)
 
     def write(self, fields: batch.BodyFields, held: bool = False,
               spaces: slice = slice(None)) -> None:

@@ -49,7 +49,8 @@ from scipy.spatial import cKDTree
 
 from pymunk_bot.config.substeps import SubstepNeed
 from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.bodies import get_position, get_spin, get_velocity, handles
+from pymunk_bot.physics.bodies import (BodyRows, get_position, get_spin, get_velocity,
+                                       handles)
 
 HORIZON = 2.0  # [s] the farthest ahead one test looks
 # [s] how far ahead a k-d tree looks for pairs of movers (fleets of _PAIRS_BY_TREE and more):
@@ -174,9 +175,8 @@ class SubstepGate:
         self._spin = max([spin_reach(m.body) for m in self.movers], default=0.0)
         # [m/s] each mover's top speed (0: none, a crate: only its speed now counts)
         self._top = np.array([m.speed or 0.0 for m in self.movers])
-        self._state = batch.Buffer()  # every body's _STATE
-        self._rows = np.zeros(0, dtype=np.intp)  # each mover's row in it
-        self._space_rows = -1  # bodies in the space when _rows was found
+        # Every body of the space as rows, in one read (many movers); where the movers sit
+        self._read = BodyRows(space, [m.body for m in self.movers], [])
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
         self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
         self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
@@ -254,7 +254,7 @@ class SubstepGate:
 
     def relocated(self) -> None:
         """Bodies moved between Spaces: where each mover sits is looked up at the next read."""
-        self._space_rows = -1
+        self._read.relocated()
 
     def _graded(self) -> int:
         """The substeps the next tick needs at the speeds bodies can have within two ticks
@@ -272,7 +272,7 @@ class SubstepGate:
             if every != every:
                 return self.full
         else:  # every body of the space (other copies' too: they share the count)
-            state = self._space_state()
+            state = self._read.read_every(_STATE, 5)
             linear = float(np.hypot(state[:, 2], state[:, 3]).max(initial=0.0))
             turn = float(np.abs(state[:, 4]).max(initial=0.0))
         speed = max(self._driven(2.0 * self.dt), linear + turn * self._spin)
@@ -323,27 +323,10 @@ class SubstepGate:
                 each.append((p.x, p.y, v.x, v.y, get_spin(handle)))
             rows = np.array(each).reshape(-1, 5)
         else:  # the movers' rows of every body's state
-            state = self._space_state()
-            if state.shape[0] != self._space_rows:
-                self._index(state.shape[0])
-            rows = state[self._rows]
+            rows = self._read.read(_STATE, 5)[self._read.robot]
         xy, motion = rows[:, :2], rows[:, 2:]
         now = origin_speeds(motion[:, 0], motion[:, 1], motion[:, 2], self._offset)
         return xy, np.maximum(now, self._top)
-
-    def _space_state(self) -> np.ndarray:
-        """(x, y, vx, vy, omega) of every body of the space, in pymunk's order: one read."""
-        self._state.clear()
-        batch.get_space_bodies(self.space, _STATE, self._state)
-        return np.frombuffer(self._state.float_buf()).reshape(-1, 5)
-
-    def _index(self, rows: int) -> None:
-        """Where each mover sits in pymunk's body order (``rows`` bodies in the space)."""
-        ids = batch.Buffer()
-        batch.get_space_bodies(self.space, batch.BodyFields.BODY_ID, ids)
-        order = {int(b): k for k, b in enumerate(np.frombuffer(ids.int_buf(), dtype=np.uintp))}
-        self._rows = np.array([order[m.body.id] for m in self.movers], dtype=np.intp)
-        self._space_rows = rows
 
     def _clear_between_movers(self, xy: np.ndarray, speeds: np.ndarray) -> float:
         """How long [s] no two movers of one copy (origins ``xy`` [m], at most ``speeds``
