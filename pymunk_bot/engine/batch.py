@@ -174,7 +174,7 @@ class Batch:
                 times += [now] * len(mine)
         if due:
             assert self.caster is not None and self.lidars is not None
-            self.lidars.scan(self.caster, due, times, self.propulsion.pose_array())
+            self.lidars.scan(self.caster, due, times, self.propulsion.pose_array)
 
     def _substep_after(self, substep: float) -> None:
         """Every run's world learns the substep [s] the bodies' velocities now move in (for

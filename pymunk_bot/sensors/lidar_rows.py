@@ -10,7 +10,7 @@ own stream, in the same order, and ``true + std * noise`` is clipped operand for
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -56,13 +56,18 @@ class LidarRows:
         return xy, angles, self._max_range[rows], [self._filters[k] for k in rows.tolist()]
 
     def scan(self, caster: Any, due: Sequence[int], times: Sequence[float],
-             poses: np.ndarray) -> None:
-        """The ``due`` LiDARs scan now: one ``caster.cast_many`` for all of them, each scan
-        stored as taken at its time in ``times`` [s]."""
+             poses: Callable[[], np.ndarray]) -> None:
+        """The ``due`` LiDARs scan now: one ``caster.cast_many`` for all of them (their origins
+        from ``poses()``: every body's (x, y, angle), read once), each scan stored as taken at
+        its time in ``times`` [s]."""
+        if len(due) == 1:  # one scan: the LiDAR's own (one body's pose, not every body's)
+            lidar = self.lidars[due[0]]
+            lidar.record(times[0], lidar.true_ranges())
+            return
         if not len(due):
             return
         rows = np.asarray(due, dtype=np.intp)
-        self.store(due, times, caster.cast_many(*self.requests(rows, poses),
+        self.store(due, times, caster.cast_many(*self.requests(rows, poses()),
                                                 filter_rows=self._filter_rows[rows]))
 
     def store(self, due: Sequence[int], times: Sequence[float],
