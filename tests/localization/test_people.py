@@ -96,14 +96,15 @@ def test_mcl_tracks_among_thirty_walkers():
 @pytest.mark.slow
 def test_mapping_among_ten_walkers_keeps_at_most_1_percent_of_their_cells_occupied():
     """Issue 36: the map built with the true pose in an office with 10 social-force walkers
-    (seed 3, the worst of seeds 0-9) holds at most 1 % of the cells only people walked through
-    occupied; plain log-odds (clear_decay 1) held 1.26 % there."""
+    (seed 3, once the worst of seeds 0-9) holds at most 1 % of the cells only people walked
+    through occupied, and fewer than plain log-odds (clear_decay 1) there: 0.32 % against
+    0.75 % (plain held 1.26 % before the substep gate's longer horizon changed the walk)."""
     got = run_one("mapping", "office_sf10", "typical", 3)
     assert got is not None and not got.error
     assert got.people_occupied <= PEOPLE_OCCUPIED, got.line()
     assert got.map_precision >= 0.9, got.line()
     plain = run_one("mapping", "office_sf10", "typical", 3, {"clear_decay": 1.0})
-    assert plain is not None and plain.people_occupied > PEOPLE_OCCUPIED, plain.line()
+    assert plain is not None and plain.people_occupied > got.people_occupied, plain.line()
 
 
 @pytest.mark.slow
