@@ -288,13 +288,7 @@ class MclLocalizer(Localizer):
         that explain this scan better than the estimate, found anywhere on the map. A cloud
         settles only where it has particles; a global start or a kidnapping seldom has one
         near the truth (instrumented: none within 0.3 m / 10 deg in every failed run), and
-        the cloud then settled on a look-alike room or aisle.
-
-        While not localized, also the found poses that explain it about as well (within
-        ``margin`` below the estimate) where no particle is: a look-alike that the cloud
-        settled on first fits every scan as well as the truth, so "better than the estimate"
-        kept the truth out of the cloud for good, and driving could not tell the two apart
-        (instrumented: global starts among 30 walkers, issue 36, docs/localization.md)."""
+        the cloud then settled on a look-alike room or aisle."""
         c = self.config
         z_rand = c.z_rand / scan.max_range
         found, score = search(self.field, points, self._places, self.rng, c.sigma_hit, c.z_hit, z_rand)
@@ -304,10 +298,7 @@ class MclLocalizer(Localizer):
         here_score = beam_log_pz(self.field, here[None], points, c.sigma_hit, c.z_hit, z_rand)[0]
         away = ((np.hypot(found[:, 0] - here[0], found[:, 1] - here[1]) > CLUSTER_BIN)
                 | (np.abs(wrap(found[:, 2] - here[2])) > KLD_BIN[2]))
-        good = score > here_score + margin
-        if not self.localized:  # and the ones as good that no particle covers
-            good |= (score > here_score - margin) & ~self._covered(found)
-        better = found[away & good]
+        better = found[away & (score > here_score + margin)]
         if better.shape[0] == 0:
             return
         n = self.particles.shape[0]
@@ -316,14 +307,6 @@ class MclLocalizer(Localizer):
         self.weights[slots] = self.weights.mean()
         self.weights /= self.weights.sum()
         self.reseeded += slots.size
-
-    def _covered(self, poses: np.ndarray) -> np.ndarray:
-        """Boolean per pose (k, 3): does a particle lie within a cluster bin (0.5 m) and a KLD
-        bin's heading (10 deg) of it?"""
-        near = ((np.hypot(poses[:, None, 0] - self.particles[None, :, 0],
-                          poses[:, None, 1] - self.particles[None, :, 1]) <= CLUSTER_BIN)
-                & (np.abs(wrap(poses[:, None, 2] - self.particles[None, :, 2])) <= KLD_BIN[2]))
-        return near.any(axis=1)
 
     def _explore(self, scan) -> None:
         """Active localization (explore.py) from the heaviest clusters of the belief."""
