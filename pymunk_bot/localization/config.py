@@ -78,6 +78,9 @@ class MclConfig(Section):
     moving_window: Annotated[Float, Field(gt=0.0, le=10.0)] = 1.0  # [s]
     moving_margin: Annotated[Float, Field(ge=0.0, le=100.0)] = 0.2  # [m]
     moving_blob: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.8  # [m]; 0: returns one by one
+    # a return within moving_track of one seen moving in the last moving_window is moving
+    # too (a walker that stops or walks away along the beam); 0: no memory
+    moving_track: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.5  # [m]
     # AMCL's recovery, on (Nav2: 0, off): a kidnapped robot or a wrong global guess needs it;
     # with it on, tracking succeeded as often (robustness benchmark, docs/localization.md).
     recovery_alpha_slow: Weight = 0.001  # 0 (both) disables recovery

@@ -140,7 +140,8 @@ class MclLocalizer(Localizer):
         self._beam_mean: np.ndarray | None = None  # per particle: geometric mean pz of the last scan
         self._odom_at_update: np.ndarray | None = None  # odometry when the filter last moved
         # recent scans, to find returns of things that move (moving.py)
-        self._moving = MovingReturns(config.moving_window, config.moving_margin, config.moving_blob)
+        self._moving = MovingReturns(config.moving_window, config.moving_margin, config.moving_blob,
+                                    track=config.moving_track)
         self._filter_pose, self.covariance = weighted_pose_stats(self.particles, self.weights)
         self.pose = start.copy() if config.initial == "known" else self._filter_pose.copy()
 

@@ -10,8 +10,10 @@ space seen empty a moment ago). A walker crossing or approaching the beam is cau
 rest of its outline: a short run of neighbouring returns (a person-sized blob, at most ``blob``
 across) holding a moving return is moving as a whole.
 
-Not caught: a person standing still the whole window (nothing entered free space) and one
-walking straight away along the beam (the space it enters was behind it, unseen). A return
+Not caught by that: a person standing still the whole window (nothing entered free space) and
+one walking straight away along the beam (the space it enters was behind it, unseen). With a
+``track`` radius (MCL's ``moving_track``), returns near one found moving in the last ``window``
+are moving too, which keeps a walker seen moving flagged when it stops or walks away. A return
 that was hidden before (behind something nearer) is never flagged: the earlier beam stopped
 short of it. Of an earlier scan's beams, the two bracketing the direction and one more on each
 side are asked, and the shortest counts: a wall seen edge-on or a small odometry error between
@@ -23,6 +25,7 @@ import math
 from collections import deque
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from pymunk_bot.localization.se2 import between, scan_points, transform_points
 
@@ -78,16 +81,21 @@ class MovingReturns:
     ``margin`` [m]: how far beyond a return an earlier beam must have reached; ``blob`` [m]: the
     largest outline flagged whole when one of its returns is moving (0: returns one by one).
     ``scans``: how many are kept at most, ``spacing`` [s]: the least time between two kept
-    (default: ``window`` / ``scans``, so that they span the window).
+    (default: ``window`` / ``scans``, so that they span the window). ``track`` [m]: a return
+    within this of one that :meth:`flag` found moving in the last ``window`` (odometry frame)
+    is moving too (0: no memory); see :meth:`flag`.
     """
 
     def __init__(self, window: float, margin: float, blob: float, scans: int = MAX_KEPT_SCANS,
-                 spacing: float | None = None) -> None:
+                 spacing: float | None = None, track: float = 0.0) -> None:
         self.window = window
         self.margin = margin
         self.blob = blob
+        self.track = track
         self.spacing = window / scans if spacing is None else spacing
         self._kept: deque[_Kept] = deque(maxlen=scans)
+        # (time [s], odometry-frame points (k, 2)) of the returns flag() found moving
+        self._seen_moving: deque[tuple[float, np.ndarray]] = deque(maxlen=scans)
 
     def observe(self, scan, odometry: np.ndarray) -> None:
         """Keep ``scan`` (taken at ``odometry`` [x, y, theta]) for the scans that follow, at
@@ -104,7 +112,14 @@ class MovingReturns:
 
     def flag(self, scan, odometry: np.ndarray) -> np.ndarray:
         """Boolean per return of ``scan`` (in ``scan_points`` order, max-range beams left out),
-        taken at ``odometry``: which are moving. Compared with the kept scans older than it."""
+        taken at ``odometry``: which are moving. Compared with the kept scans older than it.
+
+        With ``track``: also the returns within ``track`` of a return an earlier call found
+        entering free space in the last ``window`` (both through the odometry): a walker seen
+        moving a moment ago that now stands, or walks straight away along the beam, enters no
+        space seen free. Only returns seen entering free space are remembered, not those
+        flagged by the memory itself, so a static return flagged by mistake (an odometry error)
+        is forgotten after ``window``."""
         points, index = scan_points(scan)
         moving = np.zeros(points.shape[0], dtype=bool)
         if points.shape[0] == 0:
@@ -118,7 +133,28 @@ class MovingReturns:
             moving |= kept.reach(np.arctan2(then[:, 1], then[:, 0])) > distance + self.margin
         if self.blob > 0 and moving.any():
             moving = _whole_blobs(points, index, moving, self.blob)
+        if self.track > 0:
+            moving = self._tracked(points, index, moving, odometry, float(scan.time))
         return moving
+
+    def _tracked(self, points: np.ndarray, index: np.ndarray, moving: np.ndarray,
+                 odometry: np.ndarray, time: float) -> np.ndarray:
+        """``moving`` (found entering free space) widened to the returns within ``track`` of
+        one remembered from the last ``window``; remembers ``moving``'s."""
+        while self._seen_moving and time - self._seen_moving[0][0] > self.window:
+            self._seen_moving.popleft()
+        world = transform_points(odometry, points)
+        out = moving.copy()
+        if self._seen_moving:
+            earlier = np.concatenate([p for _, p in self._seen_moving])
+            if earlier.shape[0]:
+                near = cKDTree(earlier).query(world, distance_upper_bound=self.track)[0]
+                out |= np.isfinite(near)
+                if self.blob > 0:
+                    out = _whole_blobs(points, index, out, self.blob)
+        if moving.any():
+            self._seen_moving.append((time, world[moving]))
+        return out
 
 
 def _whole_blobs(points: np.ndarray, index: np.ndarray, moving: np.ndarray, blob: float) -> np.ndarray:
