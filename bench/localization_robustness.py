@@ -137,8 +137,6 @@ class Outcome:
     closures: int = 0  # slam: loop closures accepted
     closures_rejected: int = 0  # slam: candidates whose verification failed
     false_closures: int = 0  # slam: accepted closures off the truth (metrics.false_closures)
-    partial_closures: int = 0  # slam: partial closures accepted (loop_partial; not in closures)
-    false_partial: int = 0  # slam: ... off the truth where they measure (metrics.false_partial_closures)
     # slam_revisit: tour goals the robot was done with on its own estimate, the truth not
     # within the goal's tolerance (Tour)
     believed_arrivals: int = 0
@@ -163,7 +161,7 @@ class Outcome:
                     else self.map_precision >= SLAM_PRECISION)
         if self.localizer in SLAM_RUNS:
             return (self.ate <= SLAM_ATE and self.map_precision >= SLAM_PRECISION
-                    and self.false_closures == 0 and self.false_partial == 0
+                    and self.false_closures == 0
                     and (self.closures > 0 or self.localizer == "slam")
                     and not self.people_occupied > PEOPLE_OCCUPIED)
         if self.on_real_map:
@@ -184,8 +182,6 @@ class Outcome:
             what = (f"ATE {100 * self.ate:.1f} cm (online: {what})"
                     f", map precision {self.map_precision:.3f}, loop closures {self.closures} "
                      f"({self.false_closures} false, {self.closures_rejected} rejected)")
-            if self.partial_closures:
-                what += f", partial closures {self.partial_closures} ({self.false_partial} false)"
             if self.believed_arrivals:
                 what += f", {self.believed_arrivals} goal(s) reached on its estimate only"
         if self.localizer in ("mcl_global", "mcl_kidnap"):
@@ -395,7 +391,7 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     if localizer in SLAM_RUNS + ("mapping",):  # the map built against the scenario's
         _score_map(out, r.mapper.grid, sim.config, walked, walkers)
     if localizer in SLAM_RUNS:
-        from pymunk_bot.localization.metrics import false_closures, false_partial_closures
+        from pymunk_bot.localization.metrics import false_closures
 
         slam = r.localizer
         at_keyframes = np.asarray(keyframe_truth)
@@ -406,12 +402,6 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
             out.false_closures = false_closures(
                 [c.old for c in slam.closures], [c.new for c in slam.closures],
                 [c.relative for c in slam.closures], at_keyframes)
-        partial = slam.partial_closures
-        out.partial_closures = len(partial)
-        if partial:
-            out.false_partial = false_partial_closures(
-                [c.old for c in partial], [c.new for c in partial], [c.relative for c in partial],
-                [c.pinned for c in partial], at_keyframes)
     return out
 
 
@@ -553,8 +543,6 @@ def summary(outcomes: list[Outcome]) -> dict[str, Any]:
             result[key]["loop_closures"] = sum(o.closures for o in group)
             result[key]["closures_rejected"] = sum(o.closures_rejected for o in group)
             result[key]["false_closures"] = sum(o.false_closures for o in group)
-            result[key]["partial_closures"] = sum(o.partial_closures for o in group)
-            result[key]["false_partial_closures"] = sum(o.false_partial for o in group)
             result[key]["runs_without_closure"] = sum(o.closures == 0 for o in group)
         if group[0].localizer == "mapping":
             occupied = [o.people_occupied for o in ran if o.among_people]

@@ -135,9 +135,6 @@ class SlamConfig(Section):
     loop_min_travel: Distance = 5.0  # [m] travelled since a keyframe before it can close a loop
     loop_min_inliers: Weight = 0.7  # fraction of scan points that must match a loop closure
     loop_kernel: Annotated[Float, Field(gt=0.0, le=1e6)] = 3.0  # Cauchy scale of loop edges [chi]
-    # a loop match that pins the heading and the position across an aisle but not along it
-    # closes a partial loop: an edge on those alone (slam.py)
-    loop_partial: bool = False
     max_pair: Distance = 0.3  # [m] ICP pairs a point with a reference point at most this far
     huber: Distance = 0.05  # [m] scale of the ICP's robust (Cauchy) kernel
     iterations: Annotated[Int, Field(ge=1, le=100)] = 20  # ICP iterations per match

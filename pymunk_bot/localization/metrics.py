@@ -191,17 +191,3 @@ def false_closures(old: np.ndarray, new: np.ndarray, relative: np.ndarray,
     """Loop closures off the truth by more than FALSE_CLOSURE_OFFSET or FALSE_CLOSURE_ANGLE."""
     position, heading = closure_errors(old, new, relative, truth)
     return int(np.count_nonzero((position > FALSE_CLOSURE_OFFSET) | (heading > FALSE_CLOSURE_ANGLE)))
-
-
-def false_partial_closures(old: np.ndarray, new: np.ndarray, relative: np.ndarray,
-                           pinned: np.ndarray, truth: np.ndarray) -> int:
-    """Partial loop closures (SLAM's ``loop_partial``: position measured along ``pinned`` only,
-    (k, 2) unit vectors in keyframe ``new``'s frame, and heading) off the truth by more than
-    FALSE_CLOSURE_OFFSET along ``pinned`` or FALSE_CLOSURE_ANGLE: what they measured is wrong."""
-    old, new = np.asarray(old, dtype=np.intp), np.asarray(new, dtype=np.intp)
-    if old.size == 0:
-        return 0
-    err = between(between(truth[old], truth[new]), np.asarray(relative, dtype=float).reshape(-1, 3))
-    across = np.abs(np.einsum("ka,ka->k", err[:, :2], np.asarray(pinned, dtype=float).reshape(-1, 2)))
-    return int(np.count_nonzero((across > FALSE_CLOSURE_OFFSET)
-                                | (np.abs(wrap(err[:, 2])) > FALSE_CLOSURE_ANGLE)))

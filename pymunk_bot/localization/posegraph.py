@@ -35,27 +35,16 @@ class Edge:
     robust: float = 0.0  # Cauchy kernel scale [chi]; 0: a plain least-squares edge
 
 
-def edge_information(world_covariance: np.ndarray, heading: float,
-                     pinned: np.ndarray | None = None) -> np.ndarray:
+def edge_information(world_covariance: np.ndarray, heading: float) -> np.ndarray:
     """The information matrix (3x3) of an edge into a node at ``heading`` [rad] whose pose was
-    measured with ``world_covariance`` (3x3, world frame, as a scan match gives it), turned
-    into that node's frame, where the edge's error is (edge_terms). (Taken as it was, an aisle
-    along the world's y axis was held along the aisle and left loose across it.)
-
-    ``pinned`` (k, 3; rows: directions of the pose [x, y, theta], world frame): only these
-    were measured (a match in an aisle pins the pose across it and its heading, not along it).
-    The information is then that of ``pinned @ pose``, whose covariance is
-    ``pinned @ world_covariance @ pinned.T``, and says nothing of the directions left out."""
-    cov = np.asarray(world_covariance, dtype=float)
-    if pinned is None:
-        world = np.linalg.inv(0.5 * (cov + cov.T))
-    else:
-        a = np.asarray(pinned, dtype=float).reshape(-1, 3)
-        marginal = a @ cov @ a.T
-        world = a.T @ np.linalg.inv(0.5 * (marginal + marginal.T)) @ a
+    measured with ``world_covariance`` (3x3, world frame, as a scan match gives it): the edge's
+    error is in that node's frame (edge_terms), so the covariance is turned into it first.
+    (Taken as it was, an aisle along the world's y axis was held along the aisle and left
+    loose across it.)"""
     c, s = np.cos(heading), np.sin(heading)
     to_node = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world -> node frame
-    return to_node @ world @ to_node.T
+    covariance = to_node @ np.asarray(world_covariance, dtype=float) @ to_node.T
+    return np.linalg.inv(0.5 * (covariance + covariance.T))
 
 
 def edge_terms(xi: np.ndarray, xj: np.ndarray, z: np.ndarray):

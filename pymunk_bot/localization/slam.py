@@ -64,7 +64,6 @@ LOOP_MAX_PAIR = 1.0  # [m] the loop match's first pairing radius, at most
 LOOP_MAX_STD = 0.05  # [m] a closure's match: largest position std at most
 LOOP_MAX_HEADING_STD = math.radians(1.0)  # [rad] its heading std at most
 LOOP_CONSISTENCY = 16.27  # chi^2_3 (99.9 %) of the correction against the accumulated covariance
-PARTIAL_CONSISTENCY = 13.82  # chi^2_2 (99.9 %): a partial closure's, across the aisle and heading
 OVERRULED_WEIGHT = 0.1  # a closure whose kernel weight falls below this is overruled
 # A keyframe keeps at least this share of its returns: past it, the prediction is too far off
 # for the free-space test (walls land in free space) and only the moving test counts.
@@ -79,8 +78,6 @@ class LoopClosure:
     new: int
     relative: np.ndarray  # [x, y, theta] of new in old's frame, as the scan match measured it
     correction: float  # [m] how far the match moved the new keyframe from its estimate
-    # a partial closure's one pinned direction of position (unit, new's frame); None: all pinned
-    pinned: np.ndarray | None = None
 
 
 class SlamLocalizer(Localizer):
@@ -105,8 +102,6 @@ class SlamLocalizer(Localizer):
         self.edges: list[Edge] = []
         self.loop_closures: list[tuple[int, int]] = []  # (old, new) of each accepted closure
         self.closures: list[LoopClosure] = []
-        # closures that pin the position across an aisle and the heading, not along (loop_partial)
-        self.partial_closures: list[LoopClosure] = []
         self.closures_rejected = 0  # candidates whose verification failed
         self.keyframe_limit_reached = False  # past max_keyframes the estimate is odometry only
         self._last_closure = -MIN_KEYFRAMES_BETWEEN_CLOSURES
@@ -133,8 +128,8 @@ class SlamLocalizer(Localizer):
         return self.mapper.grid
 
     def closures_overruled(self) -> int:
-        """Accepted closures, partial ones too, the optimized graph has all but switched off
-        (kernel weight below OVERRULED_WEIGHT): the rest of the graph contradicts them."""
+        """Accepted closures the optimized graph has all but switched off (kernel weight below
+        OVERRULED_WEIGHT): the rest of the graph contradicts them."""
         loops = [e for e in self.edges if e.robust > 0.0]
         return int(np.count_nonzero(final_weights(np.asarray(self.keyframes), loops) < OVERRULED_WEIGHT))
 
@@ -296,50 +291,34 @@ class SlamLocalizer(Localizer):
         old = int(found[0])
         accumulated = np.zeros((3, 3))
         accumulated[:2, :2], accumulated[2, 2] = position_cov[old], heading_var[old]
-        verified = self._loop_match(old, index, accumulated)
-        if verified is None:
+        match = self._loop_match(old, index, accumulated)
+        if match is None:
             self.closures_rejected += 1
             return False
-        match, pinned = verified
-        self.add_closure(old, index, between(self.keyframes[old], match.pose), match.covariance,
-                         pinned)
+        self.add_closure(old, index, between(self.keyframes[old], match.pose), match.covariance)
         return True
 
-    def add_closure(self, old: int, new: int, relative: np.ndarray, covariance: np.ndarray,
-                    pinned: np.ndarray | None = None) -> None:
+    def add_closure(self, old: int, new: int, relative: np.ndarray, covariance: np.ndarray) -> None:
         """Join keyframes ``old`` and ``new`` by a loop edge (robust: Cauchy's kernel of scale
         ``loop_kernel``): ``new`` seen from ``old`` at ``relative`` [x, y, theta], with
         ``covariance`` (3x3, world frame: a scan match's of ``new``'s pose); the graph is
-        optimized every ``optimize_every`` closures. ``pinned`` (unit [x, y], world frame):
-        a partial closure, which measures the position along this direction only (across an
-        aisle) and the heading; it goes to ``partial_closures``, not ``closures``."""
+        optimized every ``optimize_every`` closures."""
         relative = np.asarray(relative, dtype=float)
         seen = compose(self.keyframes[old], relative)
-        cov = np.asarray(covariance, dtype=float) + EDGE_FLOOR
-        directions = None if pinned is None else np.array([[pinned[0], pinned[1], 0.0],
-                                                            [0.0, 0.0, 1.0]])
-        self.edges.append(Edge(old, new, relative, edge_information(cov, float(seen[2]), directions),
+        self.edges.append(Edge(old, new, relative,
+                               edge_information(np.asarray(covariance) + EDGE_FLOOR, float(seen[2])),
                                robust=self.config.loop_kernel))
-        correction = float(np.hypot(*(seen[:2] - self.keyframes[new][:2])))
-        if pinned is None:
-            self.loop_closures.append((old, new))
-            self.closures.append(LoopClosure(old, new, relative, correction))
-        else:
-            c, s = math.cos(seen[2]), math.sin(seen[2])
-            across = np.array([c * pinned[0] + s * pinned[1], -s * pinned[0] + c * pinned[1]])
-            self.partial_closures.append(LoopClosure(old, new, relative, correction, across))
+        self.loop_closures.append((old, new))
+        self.closures.append(LoopClosure(old, new, relative,
+                                         float(np.hypot(*(seen[:2] - self.keyframes[new][:2])))))
         self._last_closure = new
-        if (len(self.loop_closures) + len(self.partial_closures)) % self.config.optimize_every == 0:
+        if len(self.loop_closures) % self.config.optimize_every == 0:
             self._optimize()
 
-    def _loop_match(self, old: int, index: int,
-                    accumulated: np.ndarray) -> tuple[Match, np.ndarray | None] | None:
+    def _loop_match(self, old: int, index: int, accumulated: np.ndarray) -> Match | None:
         """The scan of keyframe ``index`` aligned with the submap around keyframe ``old``, if
         the match verifies a closure: enough inliers, well constrained, and a correction that
-        the ``accumulated`` covariance (3x3, index relative to old) explains. With it, None
-        for a full closure, or (``loop_partial``) the one direction of position (unit [x, y],
-        world frame) a match pins when it pins the heading and that direction but not the
-        other (an aisle's length): then only those are checked against ``accumulated``."""
+        the ``accumulated`` covariance (3x3, index relative to old) explains."""
         c = self.config
         here = self.keyframes[index]
         lo, hi = max(0, old - SUBMAP_NEIGHBOURS), min(index, old + SUBMAP_NEIGHBOURS + 1)
@@ -349,21 +328,13 @@ class SlamLocalizer(Localizer):
         if not (match.ok and match.inliers >= c.loop_min_inliers):
             return None
         cov = match.covariance
-        values, vectors = np.linalg.eigh(cov[:2, :2])  # ascending
-        if float(cov[2, 2]) > LOOP_MAX_HEADING_STD ** 2 or values[0] > LOOP_MAX_STD ** 2:
-            return None  # too few surfaces: not pinned down
+        if (float(np.linalg.eigvalsh(cov[:2, :2])[-1]) > LOOP_MAX_STD ** 2
+                or float(cov[2, 2]) > LOOP_MAX_HEADING_STD ** 2):
+            return None  # a corridor's length, or too few surfaces: not pinned down
         correction = match.pose - here
         correction[2] = float(wrap(correction[2]))
-        if values[1] <= LOOP_MAX_STD ** 2:
-            chi2 = float(correction @ np.linalg.solve(accumulated + cov + EDGE_FLOOR, correction))
-            return (match, None) if chi2 <= LOOP_CONSISTENCY else None
-        if not c.loop_partial:
-            return None  # a corridor's length is not pinned down
-        across = vectors[:, 0]
-        a = np.array([[across[0], across[1], 0.0], [0.0, 0.0, 1.0]])
-        seen = a @ correction
-        chi2 = float(seen @ np.linalg.solve(a @ (accumulated + cov + EDGE_FLOOR) @ a.T, seen))
-        return (match, across) if chi2 <= PARTIAL_CONSISTENCY else None
+        chi2 = float(correction @ np.linalg.solve(accumulated + cov + EDGE_FLOOR, correction))
+        return match if chi2 <= LOOP_CONSISTENCY else None
 
     def _optimize(self) -> None:
         poses, _ = optimize(np.asarray(self.keyframes), self.edges)

@@ -15,7 +15,6 @@ import pytest
 
 from pymunk_bot.localization import SlamConfig, SlamLocalizer
 from pymunk_bot.localization.base import LocalizerContext, LocalizerInputs
-from pymunk_bot.localization.metrics import false_closures, false_partial_closures
 from pymunk_bot.localization.posegraph import Edge, edge_terms
 from pymunk_bot.localization.se2 import between, wrap
 from pymunk_bot.robots.readings import LaserScan
@@ -104,39 +103,3 @@ def test_a_closure_in_an_aisle_moves_the_keyframe_across_the_aisle_not_along_it(
     assert float(moved @ across) == pytest.approx(0.03, abs=0.005), moved
     assert abs(float(moved @ along)) < 0.005, moved
     assert abs(float(wrap(slam.keyframes[1][2] - direction))) < 1e-3  # the heading stays
-
-
-def test_a_partial_closure_moves_the_keyframe_across_the_aisle_and_never_along_it():
-    # loop_partial: a loop match that pins the heading and the position across an aisle but
-    # not along it (warehouse uncalibrated seed 18: six such candidates 3-25 cm off along the
-    # aisle) joins the keyframes by an edge on what it pins alone. Here it says keyframe 1 is
-    # 3 cm off across the aisle and 20 cm off along it, with a covariance sure of both
-    # (1 cm): the keyframe moves across, not along, and it is counted apart from closures.
-    direction = math.radians(90.0)
-    along = np.array([math.cos(direction), math.sin(direction)])
-    across = np.array([-along[1], along[0]])
-    start = np.array([0.0, 0.0, direction])
-    there = np.array([*(3.0 * along), direction])
-    slam = _slam(start)
-    slam.keyframes = [start.copy(), there.copy()]
-    slam.edges = [Edge(0, 1, between(start, there), np.diag([100.0, 100.0, 1e4]))]
-    seen = there + np.array([*(0.2 * along + 0.03 * across), 0.0])
-    cov = np.diag([0.01, 0.01, math.radians(0.1)]) ** 2
-    slam.add_closure(0, 1, between(start, seen), cov, pinned=across)
-    moved = slam.keyframes[1][:2] - there[:2]
-    assert float(moved @ across) == pytest.approx(0.03, abs=0.005), moved
-    assert abs(float(moved @ along)) < 1e-3, moved
-    assert not slam.closures and len(slam.partial_closures) == 1
-    # its pinned direction, in keyframe 1's frame (heading along the aisle): the robot's left
-    assert np.allclose(slam.partial_closures[0].pinned, [0.0, 1.0], atol=1e-6)
-
-
-def test_a_partial_closure_is_false_only_where_it_measures():
-    # Keyframe 1 truly 3 m ahead of keyframe 0, heading along the aisle. A partial closure
-    # pins the robot's left (across): 25 cm off along the aisle is not false, 25 cm across is.
-    truth = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
-    left = [[0.0, 1.0]]
-    assert false_partial_closures([0], [1], [[3.25, 0.01, 0.0]], left, truth) == 0
-    assert false_partial_closures([0], [1], [[3.0, 0.25, 0.0]], left, truth) == 1
-    assert false_partial_closures([0], [1], [[3.0, 0.0, math.radians(4.0)]], left, truth) == 1
-    assert false_closures([0], [1], [[3.25, 0.01, 0.0]], truth) == 1  # as a full closure
