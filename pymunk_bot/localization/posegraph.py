@@ -31,8 +31,20 @@ class Edge:
     i: int
     j: int
     z: np.ndarray  # measured pose of j in i's frame [x, y, theta]
-    information: np.ndarray  # 3x3
+    information: np.ndarray  # 3x3, of the error: x, y in j's frame (edge_information)
     robust: float = 0.0  # Cauchy kernel scale [chi]; 0: a plain least-squares edge
+
+
+def edge_information(world_covariance: np.ndarray, heading: float) -> np.ndarray:
+    """The information matrix (3x3) of an edge into a node at ``heading`` [rad] whose pose was
+    measured with ``world_covariance`` (3x3, world frame, as a scan match gives it): the edge's
+    error is in that node's frame (edge_terms), so the covariance is turned into it first.
+    (Taken as it was, an aisle along the world's y axis was held along the aisle and left
+    loose across it.)"""
+    c, s = np.cos(heading), np.sin(heading)
+    to_node = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world -> node frame
+    covariance = to_node @ np.asarray(world_covariance, dtype=float) @ to_node.T
+    return np.linalg.inv(0.5 * (covariance + covariance.T))
 
 
 def edge_terms(xi: np.ndarray, xj: np.ndarray, z: np.ndarray):

@@ -40,7 +40,7 @@ from pymunk_bot.localization.loopsearch import ChainUncertainty, candidates
 from pymunk_bot.localization.mapping import OccupancyMapper
 from pymunk_bot.localization.moving import MovingReturns
 from pymunk_bot.localization.odometry_trust import OdometryTrust
-from pymunk_bot.localization.posegraph import Edge, final_weights, optimize
+from pymunk_bot.localization.posegraph import Edge, edge_information, final_weights, optimize
 from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.scanmatch import Match, subsample
 from pymunk_bot.localization.se2 import between, compose, scan_points, transform_points, wrap
@@ -259,7 +259,8 @@ class SlamLocalizer(Localizer):
         self._travel.append(travel)
         if cov is not None:
             z = between(self.keyframes[index - 1], self.keyframes[index])
-            self.edges.append(Edge(index - 1, index, z, np.linalg.inv(cov + EDGE_FLOOR)))
+            self.edges.append(Edge(index - 1, index, z,
+                                   edge_information(cov + EDGE_FLOOR, float(self.keyframes[index][2]))))
         self.uncertainty.add(self.keyframes[index], np.zeros((3, 3)) if cov is None else cov + EDGE_FLOOR)
         # Integrated even when the graph has moved since the map was built (the next read
         # rebuilds it from every keyframe): static_returns asks it for surfaces as it stands.
@@ -300,10 +301,12 @@ class SlamLocalizer(Localizer):
     def add_closure(self, old: int, new: int, relative: np.ndarray, covariance: np.ndarray) -> None:
         """Join keyframes ``old`` and ``new`` by a loop edge (robust: Cauchy's kernel of scale
         ``loop_kernel``): ``new`` seen from ``old`` at ``relative`` [x, y, theta], with
-        ``covariance`` (3x3); the graph is optimized every ``optimize_every`` closures."""
+        ``covariance`` (3x3, world frame: a scan match's of ``new``'s pose); the graph is
+        optimized every ``optimize_every`` closures."""
         relative = np.asarray(relative, dtype=float)
         seen = compose(self.keyframes[old], relative)
-        self.edges.append(Edge(old, new, relative, np.linalg.inv(np.asarray(covariance) + EDGE_FLOOR),
+        self.edges.append(Edge(old, new, relative,
+                               edge_information(np.asarray(covariance) + EDGE_FLOOR, float(seen[2])),
                                robust=self.config.loop_kernel))
         self.loop_closures.append((old, new))
         self.closures.append(LoopClosure(old, new, relative,
