@@ -132,8 +132,8 @@ def _mark(grid: np.ndarray, shape: pymunk.Shape, box: list[float], left: float, 
     i1 = min(int(math.floor((box[2] - left) / cell)), cols - 1)
     j0 = int(math.floor((box[1] - bottom) / cell))
     j1 = min(int(math.floor((box[3] - bottom) / cell)), rows - 1)
-    outline = _outline(shape)
-    if outline is None or (i1 - i0 + 1) * (j1 - j0 + 1) <= 4:  # its box is as good
+    outline = None if (i1 - i0 + 1) * (j1 - j0 + 1) <= 4 else _outline(shape)
+    if outline is None:  # a few cells (its box is as good), or a kind of shape not known here
         grid[j0:j1 + 1, i0:i1 + 1] = 1
         return
     i, j = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
