@@ -46,18 +46,21 @@ def test_no_fixed_shape_within_reach_is_missed(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_the_clearance_never_exceeds_the_distance_to_a_fixed_shape(seed):
+def test_the_clearance_brackets_the_distance_to_the_nearest_fixed_shape(seed):
     rng = np.random.default_rng(seed)
     space, robot = _world(rng)
     cells = StaticCells(space, {robot})
     xy = rng.uniform(-25.0, 25.0, (3000, 2))
     most = rng.uniform(0.0, 4.0, 3000)
-    bound = cells.clearance(xy, most)
+    bound, within = cells.clearance(xy, most)
     fixed = [shape for shape in space.shapes if shape.body is not robot]
-    for (x, y), limit, clear in zip(xy.tolist(), most.tolist(), bound.tolist()):
+    for (x, y), limit, clear, far in zip(xy.tolist(), most.tolist(), bound.tolist(),
+                                         within.tolist()):
         nearest = min(shape.point_query((x, y)).distance for shape in fixed)
         assert 0.0 <= clear <= limit and clear <= max(nearest, 0.0), (x, y, clear, nearest)
-    assert np.mean(bound > 0.5 * most) > 0.5  # and it is no trivial bound where it is empty
+        assert nearest <= far, (x, y, nearest, far)  # pymunk, asked that far, finds it
+    assert np.mean(bound > 0.5 * most) > 0.5  # and they are no trivial bounds
+    assert np.mean(np.isfinite(within)) > 0.2
 
 
 def test_the_index_follows_shapes_that_come_go_and_move():

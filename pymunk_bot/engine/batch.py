@@ -84,7 +84,7 @@ class Batch:
             self.gate = SubstepGate(ground.contact_space,
                                     [m for run in self.runs for m in run.built.movers],
                                     self.substeps, self.dt, ground.take_disturbed, ground.need,
-                                    propulsion.fastest_driven)
+                                    propulsion.fastest_driven, lambda: ground.fixed_version)
         # Robots that nothing can reach step apart (large fleets of one run).
         self.split: SplitPlanner | None = None
         if (self.gate is not None and propulsion.batched and ground.can_split

@@ -11,14 +11,16 @@ too often (by at most a cell), never "no" wrongly, so the gate's answers are the
 The cells are built at first, and again by :meth:`StaticCells.refresh` when a shape came or
 went since, or after :meth:`StaticCells.forget` (the gate calls it when bodies were moved
 outside the physics: ``World.disturb``; a fixed body moved by hand is not looked for at every
-test, which cost a microsecond per body). The substep gate refreshes before each test; the
+test, which cost a microsecond per body). The Space's shapes are compared only when the
+world's ``fixed_version`` changed (someone was handed the Space, or disturbed the world):
+comparing them at every test cost 34 us on the real warehouse map. The substep gate refreshes before each test; the
 planner of robots that step apart (physics/apart.py) when it starts, as nothing fixed can
 change while they do.
 """
 from __future__ import annotations
 
 import math
-from typing import Collection
+from typing import Callable, Collection, Sequence
 
 import numba
 import numpy as np
@@ -40,14 +42,21 @@ class StaticCells:
     """The bounding boxes of ``space``'s shapes that belong to no body of ``moving`` (and are
     no sensors), as marked cells; built again when the Space's shapes change."""
 
-    def __init__(self, space: pymunk.Space, moving: Collection[pymunk.Body]) -> None:
+    def __init__(self, space: pymunk.Space, moving: Collection[pymunk.Body],
+                 version: Callable[[], int] | None = None) -> None:
+        """``version()``: a count that changes whenever fixed shapes may have come, gone or
+        moved (``World.fixed_version``); without it, every :meth:`refresh` compares the
+        Space's shapes."""
         self.space = space
         self._moving = moving
+        self._version = version
+        self._seen: int | None = None  # the version the cells were checked at
         self._key: tuple | None = None  # the shapes the cells were built from
         self._origin = (0.0, 0.0)  # [m] the grid's lower-left corner
         self._cell = 1.0  # [m]
         self._table = np.zeros((1, 1), dtype=np.int32)  # summed-area table of marked cells
         self._everywhere = False  # a shape without bounds: every point may be near it
+        self._loose = False  # a shape of a kind not known here marked a box of many cells
         self.refresh()
 
     def near(self, xy: np.ndarray, look: np.ndarray) -> np.ndarray:
@@ -59,30 +68,45 @@ class StaticCells:
         _near_cells(xy, look, self._table, self._origin[0], self._origin[1], self._cell, near)
         return near
 
-    def clearance(self, xy: np.ndarray, most: np.ndarray) -> np.ndarray:
+    def clearance(self, xy: np.ndarray, most: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For each point of ``xy`` (n, 2) [m]: a distance [m] within which no fixed shape
-        lies, at most ``most`` (n,) [m]: the cells tell it to within a cell or two."""
-        out = np.empty(xy.shape[0])
+        lies, at most ``most`` (n,) [m], and one within which a fixed shape lies (inf: none
+        found within ``most``): the cells tell the nearest shape's distance to within a cell
+        or two."""
+        out, within = np.empty(xy.shape[0]), np.empty(xy.shape[0])
         if self._everywhere:
             out.fill(0.0)
-            return out
-        _clearance(xy, most, self._table, self._origin[0], self._origin[1], self._cell, out)
-        return out
+            within.fill(math.inf)
+            return out, within
+        _clearance(xy, most, self._table, self._origin[0], self._origin[1], self._cell, out,
+                   within)
+        if self._loose:  # its marked cells may lie far from it
+            within.fill(math.inf)
+        return out, within
 
-    def distances(self, xy: np.ndarray, look: np.ndarray, which: np.ndarray | None = None
-                  ) -> np.ndarray:
+    def distances(self, xy: np.ndarray, look: np.ndarray, which: np.ndarray | None = None,
+                  filters: Sequence[pymunk.ShapeFilter] | None = None) -> np.ndarray:
         """The distance [m] from each point of ``xy`` (n, 2) [m] to the nearest fixed shape
         (pymunk's point query; negative inside one), inf where none lies within ``look``
         (n,) [m] or where ``which`` (n,) is False: pymunk is asked only about the points
-        :meth:`near` cannot rule out."""
+        :meth:`near` cannot rule out. ``filters``: each point's mover's own shape filter: its
+        nearest shape through it, if fixed, is the answer (one result instead of every shape
+        within ``look``)."""
         out = np.full(xy.shape[0], math.inf)
         moving = self._moving
         near = self.near(xy, look)
         if which is not None:
             near &= which
+        space = self.space
         for k in np.flatnonzero(near).tolist():
-            for hit in self.space.point_query((float(xy[k, 0]), float(xy[k, 1])),
-                                              float(look[k]), _EVERY_SHAPE):
+            point, reach = (float(xy[k, 0]), float(xy[k, 1])), float(look[k])
+            if filters is not None:
+                hit = space.point_query_nearest(point, reach, filters[k])
+                if hit is None or (hit.shape is not None and hit.shape.body not in moving
+                                   and not hit.shape.sensor):
+                    out[k] = math.inf if hit is None else hit.distance
+                    continue
+            for hit in space.point_query(point, reach, _EVERY_SHAPE):
                 shape = hit.shape
                 if shape is not None and not shape.sensor and shape.body not in moving:
                     out[k] = min(out[k], hit.distance)
@@ -90,10 +114,16 @@ class StaticCells:
 
     def forget(self) -> None:
         """Fixed bodies may have moved: the next :meth:`refresh` builds the cells again."""
-        self._key = None
+        self._key = self._seen = None
 
     def refresh(self) -> None:
-        """Build the cells again if a shape came or went (or after :meth:`forget`)."""
+        """Build the cells again if a shape came or went (or after :meth:`forget`): looked
+        for only when the version changed."""
+        if self._version is not None:
+            version = self._version()
+            if version == self._seen:
+                return
+            self._seen = version
         key = tuple(self.space.shapes)
         if key == self._key:
             return
@@ -115,33 +145,37 @@ class StaticCells:
             cell *= 1.5
             cols, rows = int(width / cell) + 1, int(height / cell) + 1
         grid = np.zeros((rows, cols), dtype=np.int32)
+        self._loose = False
         for shape, box in zip(fixed, boxes.tolist()):
-            _mark(grid, shape, box, left, bottom, cell)
+            self._loose |= not _mark(grid, shape, box, left, bottom, cell)
         table = np.zeros((rows + 1, cols + 1), dtype=np.int32)
         table[1:, 1:] = grid.cumsum(axis=0).cumsum(axis=1)
         self._origin, self._cell, self._table = (left, bottom), cell, table
 
 
 def _mark(grid: np.ndarray, shape: pymunk.Shape, box: list[float], left: float, bottom: float,
-          cell: float) -> None:
+          cell: float) -> bool:
     """Mark the cells of ``grid`` (corner at (``left``, ``bottom``) [m], cells of ``cell``
     [m]) that ``shape`` covers: those of its bounding box ``box`` (left, bottom, right, top)
-    [m] that its outline, grown by its rounding radius and OUTLINE_SLACK, meets."""
+    [m] that its outline, grown by its rounding radius and OUTLINE_SLACK, meets. False if it
+    marked a box more than two cells across without its outline (a kind not known here)."""
     rows, cols = grid.shape
     i0 = int(math.floor((box[0] - left) / cell))
     i1 = min(int(math.floor((box[2] - left) / cell)), cols - 1)
     j0 = int(math.floor((box[1] - bottom) / cell))
     j1 = min(int(math.floor((box[3] - bottom) / cell)), rows - 1)
-    outline = None if (i1 - i0 + 1) * (j1 - j0 + 1) <= 4 else _outline(shape)
-    if outline is None:  # a few cells (its box is as good), or a kind of shape not known here
+    small = i1 - i0 <= 1 and j1 - j0 <= 1  # two cells across at most: its box is as good
+    outline = None if small else _outline(shape)
+    if outline is None:  # a small box, or a kind of shape not known here
         grid[j0:j1 + 1, i0:i1 + 1] = 1
-        return
+        return small
     i, j = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
     x, y = left + i * cell, bottom + j * cell
     with np.errstate(divide="ignore", invalid="ignore"):  # flags GEOS may leave raised
         squares = shapely.box(x, y, x + cell, y + cell)
         covered = shapely.intersects(squares, outline)
     grid[j0:j1 + 1, i0:i1 + 1] |= covered.astype(np.int32)
+    return True
 
 
 def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:
@@ -164,16 +198,20 @@ def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:
 
 @numba.njit(cache=True)
 def _clearance(xy: np.ndarray, most: np.ndarray, table: np.ndarray, left: float,
-               bottom: float, cell: float, out: np.ndarray) -> None:
+               bottom: float, cell: float, out: np.ndarray, within: np.ndarray) -> None:
     """``out[k]``: the half-width m * ``cell`` of the largest square block of cells about
     ``xy[k]``'s cell with no marked cell (a shape outside the block is farther than that from
     any point inside its middle cell), less SLACK, at most ``most[k]`` [m]; 0 for a point that
-    is not finite. ``table``: the cells' summed-area table (see :func:`_near_cells`)."""
+    is not finite. ``within[k]``: how far a corner of the smallest block with a marked cell
+    is, grown by a cell (a shape covers part of that cell, or of one next to it), plus SLACK
+    and OUTLINE_SLACK; inf where no block up to ``most[k]`` holds one. ``table``: the cells' summed-area table (see
+    :func:`_near_cells`)."""
     rows, cols = table.shape[0] - 1, table.shape[1] - 1
     for k in range(xy.shape[0]):
         x, y = xy[k, 0], xy[k, 1]
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(most[k])):
             out[k] = 0.0
+            within[k] = math.inf
             continue
         ci = math.floor((x - left) / cell)
         cj = math.floor((y - bottom) / cell)
@@ -187,6 +225,11 @@ def _clearance(xy: np.ndarray, most: np.ndarray, table: np.ndarray, left: float,
             else:
                 lo = m
         out[k] = min(max(lo * cell - SLACK, 0.0), most[k])
+        top = int(most[k] / cell) + 1
+        # A marked cell is met by its shape's outline, or lies in the box (two cells across at
+        # most) of a shape marked by its box: the shape is within the block one cell wider.
+        within[k] = (math.sqrt(2.0) * (hi + 2) * cell + SLACK + OUTLINE_SLACK if hi < top
+                     else math.inf)
 
 
 @numba.njit(cache=True)

@@ -153,11 +153,13 @@ class SubstepGate:
     were moved outside the physics since it was last asked (a teleport). ``need``: the count
     for any speed bound (its ``full`` is ``full``); ``driven(seconds)``: the fastest
     any robot's footprint can be driven within ``seconds`` [m/s] (either None: every tick with
-    substeps takes ``full``)."""
+    substeps takes ``full``); ``fixed_version()``: a count that changes when fixed shapes may
+    have changed (``World.fixed_version``; None: the Space's shapes compared at every test)."""
 
     def __init__(self, space: pymunk.Space, movers: Sequence[Mover], full: int, dt: float,
                  disturbed: Callable[[], bool], need: SubstepNeed | None = None,
-                 driven: Callable[[float], float] | None = None) -> None:
+                 driven: Callable[[float], float] | None = None,
+                 fixed_version: Callable[[], int] | None = None) -> None:
         self.space = space
         self.disturbed = disturbed
         self._driven = driven
@@ -166,7 +168,8 @@ class SubstepGate:
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
-        self.fixed = StaticCells(space, self._bodies)  # where the fixed shapes are
+        # where the fixed shapes are (looked at again when fixed_version() changes)
+        self.fixed = StaticCells(space, self._bodies, fixed_version)
         self._handles = handles([m.body for m in self.movers])  # read one by one when few
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         # [m] cog to origin
@@ -180,6 +183,8 @@ class SubstepGate:
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
         self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
         self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
+        # Each mover's own query filter: the nearest shape through it is never its own
+        self._filters = [next(iter(m.body.shapes)).filter for m in self.movers]
         self._pairs = self._meeting(*np.triu_indices(len(self.movers), 1)) \
             if len(self.movers) < _PAIRS_BY_TREE else None  # else found near, with a k-d tree
         self.full = full
@@ -298,11 +303,13 @@ class SubstepGate:
         most = self._reach + speeds * clear + MARGIN  # [m] farther shapes change nothing
         dynamic, reach = self._dynamic, self._reach
         until = np.empty(len(movers))
-        _fixed_times(self.fixed.clearance(xy, most), reach, speeds, dynamic, until)
+        clearance, within = self.fixed.clearance(xy, most)
+        _fixed_times(clearance, reach, speeds, dynamic, until)
         short = until < needed
-        if short.any():  # the cells are too coarse here: ask pymunk
+        if short.any():  # the cells are too coarse here: ask pymunk, as far as a shape may be
             exact = np.empty(len(movers))
-            _fixed_times(self.fixed.distances(xy, most, short), reach, speeds, short, exact)
+            _fixed_times(self.fixed.distances(xy, np.minimum(most, within), short, self._filters),
+                         reach, speeds, short, exact)
             until[short] = exact[short]
         clear = min(clear, float(until.min()))
         return max(clear, 0.0)

@@ -95,6 +95,9 @@ class World:
         # Robots (body, control body) stepping in apart_space now, in the order they went.
         self._apart: dict[pymunk.Body, pymunk.Body] = {}
         self.whole = False  # someone holds the world's Space: every robot stays in it
+        # Counts the times someone was handed the Space (who may add or remove fixed shapes)
+        # or disturbed the world: the substep gate's cells of the fixed world look again then.
+        self.fixed_version = 0
         self.layout = 0  # counts the moves between the two Spaces (batch readers re-index)
 
     def shared_tables(self) -> tuple[dict, dict, dict]:
@@ -110,6 +113,7 @@ class World:
         LiDAR, a crowd, a metric or a user's query sees the whole world)."""
         self.whole = True
         self.gather()
+        self.touched()
         return self._space
 
     @property
@@ -171,9 +175,18 @@ class World:
         by hand): adaptive substeps look again before a tick may skip them (on a shared
         ground, for every copy)."""
         self._disturbed = True
+        self.touched()
         ground = getattr(self, "_ground", None)
         if ground is not None:
             ground.disturb()
+
+    def touched(self) -> None:
+        """The fixed world may have changed (the Space was handed out, or bodies moved by
+        hand): ``fixed_version`` counts it, on a shared ground for every copy."""
+        self.fixed_version += 1
+        ground = getattr(self, "_ground", None)
+        if ground is not None:
+            ground.touched()
 
     def random_point(self, rng: np.random.Generator, margin: float) -> tuple[float, float]:
         """A point [m] drawn uniformly from the arena's open area: a grid map's free cells,
