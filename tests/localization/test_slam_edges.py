@@ -124,3 +124,13 @@ def test_a_closure_in_an_aisle_moves_the_keyframe_across_the_aisle_not_along_it(
     assert float(moved @ across) == pytest.approx(0.03, abs=0.005), moved
     assert abs(float(moved @ along)) < 0.005, moved
     assert abs(float(wrap(slam.keyframes[1][2] - direction))) < 1e-3  # the heading stays
+
+
+def test_the_edge_probe_refuses_more_seeds_than_it_bounds_in_one_line(capsys):
+    from bench.slam_edge_probe import MAX_RUNS, main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["warehouse", "typical", *map(str, range(MAX_RUNS + 1))])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert f"at most {MAX_RUNS} seeds" in err[-1] and "Traceback" not in "".join(err)
