@@ -30,13 +30,18 @@ def _world(rng: np.random.Generator) -> tuple[pymunk.Space, pymunk.Body]:
     return space, robot
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_no_fixed_shape_within_reach_is_missed(seed):
+def _asked(seed: int, points: int, farthest: float):
+    """A random world of fixed shapes and a robot, its cells, and random points [m] with a
+    random distance [m] each, up to ``farthest``."""
     rng = np.random.default_rng(seed)
     space, robot = _world(rng)
-    cells = StaticCells(space, {robot})
-    xy = rng.uniform(-25.0, 25.0, (4000, 2))
-    look = rng.uniform(0.0, 3.0, 4000)
+    xy = rng.uniform(-25.0, 25.0, (points, 2))
+    return space, robot, StaticCells(space, {robot}), xy, rng.uniform(0.0, farthest, points)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_no_fixed_shape_within_reach_is_missed(seed):
+    space, robot, cells, xy, look = _asked(seed, 4000, 3.0)
     near = cells.near(xy, look)
     for (x, y), r, maybe in zip(xy.tolist(), look.tolist(), near.tolist()):
         found = [h for h in space.point_query((x, y), r, pymunk.ShapeFilter())
@@ -47,11 +52,7 @@ def test_no_fixed_shape_within_reach_is_missed(seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_the_clearance_brackets_the_distance_to_the_nearest_fixed_shape(seed):
-    rng = np.random.default_rng(seed)
-    space, robot = _world(rng)
-    cells = StaticCells(space, {robot})
-    xy = rng.uniform(-25.0, 25.0, (3000, 2))
-    most = rng.uniform(0.0, 4.0, 3000)
+    space, robot, cells, xy, most = _asked(seed, 3000, 4.0)
     bound, within = cells.clearance(xy, most)
     fixed = [shape for shape in space.shapes if shape.body is not robot]
     for (x, y), limit, clear, far in zip(xy.tolist(), most.tolist(), bound.tolist(),
