@@ -44,8 +44,9 @@ def test_an_abort_after_an_interrupt_in_append_stops_the_writer_at_once():
     try:
         for trial in range(TRIALS):
             background = _Background(_SlowEncoder(rng))
-            signal.setitimer(signal.ITIMER_REAL, rng.uniform(0.0005, 0.01))
             with pytest.raises(SystemExit):
+                # armed inside: a timer of 0.5 ms could fire in pytest.raises' own set-up
+                signal.setitimer(signal.ITIMER_REAL, rng.uniform(0.0005, 0.01))
                 while True:
                     background.append(b"frame")
             aborting = threading.Thread(target=background.abort, daemon=True)
