@@ -87,3 +87,16 @@ def test_the_index_follows_shapes_that_come_go_and_move():
     space.remove(shape)
     cells.refresh()
     assert not cells.near(here, reach)[0]
+
+
+def test_a_large_round_shape_is_covered_between_the_buffer_polygons_vertices():
+    # shapely's buffer of a 5 m disc has its vertices on the circle and its chords sag 6 mm
+    # inside it: the cells of the arc beyond a chord must be marked all the same.
+    space = pymunk.Space()
+    robot = pymunk.Body(1.0, 1.0)
+    space.add(robot, pymunk.Circle(robot, 0.2, (50.0, 50.0)),
+              pymunk.Circle(space.static_body, 5.0))
+    cells = StaticCells(space, {robot})
+    turns = np.linspace(0.0, 2.0 * np.pi, 4001)
+    xy = 5.0005 * np.column_stack([np.cos(turns), np.sin(turns)])  # 0.5 mm outside the circle
+    assert cells.near(xy, np.full(turns.shape[0], 0.001)).all()

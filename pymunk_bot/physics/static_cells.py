@@ -13,9 +13,9 @@ went since, or after :meth:`StaticCells.forget` (the gate calls it when bodies w
 outside the physics: ``World.disturb``; a fixed body moved by hand is not looked for at every
 test, which cost a microsecond per body). The Space's shapes are compared only when the
 world's ``fixed_version`` changed (someone was handed the Space, or disturbed the world):
-comparing them at every test cost 34 us on the real warehouse map. The substep gate refreshes before each test; the
-planner of robots that step apart (physics/apart.py) when it starts, as nothing fixed can
-change while they do.
+comparing them at every test cost 34 us on the real warehouse map. The substep gate refreshes
+before each test; the planner of robots that step apart (physics/apart.py) when it starts, as
+nothing fixed can change while they do.
 """
 from __future__ import annotations
 
@@ -36,11 +36,16 @@ SLACK = 1e-6
 # [m] what every fixed shape's outline is grown by before it marks cells: GEOS's arithmetic
 # and Chipmunk's may differ in the last bits of a point on the outline.
 OUTLINE_SLACK = 1e-6
+# Segments per quarter circle of shapely's round buffers. Their vertices lie on the circle and
+# the chords between them sag inside it by up to 1 - cos(pi / (4 * QUAD_SEGS)) of the radius
+# (1.2 mm a metre at 16): each buffer is grown by that, so that it covers the round shape.
+QUAD_SEGS = 16
+_SAG = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))
 
 
 class StaticCells:
-    """The bounding boxes of ``space``'s shapes that belong to no body of ``moving`` (and are
-    no sensors), as marked cells; built again when the Space's shapes change."""
+    """The cells that ``space``'s shapes cover, those that belong to no body of ``moving`` and
+    are no sensors; built again when the Space's shapes change (:meth:`refresh`)."""
 
     def __init__(self, space: pymunk.Space, moving: Collection[pymunk.Body],
                  version: Callable[[], int] | None = None) -> None:
@@ -185,15 +190,20 @@ def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:
     assert body is not None
     if isinstance(shape, pymunk.Circle):
         centre = body.local_to_world(shape.offset)
-        return shapely.Point(centre.x, centre.y).buffer(shape.radius + OUTLINE_SLACK)
+        return _grown(shapely.Point(centre.x, centre.y), shape.radius)
     if isinstance(shape, pymunk.Segment):
         a, b = body.local_to_world(shape.a), body.local_to_world(shape.b)
-        return shapely.LineString([(a.x, a.y), (b.x, b.y)]).buffer(shape.radius + OUTLINE_SLACK)
+        return _grown(shapely.LineString([(a.x, a.y), (b.x, b.y)]), shape.radius)
     if isinstance(shape, pymunk.Poly):
         corners = [body.local_to_world(v) for v in shape.get_vertices()]
-        hull = shapely.Polygon([(p.x, p.y) for p in corners])
-        return hull.buffer(shape.radius + OUTLINE_SLACK)
+        return _grown(shapely.Polygon([(p.x, p.y) for p in corners]), shape.radius)
     return None
+
+
+def _grown(geometry: shapely.Geometry, radius: float) -> shapely.Geometry:
+    """``geometry`` grown by ``radius`` [m] (a shape's rounding), enough that shapely's
+    polygon of the round parts holds the true ones, plus OUTLINE_SLACK."""
+    return geometry.buffer(radius * _SAG + OUTLINE_SLACK, quad_segs=QUAD_SEGS)
 
 
 @numba.njit(cache=True)

@@ -57,14 +57,12 @@ class LidarRows:
 
     def scan(self, caster: Any, due: Sequence[int], times: Sequence[float],
              poses: Callable[[], np.ndarray]) -> None:
-        """The ``due`` LiDARs scan now: one ``caster.cast_many`` for all of them (their origins
-        from ``poses()``: every body's (x, y, angle), read once), each scan stored as taken at
-        its time in ``times`` [s]."""
+        """The ``due`` LiDARs (one or more) scan now: one ``caster.cast_many`` for all of them
+        (their origins from ``poses()``: every body's (x, y, angle), read once), each scan
+        stored as taken at its time in ``times`` [s]."""
         if len(due) == 1:  # one scan: the LiDAR's own (one body's pose, not every body's)
             lidar = self.lidars[due[0]]
             lidar.record(times[0], lidar.true_ranges())
-            return
-        if not len(due):
             return
         rows = np.asarray(due, dtype=np.intp)
         self.store(due, times, caster.cast_many(*self.requests(rows, poses()),
