@@ -32,7 +32,6 @@ _EXPORTS = {"Command": "robots.command", "Robot": "robots.robot", "ScenarioConfi
 _MOVED = {
     'arcs': 'geometry.arcs',
     'batch': 'engine.batch',
-    'body_rows': 'physics.bodies',
     'build': 'engine.build',
     'command': 'robots.command',
     'drives': 'robots.drives',

@@ -1,31 +1,35 @@
-"""A robot moves the same in a fleet of any size: the batched tick (pymunk.batch, arrays) and
-the per-robot tick (floats) give the very same poses, held steps included."""
+"""One path at every size: a robot steered alone and as one of a fleet of 30 gets the very same
+poses, to the bit (held steps, straight ones and ramping motors included)."""
 from __future__ import annotations
 
-import sys
+from typing import Any
 
 import numpy as np
-import pytest
 
-from bench.fleet import swarm_scenario
 from pymunk_bot.engine.simulation import Simulation
 
 
-def _run(monkeypatch: pytest.MonkeyPatch, small_below: int, seconds: float) -> np.ndarray:
-    """Every robot's pose after ``seconds`` of the 30-robot swarm, with the per-robot path
-    taken below ``small_below`` robots."""
-    for module in list(sys.modules.values()):
-        if getattr(module, "__name__", "").startswith("pymunk_bot") and hasattr(module, "SMALL_GROUP"):
-            monkeypatch.setattr(module, "SMALL_GROUP", small_below)
-    sim = Simulation.from_dict(swarm_scenario(30), source="swarm")
-    assert sim._built.propulsion.batched == (small_below <= 30)
+def _robot(k: int) -> dict[str, Any]:
+    """Robot ``k`` of a 6 x 5 grid 8 m apart: each its own wheel speeds (some straight)."""
+    left = 0.3 + 0.05 * (k % 7)
+    right = left if k % 5 == 0 else left + 0.04 * (1 + k % 3)
+    return {"name": f"r{k}", "pose": [6.0 + 8.0 * (k % 6), 6.0 + 8.0 * (k // 6), 0.3 * k],
+            "controller": {"type": "wheels", "left": left, "right": right}}
+
+
+def _poses(robots: list[dict[str, Any]], seconds: float) -> np.ndarray:
+    # A substep count of its own: the default's, where contacts can start, is shared by a
+    # Space's robots (the fleet's fastest sets it), which would differ alone.
+    sim = Simulation.from_dict({"name": "fleet", "world": {"size": [52.0, 44.0], "substeps": 3},
+                                "robots": robots}, source="fleet")
     sim.run(seconds)
     return np.array([robot.pose for robot in sim.robots.values()])
 
 
-def test_batched_and_per_robot_ticks_agree_to_the_bit(monkeypatch: pytest.MonkeyPatch) -> None:
-    # The swarm's robots hold steady arcs, meet and push each other: held steps and contacts.
-    batched = _run(monkeypatch, 24, 3.0)
-    per_robot = _run(monkeypatch, 1000, 3.0)
-    assert np.array_equal(batched, per_robot)
-    assert np.ptp(batched[:, :2], axis=0).min() > 1.0  # they did move
+def test_a_robot_moves_alone_as_in_a_fleet_to_the_bit() -> None:
+    fleet = _poses([_robot(k) for k in range(30)], 4.0)
+    for k in (0, 7, 13, 29):  # straight (0), turning (7, 13, 29)
+        alone = _poses([_robot(k)], 4.0)
+        assert np.array_equal(alone[0], fleet[k]), k
+    assert np.ptp(fleet[:, :2], axis=0).min() > 10.0  # they did move (and apart)
+    assert abs(fleet[7, 2] - 0.3 * 7) > 0.5  # and turned

@@ -56,8 +56,15 @@ def _names(action: argparse.Action) -> str:
 
 
 def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
-    # argparse's own expansion (%(default)s, %(type)s, '%%' -> '%'), as --help prints it
-    text = parser._get_formatter()._expand_help(action) if action.help else ""
+    # %-formatted with the action's attributes, as --help prints it (%(default)s, %(type)s
+    # by its name, %(choices)s joined, %(prog)s, '%%' -> '%')
+    text = ""
+    if action.help:
+        values = {name: getattr(value, "__name__", value) for name, value in vars(action).items()
+                  if value is not argparse.SUPPRESS}
+        if values.get("choices") is not None:
+            values["choices"] = ", ".join(str(choice) for choice in action.choices or ())
+        text = action.help % dict(values, prog=parser.prog)
     if action.required and action.option_strings:
         text += " (required)"
     return text.replace("|", "\\|")

@@ -87,7 +87,7 @@ class Batch:
                                     propulsion.fastest_driven, lambda: ground.fixed_version)
         # Robots that nothing can reach step apart (large fleets of one run).
         self.split: SplitPlanner | None = None
-        if (self.gate is not None and propulsion.batched and ground.can_split
+        if (self.gate is not None and not propulsion.copies and ground.can_split
                 and propulsion.n >= SPLIT_FROM):
             assert ground.apart_space is not None
             self.split = SplitPlanner(ground.apart_space, propulsion.bodies, self.gate.movers,
@@ -143,19 +143,17 @@ class Batch:
             world = self.runs[0].world
             if split.apart.any() and split.layout != world.layout:
                 split.reset()  # someone gathered the robots (asked for the world's Space)
-                propulsion.relocated()
-                gate.relocated()
             if world.can_split:
                 disturbed = world.take_disturbed()
                 if disturbed:  # a teleport: every robot back, decided anew
-                    split.settle(world, propulsion, gate, np.zeros(split.n, dtype=bool))
+                    split.settle(world, propulsion, np.zeros(split.n, dtype=bool))
                     split.reset(disturbed=True)
                 apart, following_apart = split.apart, split.next_apart(propulsion)
                 substeps, following = gate.counts_apart(
                     disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
                 propulsion.step(dt / substeps, substeps, dt / following,
                                 (apart, following_apart))
-                split.settle(world, propulsion, gate, following_apart)
+                split.settle(world, propulsion, following_apart)
                 self._substep_after(dt / following)
                 return
         substeps, following = gate.counts()  # one pymunk step where no contact can start

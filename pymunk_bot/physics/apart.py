@@ -41,7 +41,7 @@ from scipy.spatial import cKDTree
 
 from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.substeps import (MARGIN, Mover, SubstepGate, motions, origin_speeds,
+from pymunk_bot.physics.substeps import (MARGIN, Mover, motions, origin_speeds,
                                          pair_gaps)
 from pymunk_bot.physics.world import World
 
@@ -108,18 +108,15 @@ class SplitPlanner:
         return self._clear((PLAN_TICKS + 1) * self.dt, propulsion.motion_array(),
                            propulsion.position_array())
 
-    def settle(self, world: World, propulsion: Propulsion, gate: SubstepGate,
-               apart: np.ndarray) -> None:
+    def settle(self, world: World, propulsion: Propulsion, apart: np.ndarray) -> None:
         """After a tick: the robots that step apart in the next one (``apart``) move there,
-        the others back; ``propulsion`` and ``gate`` look their rows up again."""
+        the others back."""
         went = np.flatnonzero(apart & ~self.apart).tolist()
         back = np.flatnonzero(self.apart & ~apart).tolist()
         if went or back:
             bodies, controls = propulsion.bodies, propulsion.controls
             world.move_back([(bodies[k], controls[k]) for k in back])
             world.move_apart([(bodies[k], controls[k]) for k in went])
-            propulsion.relocated()
-            gate.relocated()
         self.apart = apart
         self.layout = world.layout
 

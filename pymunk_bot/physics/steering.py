@@ -1,8 +1,8 @@
 """How a control body is steered so its robot follows a twist: each formula written once, compiled.
 
-The same compiled function serves one robot (called with floats, for less than the Python it
-replaces) and rows of robots (the kernels below loop over it), so a robot gets the very same
-floats whether it is steered alone, in a fleet or as one of many copies of a scenario. The
+The kernels below loop over robots, reading and writing their bodies through Chipmunk's own
+functions (:mod:`pymunk_bot.physics.chipmunk`), so one robot and ten thousand take the same
+path and a robot gets the very same floats alone, in a fleet or as one of many copies. The
 formulas are explained in :mod:`pymunk_bot.physics.propulsion`; a twist is (ux, uy [m/s] in the robot
 frame, omega [rad/s]); ``cog`` is the body origin's offset from the centre of gravity in the body
 frame [m] (a car's pose point is its rear axle).
@@ -18,6 +18,8 @@ import numba
 import numpy as np
 
 from pymunk_bot.geometry.arcs import sinc_half
+from pymunk_bot.physics.chipmunk import (GET_ANGLE, GET_SPIN, SET_ANCHOR, SET_ANGLE, SET_SPIN,
+                                         SET_VELOCITY, get_scalar, set_scalar, set_vect)
 
 
 @numba.njit(cache=True)
@@ -66,60 +68,78 @@ def anchor(ux: float, uy: float, omega: float, h: float, cx: float,
     return wy / omega, -wx / omega
 
 
+# A robot's steering row (``steer``, floats): the twist its control body holds (NaN: none, it
+# is aimed substep by substep), whether its pivot's anchor is off the control body's centre
+# (1.0) and its ``cog`` [m]. ``chip``: each robot's (body, control body, pivot joint) as
+# Chipmunk addresses (:mod:`pymunk_bot.physics.chipmunk`).
+HELD, ANCHORED, COG_X, COG_Y = 0, 3, 4, 5
+STEER_COLUMNS = 6
+# A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
+# [m] (an almost straight path) it is aimed substep by substep instead.
+MAX_ANCHOR = 1e6
+
+
 @numba.njit(cache=True)
-def aim_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray,
-             members: np.ndarray, ux: np.ndarray, uy: np.ndarray, omega: np.ndarray,
-             h: np.ndarray, h_next: np.ndarray, cog: np.ndarray, out: np.ndarray) -> None:
-    """:func:`aim` for robots ``members`` (their twists, steps ``h`` and next steps ``h_next``
-    [s] in the same order; ``h`` or ``h_next`` of length 1: the same for all), from the
-    bodies' ``state`` rows (angle, vx, vy, omega) in pymunk's body order: each control body's
-    (vx, vy, omega) into ``out`` (rows in the same order), every other body's as it is."""
-    for r in range(state.shape[0]):
-        out[r, 0], out[r, 1], out[r, 2] = state[r, 1], state[r, 2], state[r, 3]
-    each, each_next = h.shape[0] > 1, h_next.shape[0] > 1
+def aim_one(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, k: int, ux: float,
+            uy: float, omega: float, h: float, h_next: float) -> None:
+    """Robot ``k``'s control body velocity for the next substep, of ``h_next`` [s], after this
+    one of ``h`` [s] (:func:`aim`); its anchor back at the centre, nothing held."""
+    body, control = chip[k, 0], chip[k, 1]
+    if steer[k, ANCHORED] != 0.0:  # from holding: the anchor back to the centre
+        set_vect(calls[SET_ANCHOR], chip[k, 2], 0.0, 0.0)
+        steer[k, ANCHORED] = 0.0
+    steer[k, HELD] = steer[k, HELD + 1] = steer[k, HELD + 2] = math.nan
+    vx, vy = aim(get_scalar(calls[GET_ANGLE], body), get_scalar(calls[GET_SPIN], body), ux, uy,
+                 omega, h, h_next, steer[k, COG_X], steer[k, COG_Y])
+    set_vect(calls[SET_VELOCITY], control, vx, vy)
+    set_scalar(calls[SET_SPIN], control, omega)
+
+
+@numba.njit(cache=True)
+def aim_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: np.ndarray,
+             ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: float,
+             h_next: np.ndarray) -> None:
+    """:func:`aim_one` for robots ``members`` (their twists in the same order); ``h_next``
+    [s]: each member's, or (length 1) one for all."""
+    each = h_next.shape[0] > 1
     for j in range(members.shape[0]):
-        k = members[j]
-        r = robot_rows[k]
-        vx, vy = aim(state[r, 0], state[r, 3], ux[j], uy[j], omega[j], h[j if each else 0],
-                     h_next[j if each_next else 0], cog[k, 0], cog[k, 1])
-        row = control_rows[k]
-        out[row, 0] = vx
-        out[row, 1] = vy
-        out[row, 2] = omega[j]
+        aim_one(calls, chip, steer, members[j], ux[j], uy[j], omega[j], h,
+                h_next[j if each else 0])
 
 
 @numba.njit(cache=True)
-def hold_rows(state: np.ndarray, robot_rows: np.ndarray, control_rows: np.ndarray,
-              ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: np.ndarray, cog: np.ndarray,
-              max_anchor: float, anchors: np.ndarray, out: np.ndarray, held: np.ndarray,
-              changed: np.ndarray) -> bool:
-    """Every robot held for a step of substeps ``h`` [s] (a row: its own; of length 1: the
-    same for all): a turning one by its pivot's
-    :func:`anchor` (into ``anchors``; its control body spinning at omega, headed as the robot
-    will be at the solve), a straight one aimed once. Control bodies' (angle, vx, vy, omega) into
-    ``out`` (rows in pymunk's body order); ``held`` (n, 3), the twists held before (NaN: none),
-    becomes these, and ``changed`` says whose differ. False if some anchor would lie beyond
-    ``max_anchor`` [m] (``out`` is then incomplete, ``held`` untouched)."""
-    each = h.shape[0] > 1
-    for k in range(robot_rows.shape[0]):
-        r, row = robot_rows[k], control_rows[k]
-        angle, spin = state[r, 0], state[r, 3]
-        hk = h[k if each else 0]
-        if omega[k] != 0.0:
-            ax, ay = anchor(ux[k], uy[k], omega[k], hk, cog[k, 0], cog[k, 1])
-            if not (abs(ax) <= max_anchor and abs(ay) <= max_anchor):
-                return False
-            anchors[k, 0], anchors[k, 1] = ax, ay
-            out[row, 0] = angle + (spin - omega[k]) * hk
-            out[row, 1], out[row, 2] = 0.0, 0.0
-        else:
-            anchors[k, 0], anchors[k, 1] = 0.0, 0.0
-            out[row, 1], out[row, 2] = aim(angle, spin, ux[k], uy[k], 0.0, hk, hk,
-                                           cog[k, 0], cog[k, 1])
-        out[row, 3] = omega[k]
-    for k in range(robot_rows.shape[0]):
-        differs = held[k, 0] != ux[k] or held[k, 1] != uy[k] or held[k, 2] != omega[k]
-        changed[k] = differs
-        if differs:
-            held[k, 0], held[k, 1], held[k, 2] = ux[k], uy[k], omega[k]
-    return True
+def hold_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: np.ndarray,
+              ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: float,
+              aimed: np.ndarray) -> int:
+    """Robots ``members`` (their twists in the same order) held for a step of substeps ``h``
+    [s] (see :mod:`pymunk_bot.physics.propulsion`): a turning one by its pivot's
+    :func:`anchor`, its control body spinning at omega and headed as the robot will be at the
+    solve; a straight one aimed once. A robot whose anchor would lie beyond MAX_ANCHOR is aimed
+    for this substep only: the positions in ``members`` of those are put in ``aimed``, and
+    their count returned."""
+    count = 0
+    for j in range(members.shape[0]):
+        k, w = members[j], omega[j]
+        body, control = chip[k, 0], chip[k, 1]
+        if w == 0.0:  # a constant velocity: one aim lasts the step
+            aim_one(calls, chip, steer, k, ux[j], uy[j], w, h, h)
+            continue
+        if steer[k, HELD] != ux[j] or steer[k, HELD + 1] != uy[j] or steer[k, HELD + 2] != w:
+            ax, ay = anchor(ux[j], uy[j], w, h, steer[k, COG_X], steer[k, COG_Y])
+            if not (abs(ax) <= MAX_ANCHOR and abs(ay) <= MAX_ANCHOR):
+                aim_one(calls, chip, steer, k, ux[j], uy[j], w, h, h)
+                aimed[count] = j
+                count += 1
+                continue
+            set_vect(calls[SET_VELOCITY], control, 0.0, 0.0)
+            set_scalar(calls[SET_SPIN], control, w)
+            set_vect(calls[SET_ANCHOR], chip[k, 2], ax, ay)
+            steer[k, ANCHORED] = 1.0
+            steer[k, HELD], steer[k, HELD + 1], steer[k, HELD + 2] = ux[j], uy[j], w
+        # At each solve the control body's heading equals the robot's (both turn at omega); in
+        # free space they already do, to the last bit, and the write is skipped.
+        heading = (get_scalar(calls[GET_ANGLE], body)
+                   + (get_scalar(calls[GET_SPIN], body) - w) * h)
+        if heading != get_scalar(calls[GET_ANGLE], control):
+            set_scalar(calls[SET_ANGLE], control, heading)
+    return count

@@ -49,8 +49,7 @@ from scipy.spatial import cKDTree
 
 from pymunk_bot.config.substeps import SubstepNeed
 from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.bodies import (BodyRows, get_position, get_spin, get_velocity,
-                                       handles)
+from pymunk_bot.physics.chipmunk import CALLS, addresses, read_states
 
 HORIZON = 2.0  # [s] the farthest ahead one test looks
 # [s] how far ahead a k-d tree looks for pairs of movers (fleets of _PAIRS_BY_TREE and more):
@@ -62,7 +61,7 @@ MIN_CLEAR = 0.1
 MARGIN = 1e-3  # [m] kept between shapes on top of the bounds (rounding, the contact slop)
 MAX_WAIT = 64  # [ticks] the longest wait between tests after failures in a row
 _PAIRS_BY_TREE = 48  # movers from which pairs are found with a k-d tree, not all n^2
-_IN_ONE_READ = 8  # movers from which the bodies are read in one pymunk.batch call
+_IN_ONE_READ = 8  # movers from which every body of the Space is read (one pymunk.batch call)
 # (x, y, vx, vy, omega) of every body
 _STATE = batch.BodyFields.POSITION | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
@@ -170,7 +169,9 @@ class SubstepGate:
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         # where the fixed shapes are (looked at again when fixed_version() changes)
         self.fixed = StaticCells(space, self._bodies, fixed_version)
-        self._handles = handles([m.body for m in self.movers])  # read one by one when few
+        # The movers as Chipmunk addresses, read by a compiled loop, and their (x, y, vx, vy, omega)
+        self._addresses = addresses([m.body for m in self.movers])
+        self._state = np.empty((len(self.movers), 5))
         self._reach = np.array([m.reach for m in self.movers])  # [m]
         # [m] cog to origin
         self._offset = np.array([abs(m.body.center_of_gravity) for m in self.movers])
@@ -178,8 +179,7 @@ class SubstepGate:
         self._spin = max([spin_reach(m.body) for m in self.movers], default=0.0)
         # [m/s] each mover's top speed (0: none, a crate: only its speed now counts)
         self._top = np.array([m.speed or 0.0 for m in self.movers])
-        # Every body of the space as rows, in one read (many movers); where the movers sit
-        self._read = BodyRows(space, [m.body for m in self.movers], [])
+        self._every = batch.Buffer()  # every body's state (many movers: _graded)
         # Pairs that can touch: of one copy, not both kinematic (kinematic pairs never do).
         self._copy = np.array([-1 if m.copy is None else m.copy for m in self.movers], dtype=np.intp)
         self._dynamic = np.array([m.collides_with_static for m in self.movers], dtype=bool)
@@ -257,10 +257,6 @@ class SubstepGate:
         self.clear_until, self._wait, self._failures = -math.inf, 0, 0
         return current, self._planned
 
-    def relocated(self) -> None:
-        """Bodies moved between Spaces: where each mover sits is looked up at the next read."""
-        self._read.relocated()
-
     def _graded(self) -> int:
         """The substeps the next tick needs at the speeds bodies can have within two ticks
         (see the module docstring), at most ``full``."""
@@ -268,16 +264,17 @@ class SubstepGate:
             return self.full
         # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
         # no faster than its pusher, but a contact may have just sped it up).
-        if len(self.movers) < _IN_ONE_READ:  # a few, one by one (|v| as pymunk's abs(Vec2d))
-            linear = turn = every = 0.0  # every: the sum of all, NaN if one is (max drops it)
-            for handle in self._handles:
-                v, spin = get_velocity(handle), abs(get_spin(handle))
-                speed = math.sqrt(v.x ** 2 + v.y ** 2)
-                linear, turn, every = max(linear, speed), max(turn, spin), every + speed + spin
-            if every != every:
+        if len(self.movers) < _IN_ONE_READ:  # a few: the movers (|v| as pymunk's abs(Vec2d))
+            state = self._read_movers()
+            vx, vy, spin = state[:, 2], state[:, 3], np.abs(state[:, 4])
+            speeds = np.sqrt(vx * vx + vy * vy)
+            if math.isnan(float(speeds.sum() + spin.sum())):
                 return self.full
+            linear, turn = float(speeds.max(initial=0.0)), float(spin.max(initial=0.0))
         else:  # every body of the space (other copies' too: they share the count)
-            state = self._read.read_every(_STATE, 5)
+            self._every.clear()
+            batch.get_space_bodies(self.space, _STATE, self._every)
+            state = np.frombuffer(self._every.float_buf()).reshape(-1, 5)
             linear = float(np.hypot(state[:, 2], state[:, 3]).max(initial=0.0))
             turn = float(np.abs(state[:, 4]).max(initial=0.0))
         speed = max(self._driven(2.0 * self.dt), linear + turn * self._spin)
@@ -322,18 +319,16 @@ class SubstepGate:
     def _origins_and_speeds(self) -> tuple[np.ndarray, np.ndarray]:
         """The movers' origins (n, 2) [m] and how fast each can go (n,) [m/s]: its speed now
         (see origin_speeds), or its top speed if that is more."""
-        movers = self.movers
-        if len(movers) < _IN_ONE_READ:  # a few, one by one, into one array
-            each = []
-            for handle in self._handles:
-                p, v = get_position(handle), get_velocity(handle)
-                each.append((p.x, p.y, v.x, v.y, get_spin(handle)))
-            rows = np.array(each).reshape(-1, 5)
-        else:  # the movers' rows of every body's state
-            rows = self._read.read(_STATE, 5)[self._read.robot]
+        rows = self._read_movers()
         xy, motion = rows[:, :2], rows[:, 2:]
         now = origin_speeds(motion[:, 0], motion[:, 1], motion[:, 2], self._offset)
         return xy, np.maximum(now, self._top)
+
+    def _read_movers(self) -> np.ndarray:
+        """Every mover's (x, y [m], vx, vy [m/s], omega [rad/s]) now, into a buffer that the
+        next call overwrites."""
+        read_states(CALLS, self._addresses, self._state)
+        return self._state
 
     def _clear_between_movers(self, xy: np.ndarray, speeds: np.ndarray) -> float:
         """How long [s] no two movers of one copy (origins ``xy`` [m], at most ``speeds``

@@ -124,20 +124,21 @@ class DriveUnits:
             self._unit_rows = [np.arange(a, b) for a, b in zip(starts.tolist(), ends.tolist())]
 
     def coast_settled(self, units: list[int], h: float, substeps: int
-                      ) -> tuple[list[int], tuple[Any, Any, Any] | None, list[int]]:
+                      ) -> tuple[np.ndarray, tuple[Any, Any, Any] | None, list[int]]:
         """Of these units, those whose motors have reached their commands coast over
-        ``substeps`` substeps of ``h`` [s]: (their robots, their twists in that order, the
-        units still moving). Random commands leave most units moving every tick."""
+        ``substeps`` substeps of ``h`` [s]: (their robots, as an array, their twists in that
+        order, the units still moving). Random commands leave most units moving every tick."""
         if self.starts is None:  # one unit: the whole group, in one call
             twists = self.group.coast_if_settled(h, substeps)
-            return (self.members, twists, []) if twists is not None else ([], None, units)
+            return (self.member_rows, twists, []) if twists is not None else \
+                (self.member_rows, None, units)
         settled = self.group.settled_units(self.starts)
         calm = [u for u in units if settled[u]]
         if not calm:
-            return [], None, units
+            return self.member_rows, None, units
         moving = [u for u in units if not settled[u]] if len(calm) < len(units) else []
-        rows, members, _ = self.rows(calm)
-        return members, self.coast(h, substeps, rows), moving
+        rows, _, member_rows = self.rows(calm)
+        return member_rows, self.coast(h, substeps, rows), moving
 
     def rows(self, units: list[int]) -> tuple[np.ndarray | None, list[int], np.ndarray]:
         """The rows of these units (None: every row) and their robots, as a list and an array."""

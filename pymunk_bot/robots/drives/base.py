@@ -16,10 +16,6 @@ import numpy as np
 from pymunk_bot.robots.command import Command
 from pymunk_bot.robots.stacking import join_rows, split_rows
 
-# Below this many robots, the tick reads and writes the bodies robot by robot (pymunk's
-# properties); from it on, all at once through pymunk.batch (see physics/propulsion.py).
-SMALL_GROUP = 24
-
 
 class DriveGroup:
     """All robots of one drive kind. Subclasses set ``name`` and implement the methods below."""
