@@ -12,6 +12,12 @@ worst and best axes and of its heading (a corridor: the worst axis near the odom
 The summary says which dominates: a forward error entered where the scan could not pin the
 position along the route; a sideways error that grows with the distance driven, under a
 steady heading error, entered with the heading.
+
+The step's heading error is split into where it came from: the odometry's own step heading
+error (the prior's mean), what the scan alone said (the match's information less the
+prior's: ``scan_step_heading_error``) and how far the prior pulled the match from it
+(``prior_pull``). The summary adds them up over the run: an odometry whose heading error is a
+bias (wheel radii that differ: degrees per metre) shows as a prior pull of one sign.
 """
 from __future__ import annotations
 
@@ -25,6 +31,7 @@ import numpy as np
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, Tour,
                                            lidar_for, odometry_for, settings_option,
                                            tour_goals, world_for)
+from pymunk_bot.localization.odometry_trust import scan_only
 from pymunk_bot.localization.se2 import between, wrap
 
 
@@ -32,6 +39,21 @@ def _refuse(problem: str) -> NoReturn:
     """One line on stderr, exit status 2."""
     print(f"slam_heading_probe: {problem}", file=sys.stderr)
     raise SystemExit(2)
+
+
+def _sources(step, truth_turn: float) -> dict:
+    """The step's heading error by its sources [deg] (module docstring), from the front end's
+    latest match ``step`` (slam.FrontEndStep) and the true turn since the previous keyframe
+    ``truth_turn`` [rad]."""
+    odometry = float(wrap(between(step.last, step.predicted)[2] - truth_turn))
+    scan = scan_only(step.pose, step.covariance, step.predicted, step.prior) if step.matched else None
+    if scan is None:  # the keyframe took the prediction: no scan-only heading
+        return {"odometry_step_heading_error": math.degrees(odometry),
+                "scan_step_heading_error": math.nan, "prior_pull": 0.0}
+    scan_heading = float(step.predicted[2]) + float(scan[0][2])
+    return {"odometry_step_heading_error": math.degrees(odometry),
+            "scan_step_heading_error": math.degrees(float(wrap(scan_heading - float(step.last[2]) - truth_turn))),
+            "prior_pull": math.degrees(float(wrap(float(step.pose[2]) - scan_heading)))}
 
 
 def probe(family: str, profile: str, seed: int, settings: dict | None = None) -> dict:
@@ -55,15 +77,18 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
     slam = r.localizer
     rows: list[dict] = []
     last_truth = last_pose = None
+    seen = 0  # keyframes seen so far (one new keyframe a row; the first has no step)
     while sim.time < REVISIT_MAX_TIME:
         sim.step()
-        if len(slam.keyframes) > len(rows) + (last_truth is None):
+        if len(slam.keyframes) > seen:
+            seen = len(slam.keyframes)
             truth, pose = np.array(r.pose, dtype=float), np.array(slam.keyframes[-1], dtype=float)
             if last_truth is not None:
                 c, s = math.cos(truth[2]), math.sin(truth[2])
                 d = pose[:2] - truth[:2]
                 cov = np.asarray(slam.covariance)
                 axes = np.sqrt(np.maximum(np.linalg.eigvalsh(cov[:2, :2]), 0.0))
+                truth_turn = float(between(last_truth, truth)[2])
                 rows.append({
                     "time": round(sim.time, 2),
                     "heading_error": math.degrees(float(wrap(pose[2] - truth[2]))),
@@ -72,7 +97,9 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
                     "step_heading_error": math.degrees(float(wrap(between(last_pose, pose)[2]
                                                                   - between(last_truth, truth)[2]))),
                     "match_std_worst": 100.0 * float(axes[1]), "match_std_best": 100.0 * float(axes[0]),
-                    "match_heading_std": math.degrees(math.sqrt(max(float(cov[2, 2]), 0.0)))})
+                    "match_heading_std": math.degrees(math.sqrt(max(float(cov[2, 2]), 0.0))),
+                    "driven": 100.0 * float(np.hypot(*(truth[:2] - last_truth[:2]))),
+                    **_sources(slam.front_end_step, truth_turn)})
             last_truth, last_pose = truth, pose
         if not tour.next_goal(r):
             break
@@ -88,7 +115,12 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
                "step_heading_error_rms_deg": float(np.sqrt(np.mean(table["step_heading_error"] ** 2))),
                "match_heading_std_median_deg": float(np.median(table["match_heading_std"])),
                "match_std_worst_median_cm": float(np.median(table["match_std_worst"])),
-               "closures": len(slam.closures)}
+               "closures": len(slam.closures),
+               "odometry_heading_error_deg_per_m": float(np.sum(table["odometry_step_heading_error"])
+                                                          / max(float(np.sum(table["driven"])) / 100.0, 1e-9)),
+               "step_heading_error_sum_deg": float(np.sum(table["step_heading_error"])),
+               "scan_step_heading_error_sum_deg": float(np.nansum(table["scan_step_heading_error"])),
+               "prior_pull_sum_deg": float(np.sum(table["prior_pull"]))}
     return {"summary": summary, "keyframes": rows}
 
 

@@ -62,6 +62,21 @@ def _axes(heading: float) -> np.ndarray:
     return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def scan_only(pose: np.ndarray, covariance: np.ndarray, predicted: np.ndarray,
+              prior: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """What the scan alone said of a maximum a posteriori match: ``pose`` [x, y, theta] with
+    ``covariance`` (3x3, world frame), found with ``prior`` (its information matrix) about
+    ``predicted``. Returns the scan-only pose's offset from ``predicted`` [m, m, rad] and its
+    covariance (the match's information less the prior's), or None when that is singular."""
+    offset = np.asarray(pose, dtype=float) - np.asarray(predicted, dtype=float)
+    offset[2] = float(wrap(offset[2]))
+    try:  # the scan-only pose x_s: H_s (x_s - g) = (H_s + P) (x - g), H_s = H - P
+        scan_covariance = np.linalg.inv(np.linalg.inv(covariance) - prior + 1e-12 * np.eye(3))
+    except np.linalg.LinAlgError:
+        return None
+    return offset + scan_covariance @ (prior @ offset), scan_covariance
+
+
 class OdometryTrust:
     """The front end's odometry prior, learned from the matches so far (module docstring)."""
 
@@ -88,13 +103,10 @@ class OdometryTrust:
               covariance: np.ndarray, prior: np.ndarray) -> None:
         """Sample the odometry's error from a match: ``pose`` with ``covariance`` (3x3, world
         frame), found with ``prior`` (its information) about ``predicted`` by ``step``."""
-        offset = pose - predicted
-        offset[2] = float(wrap(offset[2]))
-        try:  # the scan-only pose x_s: H_s (x_s - g) = (H_s + P) (x - g), H_s = H - P
-            scan_covariance = np.linalg.inv(np.linalg.inv(covariance) - prior + 1e-12 * np.eye(3))
-        except np.linalg.LinAlgError:
+        scan = scan_only(pose, covariance, predicted, prior)
+        if scan is None:
             return
-        scan_offset = offset + scan_covariance @ (prior @ offset)
+        scan_offset, scan_covariance = scan
         base = step_variances(step)[0]
         forward, sideways, _ = _axes(float(predicted[2]))
         if 0.0 <= float(forward @ scan_covariance @ forward) <= ACCEPT * base:

@@ -74,6 +74,19 @@ MIN_STATIC_SHARE = 0.4
 
 
 @dataclass(frozen=True)
+class FrontEndStep:
+    """The front end's latest keyframe match, for instruments (bench/slam_heading_probe.py):
+    the odometry's prediction from the previous keyframe and the prior it held the match to."""
+
+    last: np.ndarray  # [x, y, theta] the previous keyframe's pose when the match was made
+    predicted: np.ndarray  # [x, y, theta] the odometry's prediction (the match's prior mean)
+    prior: np.ndarray  # 3x3 information of the prediction (world frame)
+    pose: np.ndarray  # [x, y, theta] the keyframe's pose: the match's, or the prediction's
+    covariance: np.ndarray  # 3x3 of ``pose`` (world frame)
+    matched: bool  # False: the match failed and the keyframe took the prediction
+
+
+@dataclass(frozen=True)
 class LoopClosure:
     """An accepted loop closure: keyframe ``new`` seen from keyframe ``old`` at ``relative``."""
 
@@ -118,6 +131,7 @@ class SlamLocalizer(Localizer):
         self._submap_scans = MovingReturns(math.inf, config.moving_margin, config.moving_blob,
                                            scans=LOCAL_KEYFRAMES, spacing=0.0)
         self.returns_left_out = 0  # returns of keyframes left out as moving or seen free, in all
+        self.front_end_step: FrontEndStep | None = None  # the latest keyframe's match
 
     @property
     def grid(self) -> OccupancyGrid:
@@ -175,11 +189,14 @@ class SlamLocalizer(Localizer):
             static = self.static_returns(scan, predicted)
             points = subsample(scan_points(scan)[0][static], self.config.max_beams)
             match = self._front_end_match(points, predicted, prior)
-            if match.ok and match.inliers > 0.5:
+            matched = match.ok and match.inliers > 0.5
+            if matched:
                 pose, cov = match.pose, match.covariance
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
             else:
                 pose, cov = predicted, np.diag([0.05, 0.05, 0.05]) ** 2
+            self.front_end_step = FrontEndStep(self.keyframes[-1].copy(), predicted, prior,
+                                               np.array(pose, dtype=float), cov, matched)
             self._add_keyframe(pose, odom, scan, travel, cov, time, static)
             self.pose = pose
             self.covariance = cov

@@ -14,7 +14,7 @@ import pytest
 
 from bench.localization_robustness import run_one
 from pymunk_bot.localization.icp import Reference, icp
-from pymunk_bot.localization.odometry_trust import OdometryTrust
+from pymunk_bot.localization.odometry_trust import OdometryTrust, scan_only
 from pymunk_bot.localization.se2 import compose
 
 
@@ -126,3 +126,19 @@ def test_slam_keeps_to_5_cm_in_the_warehouse_whose_first_match_failed():
     assert not out.error
     assert out.rmse <= 0.05, out.line()
     assert out.map_precision >= 0.9, out.line()
+
+
+def test_what_the_scan_alone_said_is_read_back_from_a_prior_held_match():
+    # An instrument's view (bench.slam_heading_probe): a match held by an odometry prior 2 deg
+    # off in heading lands between the two; scan_only recovers the scan's own pose and
+    # covariance, so the prior's pull on the heading can be told from the scan's error.
+    predicted = np.array([1.0, 2.0, 0.5])
+    scan_pose = np.array([1.01, 1.99, 0.5 - np.radians(2.0)])
+    scan_cov = np.diag([0.004, 0.002, np.radians(0.5)]) ** 2
+    prior = np.diag([1.0 / 0.015 ** 2, 1.0 / 0.015 ** 2, 1.0 / np.radians(2.6) ** 2])
+    covariance = np.linalg.inv(np.linalg.inv(scan_cov) + prior)
+    pose = predicted + covariance @ (np.linalg.inv(scan_cov) @ (scan_pose - predicted))
+    assert abs(pose[2] - scan_pose[2]) > np.radians(0.05)  # the prior pulled the heading
+    offset, recovered = scan_only(pose, covariance, predicted, prior)
+    assert np.allclose(predicted + offset, scan_pose, atol=1e-9)
+    assert np.allclose(recovered, scan_cov, rtol=1e-6)
