@@ -137,7 +137,7 @@ class Crowd:
         self.fluctuation = np.array([c.fluctuation for c in cfg])  # [m/s^2]
         self.reacts = np.array([c.react_to_robot for c in cfg], dtype=bool)
         # The walkers' bodies, then the robots' (read together: the social force needs both).
-        self._states = BodyStates(space, [w.body for w in self.walkers]
+        self._states = BodyStates([w.body for w in self.walkers]
                                   + [r.body for r in self.robots])
         mine = {shape for w in self.walkers for shape in w.shapes}
         for shape in mine:  # a copy on a shared ground gave them its category: ours instead

@@ -147,3 +147,10 @@ def read_states(calls: np.ndarray, bodies: np.ndarray, out: np.ndarray) -> None:
         out[k, 0], out[k, 1] = get_vect(calls[GET_POSITION], bodies[k])
         out[k, 2], out[k, 3] = get_vect(calls[GET_VELOCITY], bodies[k])
         out[k, 4] = get_scalar(calls[GET_SPIN], bodies[k])
+
+
+@numba.njit(cache=True)
+def set_velocities(calls: np.ndarray, bodies: np.ndarray, velocities: np.ndarray) -> None:
+    """Give each body its row of ``velocities`` (n, 2) [m/s]."""
+    for k in range(bodies.shape[0]):
+        set_vect(calls[SET_VELOCITY], bodies[k], velocities[k, 0], velocities[k, 1])

@@ -110,7 +110,7 @@ def test_a_group_keeps_together_at_its_slowest_pace():
     assert 4.5 < b.position.x < 1.0 + 5.0 * 1.0 + 0.1
 
 
-def test_batched_body_states_match_the_properties_after_the_space_changes():
+def test_body_states_match_the_properties_after_the_space_changes():
     import pymunk
 
     from pymunk_bot.actors.body_state import BodyStates
@@ -122,11 +122,15 @@ def test_batched_body_states_match_the_properties_after_the_space_changes():
         body.position, body.velocity = (i, 2.0 * i), (0.5 * i, -i)
         space.add(body, pymunk.Circle(body, 0.2))
         bodies.append(body)
-    states = BodyStates(space, bodies[::2])
-    assert states.batched
-    expected = [[*b.position, *b.velocity] for b in bodies[::2]]
-    assert states.read().tolist() == expected
-    space.remove(bodies[1], *bodies[1].shapes)  # the batch order changes
+    bodies[4].center_of_gravity = (0.3, -0.1)  # a centre of gravity off the origin
+    bodies[4].angle = 0.7
+    states = BodyStates(bodies[::2])
+    expected = [[*b.local_to_world(b.center_of_gravity), *b.velocity] for b in bodies[::2]]
+    assert np.allclose(states.read(), expected, rtol=0, atol=1e-12)
+    space.remove(bodies[1], *bodies[1].shapes)  # the Space's body order changes
     extra = pymunk.Body(1.0, 1.0)
     space.add(extra)
-    assert states.read().tolist() == expected
+    assert np.allclose(states.read(), expected, rtol=0, atol=1e-12)
+    states.set_velocities(np.array([[1.0, 2.0], [3.0, 4.0]]))  # the first two
+    assert bodies[0].velocity == (1.0, 2.0) and bodies[2].velocity == (3.0, 4.0)
+    assert bodies[4].velocity == (2.0, -4.0)  # the others keep theirs

@@ -65,7 +65,7 @@ class NavMetrics:
         self._humans = [o.body for o in walkers]
         self._human_radius = np.array([o.config.radius for o in walkers], dtype=float)  # [m]
         self._human_set = set(self._humans)
-        self._human_states = BodyStates(world.space, self._humans)
+        self._human_states = BodyStates(self._humans)
         self._robot_set = {r.body for r in robots if r is not robot}
         # Clearing distance: RobotMetrics' clearance, with pedestrians left out of the query.
         f = robot.shape.filter
