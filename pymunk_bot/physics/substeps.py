@@ -49,7 +49,8 @@ from scipy.spatial import cKDTree
 
 from pymunk_bot.config.substeps import SubstepNeed
 from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.chipmunk import CALLS, addresses, read_states
+from pymunk_bot.physics.chipmunk import (CALLS, GET_SPIN, GET_VELOCITY, addresses, get_scalar,
+                                         get_vect, read_states)
 
 HORIZON = 2.0  # [s] the farthest ahead one test looks
 # [s] how far ahead a k-d tree looks for pairs of movers (fleets of _PAIRS_BY_TREE and more):
@@ -264,13 +265,10 @@ class SubstepGate:
             return self.full
         # What pushes bodies (the drives), and what is pushed (every body: a pushed one is
         # no faster than its pusher, but a contact may have just sped it up).
-        if len(self.movers) < _IN_ONE_READ:  # a few: the movers (|v| as pymunk's abs(Vec2d))
-            state = self._read_movers()
-            vx, vy, spin = state[:, 2], state[:, 3], np.abs(state[:, 4])
-            speeds = np.sqrt(vx * vx + vy * vy)
-            if math.isnan(float(speeds.sum() + spin.sum())):
+        if len(self.movers) < _IN_ONE_READ:  # a few: the movers
+            linear, turn = _fastest(CALLS, self._addresses)
+            if math.isnan(linear):
                 return self.full
-            linear, turn = float(speeds.max(initial=0.0)), float(spin.max(initial=0.0))
         else:  # every body of the space (other copies' too: they share the count)
             self._every.clear()
             batch.get_space_bodies(self.space, _STATE, self._every)
@@ -349,6 +347,20 @@ class SubstepGate:
         # contiguous: one array layout for the kernel (numba compiles it once)
         return _pairs_clear(np.ascontiguousarray(xy), reach, speeds, i.astype(np.intp),
                             j.astype(np.intp), horizon)
+
+
+@numba.njit(cache=True)
+def _fastest(calls: np.ndarray, bodies: np.ndarray) -> tuple[float, float]:
+    """The fastest of these bodies' speeds [m/s] (|v| as pymunk's abs(Vec2d)) and spins
+    [rad/s]; NaN for both when some body's is NaN."""
+    linear = turn = 0.0
+    for k in range(bodies.shape[0]):
+        vx, vy = get_vect(calls[GET_VELOCITY], bodies[k])
+        speed, spin = math.sqrt(vx * vx + vy * vy), abs(get_scalar(calls[GET_SPIN], bodies[k]))
+        if speed != speed or spin != spin:
+            return math.nan, math.nan
+        linear, turn = max(linear, speed), max(turn, spin)
+    return linear, turn
 
 
 @numba.njit(cache=True)
