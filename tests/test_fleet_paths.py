@@ -13,7 +13,7 @@ def _robot(k: int) -> dict[str, Any]:
     """Robot ``k`` of a 6 x 5 grid 8 m apart: each its own wheel speeds (some straight)."""
     left = 0.3 + 0.05 * (k % 7)
     right = left if k % 5 == 0 else left + 0.04 * (1 + k % 3)
-    return {"name": f"r{k}", "pose": [6.0 + 8.0 * (k % 6), 6.0 + 8.0 * (k // 6), 0.3 * k],
+    return {"name": f"r{k}", "pose": [6.0 + 8.0 * (k % 6), 6.0 + 8.0 * (k // 6), 0.2 * k],
             "controller": {"type": "wheels", "left": left, "right": right}}
 
 
@@ -32,4 +32,4 @@ def test_a_robot_moves_alone_as_in_a_fleet_to_the_bit() -> None:
         alone = _poses([_robot(k)], 4.0)
         assert np.array_equal(alone[0], fleet[k]), k
     assert np.ptp(fleet[:, :2], axis=0).min() > 10.0  # they did move (and apart)
-    assert abs(fleet[7, 2] - 0.3 * 7) > 0.5  # and turned
+    assert abs(fleet[7, 2] - 0.2 * 7) > 0.5  # and turned
