@@ -10,8 +10,8 @@ so a kernel's cache stays valid in every process. A body or joint is passed as i
 
 ``cpVect`` (two doubles) crosses by value: in two floating-point registers on x86-64 (System V)
 and arm64, exactly as two doubles do; Windows x64 passes and returns it through memory, which
-the calls below do there. ``tests/physics/test_chipmunk.py`` checks every accessor against
-pymunk's properties.
+the calls below do there (numba, and so this module, runs on 64-bit platforms only).
+``tests/test_chipmunk.py`` checks every accessor against pymunk's properties.
 """
 from __future__ import annotations
 
