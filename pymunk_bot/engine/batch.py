@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Protocol, Sequence
 
 import numpy as np
 
+from pymunk_bot.engine.bookkeeping import Bookkeeping
 from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.sensors.lidar import Lidar
 from pymunk_bot.sensors.lidar_rows import LidarRows
@@ -46,22 +47,24 @@ class Run(Protocol):
     def time(self) -> float: ...
     def act(self) -> None: ...
     def tick_clock(self) -> float: ...
-    def bookkeep(self, positions: np.ndarray) -> float: ...
+    def bookkeep(self) -> float: ...
     def due_lidars(self, now: float) -> list[int]: ...
     def read(self, now: float) -> None: ...
     def finish(self, wall_time: float) -> None: ...
 
 
 class Batch:
-    """``runs`` (in ``ground``'s Space, their robots ``propulsion``'s: run k's are those of
-    ``spans[k]``, (start, stop)), ticked as one; ``stack``: the runs' bookkeeping stacked
-    (:mod:`pymunk_bot.robots.stacking`), None to keep each run's own."""
+    """``runs`` (in ``ground``'s Space, their robots ``propulsion``'s, run after run), ticked
+    as one; ``stack``: the runs' bookkeeping stacked (:mod:`pymunk_bot.robots.stacking`), None
+    to keep each run's own."""
 
     def __init__(self, runs: Sequence[Run], ground: World, propulsion: Propulsion,
-                 spans: Sequence[tuple[int, int]], stack: "Stack | None" = None) -> None:
+                 stack: "Stack | None" = None) -> None:
         self.runs = tuple(runs)
         self.ground, self.propulsion, self.stack = ground, propulsion, stack
-        self.spans = list(spans)
+        # Copies stacked: one bookkeeping pass over every copy's robots (each its copy's time).
+        self._stacked = (Bookkeeping(stack.fleet, propulsion.body_addresses, stack.pairs)
+                         if stack is not None else None)
         self._count = len(self.runs)
         first = self.runs[0]
         self.dt, self.substeps = first.dt, first.substeps
@@ -185,16 +188,15 @@ class Batch:
     def _bookkeep(self) -> list[float]:
         """Phase 3: every run's clock, then distance, goals and odometry; the runs' times [s]."""
         if self.stack is not None:
+            assert self._stacked is not None
             nows = [run.tick_clock() for run in self.runs]
-            self.stack.bookkeep(self.propulsion.position_array(), nows)
+            self._stacked(np.repeat(nows, self.stack.per_copy))  # each robot its copy's time
             return nows
-        positions = self.propulsion.positions()
-        if len(self.runs) == 1:  # a run of its own: every robot is its
-            return [self.runs[0].bookkeep(positions)]
-        return [run.bookkeep(positions[start:stop])
-                for run, (start, stop) in zip(self.runs, self.spans)]
+        if self._count == 1:
+            return [self.runs[0].bookkeep()]
+        return [run.bookkeep() for run in self.runs]
 
 
 def single(run: Run) -> Batch:
     """The batch of one run, in a world of its own."""
-    return Batch((run,), run.world, run.built.propulsion, [(0, len(run.robots))])
+    return Batch((run,), run.world, run.built.propulsion)

@@ -119,7 +119,6 @@ class Replicas:
         bodies: list[pymunk.Body] = []
         controls: list[pymunk.Body] = []
         groups: list[tuple[Any, list[int]]] = []
-        spans: list[tuple[int, int]] = []
         for sim in self.sims:
             start = len(bodies)
             for robot in sim.robots.values():
@@ -127,10 +126,9 @@ class Replicas:
                 controls.append(robot.control)
             for group, idx in sim.built.drive_groups:
                 groups.append((group, [start + i for i in idx]))
-            spans.append((start, len(bodies)))
         propulsion = Propulsion(self.ground.contact_space, bodies, controls, groups,
                                 self._stack.drive_groups if self._stack else None, copies=True)
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
         self._propulsion = propulsion
-        self._batch = Batch(self.sims, self.ground, propulsion, spans, self._stack)
+        self._batch = Batch(self.sims, self.ground, propulsion, self._stack)

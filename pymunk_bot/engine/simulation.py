@@ -18,7 +18,7 @@ from pymunk_bot.outcomes.expectations import Check, Verdict, evaluate, judge
 from pymunk_bot.localization.base import LocalizerInputs
 from pymunk_bot.localization.score import LocalizationScore
 from pymunk_bot.engine.observing import Observer, observe
-from pymunk_bot.robots.progress import odometry_feed
+from pymunk_bot.engine.bookkeeping import Bookkeeping
 from pymunk_bot.robots.readings import Observation
 from pymunk_bot.robots.robot import Robot, RobotsByName
 from pymunk_bot.sensors.schedule import TIME_TOLERANCE, ScheduleArray
@@ -78,8 +78,10 @@ class Simulation:
         self.steps = 0
         self.wall_time = 0.0  # [s] spent inside step()
         self._robots = list(self.robots.values())
-        self._odometry = [odometry_feed(drive, odometry) for (drive, _), (odometry, _)
-                          in zip(built.drive_groups, built.odometry_groups)]
+        self._bookkeeping = Bookkeeping(
+            built.fleet, built.propulsion.body_addresses,
+            [(drive, odometry) for (drive, _), (odometry, _)
+             in zip(built.drive_groups, built.odometry_groups)])
         self._controlled = [i for i, s in enumerate(built.control_schedules) if s is not None]
         self._control = ScheduleArray([s for s in built.control_schedules if s is not None])
         self._observer = Observer(self._robots, built.fleet, built.odometry_groups)
@@ -166,25 +168,24 @@ class Simulation:
     def act(self) -> None:
         """Controllers whose period has come set commands; events fire; actors set their
         motion."""
-        now = self.steps * self.dt  # self.time, inlined: this runs every tick
+        soon = self.steps * self.dt + TIME_TOLERANCE  # self.time, inlined: this runs every tick
         actors = self.world.actors
         # Most ticks of a run without actors: no event and no controller due, nothing to do.
-        if not actors and now + TIME_TOLERANCE < min(self._events.next_at,
-                                                     self._control.earliest):
+        if not actors and soon < self._control.earliest and soon < self._events.next_at:
             return
+        now = self.steps * self.dt
         if self._events.due(now):  # scenario events (teleports: engine/events.py)
             self._events.fire(now, self.robots)
         self._run_controllers(now)
         for actor in actors:
             actor.before_step(now, self.dt)
 
-    def bookkeep(self, positions: np.ndarray) -> float:
-        """After the physics: the clock, distance and goals from the robots' new positions
-        ((n, 2) [m]), odometry from the encoders. Returns the time now [s]."""
-        now = self.tick_clock()
-        self._built.fleet.advance(positions, now)
-        for feed in self._odometry:
-            feed()
+    def bookkeep(self) -> float:
+        """After the physics: the clock, distance and goals from the robots' bodies, odometry
+        from the encoders (engine/bookkeeping.py). Returns the time now [s]."""
+        self.steps += 1  # tick_clock, inlined: this runs every tick
+        now = self.world.time = self.steps * self.dt
+        self._bookkeeping(now)
         return now
 
     def tick_clock(self) -> float:

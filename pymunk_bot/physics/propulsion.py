@@ -28,8 +28,11 @@ import pymunk
 
 from pymunk_bot.physics.chipmunk import CALLS, addresses, read_motions, read_poses
 from pymunk_bot.robots.stacking import DriveUnits
-from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, STEER_COLUMNS, aim_each,
+from pymunk_bot.physics.row_table import RowTable
+from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, STEER_COLUMNS,
+                                         WHEEL_SLOTS, aim_each, hold_coasting_wheels,
                                          hold_each)
+from pymunk_bot.robots.drives.diff import DiffDriveGroup
 from pymunk_bot.physics.substeps import spin_reach
 
 Twists = tuple[np.ndarray, np.ndarray, np.ndarray]  # ux, uy [m/s], omega [rad/s] as rows
@@ -76,7 +79,8 @@ class Propulsion:
         self.chip = np.stack([addresses(self.bodies), addresses(self.controls),
                               addresses(self.pivots)], axis=1) if self.n else \
             np.zeros((0, 3), dtype=np.intp)
-        self._body_addresses = np.ascontiguousarray(self.chip[:, 0])
+        # every robot body's Chipmunk address, in robot order (read by compiled passes)
+        self.body_addresses = np.ascontiguousarray(self.chip[:, 0])
         # Body origin -> centre of gravity [m] (a car's pose point is its rear axle): pymunk
         # moves the centre straight within a substep, so the origin's path needs a correction.
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
@@ -84,6 +88,11 @@ class Propulsion:
         self.steer[:, HELD:HELD + 3] = math.nan
         self.steer[:, COG_X], self.steer[:, COG_Y] = self.cog[:, 0], self.cog[:, 1]
         self._aimed = np.empty(self.n, dtype=np.intp)  # hold_each's robots left to aim
+        self._calls = CALLS  # (a row table's slot)
+        # Whole differential drives: their settled motors coast and are held in one compiled
+        # pass (steering.hold_coasting_wheels); other groups in two calls, the same arithmetic.
+        self._wheels = [self._wheel_table(d) if isinstance(d.group, DiffDriveGroup)
+                        and d.starts is None else None for d in self._drives]
         self._h_next = np.empty(1)  # [s] one next step for every robot aimed
         self._xy = np.zeros((self.n, 2))  # [m] positions (positions())
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
@@ -111,12 +120,16 @@ class Propulsion:
         # and coasted (not in a tick before another substep length: every substep is aimed).
         steady: list[tuple[np.ndarray, Twists]] = []  # held, yet aimed each substep
         loose: list[tuple[DriveUnits, list[int]]] = []
-        for drives in self._drives:
-            moving = drives.every_unit
-            if h_last == h:
-                members, twists, moving = drives.coast_settled(moving, h, substeps)
-                if twists is not None:
-                    self._hold(members, _rows(twists), h, steady)
+        for drives, wheels in zip(self._drives, self._wheels):
+            if h_last != h:
+                moving = drives.every_unit
+            elif wheels is not None:  # a whole differential drive: one compiled pass
+                count = hold_coasting_wheels(wheels.current(), h, substeps)
+                moving = [] if count >= 0 else drives.every_unit
+                if count > 0:
+                    self._aim_later(drives.member_rows, drives.group.twists, count, steady)
+            else:
+                moving = self._settle(drives, drives.every_unit, h, substeps, steady)
             if moving:
                 loose.append((drives, moving))
         if not (steady or loose):  # every robot held: nothing to do between substeps
@@ -138,12 +151,30 @@ class Propulsion:
             if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
                 still: list[tuple[DriveUnits, list[int]]] = []
                 for drives, units in loose:
-                    members, twists, moving = drives.coast_settled(units, h, left)
-                    if twists is not None:
-                        self._hold(members, _rows(twists), h, steady)
+                    moving = self._settle(drives, units, h, left, steady)
                     if moving:
                         still.append((drives, moving))
                 loose = still
+
+    def _wheel_table(self, drives: DriveUnits) -> RowTable:
+        """What hold_coasting_wheels reads of a whole differential drive (WHEEL_SLOTS)."""
+        group, f64, intp = drives.group, np.float64, np.intp
+        return RowTable([(self, "_calls", intp, 1), (self, "chip", intp, 2),
+                         (self, "steer", f64, 2), (drives, "member_rows", intp, 1),
+                         (group, "commanded", f64, 2), (group, "target", f64, 2),
+                         (group, "turning", f64, 2), (group, "travel", f64, 2),
+                         (group, "track", f64, 1), (group, "twist_rows", f64, 2),
+                         (self, "_aimed", intp, 1)])
+
+    def _settle(self, drives: DriveUnits, units: list[int], h: float, substeps: int,
+                steady: list[tuple[np.ndarray, Twists]]) -> list[int]:
+        """Of these units of ``drives``, those whose motors have settled coast through
+        ``substeps`` substeps of ``h`` [s] and are held for them; returns the units still
+        moving."""
+        members, twists, moving = drives.coast_settled(units, h, substeps)
+        if twists is not None:
+            self._hold(members, _rows(twists), h, steady)
+        return moving
 
     def _hold(self, members: np.ndarray, twists: Twists, h: float,
               steady: list[tuple[np.ndarray, Twists]]) -> None:
@@ -152,7 +183,14 @@ class Propulsion:
         substep and to be aimed every other."""
         ux, uy, omega = twists
         count = hold_each(CALLS, self.chip, self.steer, members, ux, uy, omega, h, self._aimed)
+        self._aim_later(members, twists, count, steady)
+
+    def _aim_later(self, members: np.ndarray, twists: Twists, count: int,
+                   steady: list[tuple[np.ndarray, Twists]]) -> None:
+        """The first ``count`` of ``_aimed`` (positions in ``members``, whose twists are
+        ``twists``) could not be held: on ``steady``, aimed every substep."""
         if count:
+            ux, uy, omega = twists
             j = self._aimed[:count].copy()
             steady.append((members[j], (ux[j], uy[j], omega[j])))
 
@@ -205,19 +243,19 @@ class Propulsion:
     def positions(self) -> np.ndarray:
         """Every robot body's position now, (n, 2) [m], into a buffer that the next call
         overwrites."""
-        read_poses(CALLS, self._body_addresses, self._xy)
+        read_poses(CALLS, self.body_addresses, self._xy)
         return self._xy
 
     def motion_array(self) -> np.ndarray:
         """Every robot body's (angle [rad], vx, vy [m/s], omega [rad/s]) now, (n, 4)."""
         out = np.empty((self.n, 4))
-        read_motions(CALLS, self._body_addresses, out)
+        read_motions(CALLS, self.body_addresses, out)
         return out
 
     def pose_array(self) -> np.ndarray:
         """Every robot body's (x, y [m], angle [rad]) now, (n, 3)."""
         out = np.empty((self.n, 3))
-        read_poses(CALLS, self._body_addresses, out)
+        read_poses(CALLS, self.body_addresses, out)
         return out
 
     def position_array(self) -> np.ndarray:

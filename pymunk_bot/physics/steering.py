@@ -20,6 +20,8 @@ import numpy as np
 from pymunk_bot.geometry.arcs import sinc_half
 from pymunk_bot.physics.chipmunk import (GET_ANGLE, GET_SPIN, SET_ANCHOR, SET_ANGLE, SET_SPIN,
                                          SET_VELOCITY, get_scalar, set_scalar, set_vect)
+from pymunk_bot.physics.row_table import floats_1d, floats_2d, integers_1d, integers_2d
+from pymunk_bot.robots.drives.diff import coast_settled_rows
 
 
 @numba.njit(cache=True)
@@ -143,3 +145,30 @@ def hold_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: n
         if heading != get_scalar(calls[GET_ANGLE], control):
             set_scalar(calls[SET_ANGLE], control, heading)
     return count
+
+
+# The slots of hold_coasting_wheels' table (physics/row_table.py): Chipmunk's calls, the
+# steering's chip and steer rows, a differential drive's robots (rows of chip and steer, in
+# the drive's order), its wheel rows and track (robots/drives/diff.py), its twist rows
+# (ux, uy, omega), and hold_each's scratch of robots aimed.
+WHEEL_SLOTS = ("calls", "chip", "steer", "members", "commanded", "target", "turning", "travel",
+               "track", "twist_rows", "aimed")
+
+
+@numba.njit(cache=True)
+def hold_coasting_wheels(table: np.ndarray, h: float, substeps: int) -> int:
+    """A differential drive's robots in one pass (``table``: WHEEL_SLOTS): if every motor has
+    reached its target, the wheels coast through ``substeps`` substeps of ``h`` [s] and the
+    robots are held for them (:func:`hold_each`; returns the count of those aimed instead);
+    else nothing is done and -1 returned. One call, given one array, instead of the drive's
+    and the hold's, given thirteen: from Python, each array costs about what one robot's work
+    does."""
+    calls, chip, steer = integers_1d(table, 0), integers_2d(table, 1), floats_2d(table, 2)
+    members, aimed = integers_1d(table, 3), integers_1d(table, 10)
+    twists = floats_2d(table, 9)
+    ux, uy, omega = twists[0], twists[1], twists[2]
+    if not coast_settled_rows(floats_2d(table, 4), floats_2d(table, 5), floats_2d(table, 6),
+                              floats_2d(table, 7), floats_1d(table, 8), h * substeps, ux,
+                              omega):
+        return -1
+    return hold_each(calls, chip, steer, members, ux, uy, omega, h, aimed)

@@ -19,10 +19,17 @@ def travel_rows(xy: np.ndarray, last: np.ndarray, distance: np.ndarray) -> None:
     """Add each robot's step from ``last`` to ``xy`` (n, 2) [m] to ``distance`` [m] and copy
     ``xy`` into ``last`` (the fleet's positions change in place: copies' views stay live)."""
     for i in range(xy.shape[0]):
-        dx = xy[i, 0] - last[i, 0]
-        dy = xy[i, 1] - last[i, 1]
-        distance[i] += math.sqrt(dx * dx + dy * dy)
-        last[i, 0], last[i, 1] = xy[i, 0], xy[i, 1]
+        travel_to(i, xy[i, 0], xy[i, 1], last, distance)
+
+
+@numba.njit(cache=True)
+def travel_to(i: int, x: float, y: float, last: np.ndarray, distance: np.ndarray) -> None:
+    """Robot ``i`` moved from ``last[i]`` to (x, y) [m]: the step added to ``distance[i]`` [m],
+    (x, y) kept in ``last[i]``."""
+    dx = x - last[i, 0]
+    dy = y - last[i, 1]
+    distance[i] += math.sqrt(dx * dx + dy * dy)
+    last[i, 0], last[i, 1] = x, y
 
 
 @numba.njit(cache=True)

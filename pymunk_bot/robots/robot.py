@@ -110,22 +110,28 @@ class Fleet:
         p = self._pending
         self._pending_goal, self._pending_tolerance2 = self.goal[p], self.tolerance[p] ** 2
         self._reached = np.empty(p.shape[0], dtype=np.bool_)  # reach_goals' flags
+        self.goals_pending = p.shape[0] > 0  # some robot has a goal it has not reached yet
 
     def advance(self, xy: np.ndarray, time: Any) -> None:
         """Bookkeeping after a tick at ``time`` [s] (one for all, or an array with each robot's),
         from every robot's new position, (n, 2) [m] (copied: the caller may reuse it)."""
         travel_rows(xy, self.xy, self.distance)
-        p = self._pending
-        if not p.shape[0]:  # no goal left to reach
+        self.arrive(time)
+
+    def arrive(self, time: Any) -> None:
+        """The goals reached at ``time`` [s] (one for all, or an array with each robot's) by
+        the robots at their positions now (``xy``: after the tick's travel)."""
+        if not self.goals_pending:
             return
+        p = self._pending
         if isinstance(time, np.ndarray):
             times = time
         else:
             times = self._now
             times[0] = time
         reached = self._reached
-        if reach_goals(xy, self.distance, p, self._pending_goal, self._pending_tolerance2, times,
-                       self.time_to_goal, self.distance_to_goal, reached):
+        if reach_goals(self.xy, self.distance, p, self._pending_goal, self._pending_tolerance2,
+                       times, self.time_to_goal, self.distance_to_goal, reached):
             self._pending = p[~reached]
             self._refresh_targets()
 

@@ -8,8 +8,9 @@ classmethod, which builds the whole from the parts' configs and joins their rows
 :func:`join_rows`, and ``split(parts)``, which gives each part arrays of its own again (before
 a copy is rebuilt). Its methods must then change those fields in place, never rebind them.
 
-Per-tick work on the stack (coast, travel, odometry, distance and goals) does the arithmetic a
-copy's own objects do on their rows, operation for operation, so the floats are the same.
+Per-tick work on the stack (coast, travel, odometry, distance and goals: engine/bookkeeping.py
+for the last three) does the arithmetic a copy's own objects do on their rows, operation for
+operation, so the floats are the same.
 """
 from __future__ import annotations
 
@@ -17,12 +18,16 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from pymunk_bot.robots.progress import odometry_feed
+# Counts the times per-robot fields were rebound (join_rows, split_rows): compiled passes that
+# hold arrays by address take them anew when it changes (physics/row_table.py).
+generation = 0
 
 
 def join_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
     """Each of ``fields`` of ``whole`` becomes the parts' rows one after another, and each
     part's field a view of its rows."""
+    global generation
+    generation += 1
     for name in fields:
         values = [np.asarray(getattr(part, name)) for part in parts]
         joined = np.concatenate(values)
@@ -35,6 +40,8 @@ def join_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
 
 def split_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
     """Each part's ``fields`` back to arrays of its own, copied from its rows of ``whole``."""
+    global generation
+    generation += 1
     for name in fields:
         joined, start = getattr(whole, name), 0
         for part in parts:
@@ -76,7 +83,6 @@ class Stack:
             whole = type(drives[0]).stacked(drives)
             self.drive_groups.append((whole, members, starts))
             self.pairs.append((whole, type(odometries[0]).stacked(odometries)))
-        self._feeds = [odometry_feed(drive, odometry) for drive, odometry in self.pairs]
         # Robot (copy * per_copy + index in its copy) -> (its stacked drive group, its row).
         self.row_of = {robot: (whole, row) for whole, members, _ in self.drive_groups
                        for row, robot in enumerate(members)}
@@ -90,15 +96,6 @@ class Stack:
         if not first.robots or not all(getattr(type(g), "ROWS", ()) for g in groups):
             return None
         return cls(sims)
-
-    def bookkeep(self, positions: np.ndarray, nows: list[float]) -> None:
-        """What each copy's ``Simulation.bookkeep`` does after the physics, for all copies:
-        distance and goals from the robots' positions (n, 2) [m] at each copy's time ``nows``
-        [s], and odometry from the encoders."""
-        times = np.repeat(nows, self.per_copy)  # each robot its copy's time
-        self.fleet.advance(positions, times)
-        for feed in self._feeds:
-            feed()
 
     def split(self) -> None:
         """Every copy's objects back on arrays of their own (the stack is not used after)."""

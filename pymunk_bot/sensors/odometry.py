@@ -51,8 +51,9 @@ class DiffOdometryGroup:
         self._noisy = self.encoders.noisy
         self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
         self.covariance = np.zeros((n, 3, 3))
-        # Encoders that only scale are applied in the compiled step; others measure first.
-        self._plain = not self._noisy and not self.encoders.quantised
+        # Encoders that only scale are applied in the compiled step (dead_reckon, which the
+        # engine's bookkeeping pass calls too); others measure first.
+        self.plain = not self._noisy and not self.encoders.quantised
         self._unit_scale = np.ones((n, 2))
         self._mid = np.empty((3, n))  # cos, sin of the mid-step heading and chord factor
 
@@ -80,23 +81,23 @@ class DiffOdometryGroup:
     def take(self, travel: np.ndarray) -> None:
         """:meth:`update` with the drive's accumulated ``travel`` (n, 2) [m], then zeroed in
         place (``DriveGroup.travel``): one compiled call where the encoders only scale."""
-        if self._plain:  # the usual case (no noise, no quantising): _integrate's first branch
-            _dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
+        if self.plain:  # the usual case (no noise, no quantising): _integrate's first branch
+            dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
                          self._mid, True)
             return
         self._integrate(travel, True)
 
     def _integrate(self, travel: np.ndarray, taken: bool) -> None:
         """Dead reckoning from ``travel`` (n, 2) [m], zeroed after if ``taken``."""
-        if self._plain:
-            _dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
+        if self.plain:
+            dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
                          self._mid, taken)
             wheels = travel  # (not read again: plain encoders have no noise to propagate)
         else:
             wheels = self.encoders.measure(travel)
             if taken:
                 travel.fill(0.0)
-            _dead_reckon(wheels, self._unit_scale, self.believed_track, self.wheel_travel,
+            dead_reckon(wheels, self._unit_scale, self.believed_track, self.wheel_travel,
                          self.pose, self._mid, False)
         if self._noisy:
             cos_h, sin_h, factor = self._mid
@@ -169,7 +170,7 @@ def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
 
 
 @numba.njit(cache=True)
-def _dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
+def dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
                  wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray,
                  taken: bool) -> None:
     """Each robot's encoder readings (n, 2) [m] (times ``scale``: encoders that only scale, or

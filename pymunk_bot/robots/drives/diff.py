@@ -41,7 +41,9 @@ class DiffDriveGroup(DriveGroup):
         # The same as floats: cheaper than numpy's scalars robot by robot.
         self._track = self.track.tolist()
         self._every = np.arange(self.n, dtype=np.intp)
-        self._twists = (np.empty(self.n), np.zeros(self.n), np.empty(self.n))  # (ux, uy, omega)
+        # (ux, uy, omega) of every robot, rows written by advance and coast [m/s, m/s, rad/s]
+        self.twist_rows = np.zeros((3, self.n))
+        self.twists = (self.twist_rows[0], self.twist_rows[1], self.twist_rows[2])
 
     def set_wheel_speeds(self, i: int, left: float, right: float) -> None:
         """Robot ``i``'s wheel speeds [m/s]; both are scaled by one factor to respect the speed
@@ -105,17 +107,17 @@ class DiffDriveGroup(DriveGroup):
     def coast_if_settled(self, h: float, substeps: int
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """See :meth:`DriveGroup.coast_if_settled`: one compiled call."""
-        ux, uy, omega = self._twists
-        if _coast_settled(self.commanded, self.target, self.turning, self.travel, self.track,
-                          h * substeps, ux, omega):
-            return self._twists
+        ux, uy, omega = self.twists
+        if coast_settled_rows(self.commanded, self.target, self.turning, self.travel,
+                              self.track, h * substeps, ux, omega):
+            return self.twists
         return None
 
     def _twists_for(self, rows: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Arrays for the twists of these rows; every robot's (None) are the same arrays each
         call, valid until the next ``advance`` or ``coast`` (the tick uses them at once)."""
         if rows is None:
-            return self._twists
+            return self.twists
         return np.empty(rows.shape[0]), np.zeros(rows.shape[0]), np.empty(rows.shape[0])
 
 
@@ -247,11 +249,12 @@ def _coast_rows(rows: np.ndarray, commanded: np.ndarray, turning: np.ndarray,
 
 
 @numba.njit(cache=True)
-def _coast_settled(commanded: np.ndarray, target: np.ndarray, turning: np.ndarray,
-                   travel: np.ndarray, track: np.ndarray, span: float, ux: np.ndarray,
-                   omega: np.ndarray) -> bool:
+def coast_settled_rows(commanded: np.ndarray, target: np.ndarray, turning: np.ndarray,
+                       travel: np.ndarray, track: np.ndarray, span: float, ux: np.ndarray,
+                       omega: np.ndarray) -> bool:
     """:func:`_coast_rows` of every robot over ``span`` [s] if every motor has reached its
-    target (True), else nothing (False)."""
+    target (True), else nothing (False). Public: the propulsion holds the robots in the same
+    compiled pass (physics/steering.py)."""
     if not _equal_rows(commanded, target):
         return False
     for i in range(commanded.shape[0]):

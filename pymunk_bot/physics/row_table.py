@@ -1,0 +1,108 @@
+"""Per-robot arrays handed to a compiled pass by address, in one table.
+
+A call from Python into compiled code costs about 60 ns for each array it is given (numba
+checks the array's type and wraps it), so a pass over one robot that reads a dozen arrays paid
+more to be called than to run. A :class:`RowTable` holds the arrays a pass reads (they live as
+long as it does) and gives the pass their addresses and shapes in one integer array; the pass
+views each array in place (:func:`floats_1d`, :func:`floats_2d`, :func:`integers_1d`,
+:func:`integers_2d`), without a copy. The arrays' order is the pass's contract: it names each
+slot, and the table checks every array's type, dimensions and layout when it takes it.
+
+An array is named by its owner and attribute and read from the owner again whenever
+:mod:`pymunk_bot.robots.stacking` has rebound per-robot fields (its ``generation``): stacking
+copies of a scenario is what gives an object new arrays after it is built; everything else
+changes them in place.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numba
+import numpy as np
+from numba import types
+from numba.extending import intrinsic
+
+from pymunk_bot.robots import stacking
+
+# A slot of the table: the array's address, its rows and its columns (1 for a 1-D array).
+ADDRESS, ROWS, COLUMNS = 0, 1, 2
+
+
+class RowTable:
+    """The arrays of ``fields``, each (owner, attribute, dtype, dimensions) in the order the
+    pass reads them, as one table (:meth:`current`)."""
+
+    def __init__(self, fields: Sequence[tuple[Any, str, Any, int]]) -> None:
+        self.fields = [(owner, name, np.dtype(dtype), ndim) for owner, name, dtype, ndim in fields]
+        self._table = np.zeros((len(self.fields), 3), dtype=np.intp)
+        self._arrays: list[np.ndarray] = []  # what the addresses point into, kept alive
+        self._generation = -1
+        self.current()
+
+    def current(self) -> np.ndarray:
+        """The table, read anew from the owners if stacking has rebound fields since."""
+        if self._generation != stacking.generation:
+            self._take()
+        return self._table
+
+    def _take(self) -> None:
+        arrays = []
+        for k, (owner, name, dtype, ndim) in enumerate(self.fields):
+            array = getattr(owner, name)
+            if not (isinstance(array, np.ndarray) and array.dtype == dtype
+                    and array.ndim == ndim and array.flags.c_contiguous):
+                raise TypeError(f"{type(owner).__name__}.{name} must be a C-contiguous "
+                                f"{ndim}-D array of {dtype} for a compiled pass")
+            self._table[k] = (array.ctypes.data, array.shape[0],
+                              array.shape[1] if ndim == 2 else 1)
+            arrays.append(array)
+        self._arrays = arrays
+        self._generation = stacking.generation
+
+
+@intrinsic
+def _as_float_pointer(typingctx, address):  # type: ignore[no-untyped-def]
+    """The address (an integer) as a pointer to float64."""
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return types.CPointer(types.float64)(types.intp), codegen
+
+
+@intrinsic
+def _as_integer_pointer(typingctx, address):  # type: ignore[no-untyped-def]
+    """The address (an integer) as a pointer to intp."""
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return types.CPointer(types.intp)(types.intp), codegen
+
+
+if TYPE_CHECKING:  # as compiled code calls them
+    def _float_pointer(address: int) -> Any: ...
+    def _integer_pointer(address: int) -> Any: ...
+else:
+    _float_pointer, _integer_pointer = _as_float_pointer, _as_integer_pointer
+
+
+@numba.njit(cache=True)
+def floats_1d(table: np.ndarray, k: int) -> np.ndarray:
+    """Slot ``k`` of a RowTable's table: a 1-D float64 array, viewed in place."""
+    return numba.carray(_float_pointer(table[k, ADDRESS]), table[k, ROWS])
+
+
+@numba.njit(cache=True)
+def floats_2d(table: np.ndarray, k: int) -> np.ndarray:
+    """Slot ``k``: a 2-D float64 array, viewed in place."""
+    return numba.carray(_float_pointer(table[k, ADDRESS]), (table[k, ROWS], table[k, COLUMNS]))
+
+
+@numba.njit(cache=True)
+def integers_1d(table: np.ndarray, k: int) -> np.ndarray:
+    """Slot ``k``: a 1-D intp array, viewed in place."""
+    return numba.carray(_integer_pointer(table[k, ADDRESS]), table[k, ROWS])
+
+
+@numba.njit(cache=True)
+def integers_2d(table: np.ndarray, k: int) -> np.ndarray:
+    """Slot ``k``: a 2-D intp array, viewed in place."""
+    return numba.carray(_integer_pointer(table[k, ADDRESS]),
+                        (table[k, ROWS], table[k, COLUMNS]))
