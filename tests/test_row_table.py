@@ -82,7 +82,7 @@ class _Unfused:
         self.built = built
         self.feeds = [odometry_feed(drive, odometry) for drive, odometry in pairs]
 
-    def __call__(self, now: float) -> None:
+    def after_tick(self, now: float) -> None:
         self.built.fleet.advance(self.built.propulsion.positions(), now)
         for feed in self.feeds:
             feed()

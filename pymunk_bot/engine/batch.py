@@ -66,6 +66,8 @@ class Batch:
         self._stacked = (Bookkeeping(stack.fleet, propulsion.body_addresses, stack.pairs)
                          if stack is not None else None)
         self._count = len(self.runs)
+        # A run of its own (no stack): its bookkeeping called straight from the tick.
+        self._only = self.runs[0] if self._count == 1 and stack is None else None
         first = self.runs[0]
         self.dt, self.substeps = first.dt, first.substeps
         self._substep = math.nan  # [s] the substep the worlds were last told of
@@ -125,7 +127,7 @@ class Batch:
         for run in self.acting:
             run.act()
         self._physics()
-        nows = self._bookkeep()
+        nows = [self._only.bookkeep()] if self._only is not None else self._bookkeep()
         if self.lidars is not None:
             assert self.caster is not None
             self.caster.begin_frame()  # every cast of this tick (on demand too) sees one scene
@@ -190,10 +192,8 @@ class Batch:
         if self.stack is not None:
             assert self._stacked is not None
             nows = [run.tick_clock() for run in self.runs]
-            self._stacked(np.repeat(nows, self.stack.per_copy))  # each robot its copy's time
+            self._stacked.after_tick(np.repeat(nows, self.stack.per_copy))  # each its copy's time
             return nows
-        if self._count == 1:
-            return [self.runs[0].bookkeep()]
         return [run.bookkeep() for run in self.runs]
 
 

@@ -77,10 +77,11 @@ class Bookkeeping:
         self._pass = travel_and_reckon if fused else travel_from_bodies
         self._table = RowTable(slots)
 
-    def __call__(self, now: Any) -> None:
+    def after_tick(self, now: Any) -> None:
         """The tick ending at ``now`` [s] (one for all, or each robot's as an array)."""
         self._pass(self._table.current())
         if self.fleet.goals_pending:
             self.fleet.arrive(now)
-        for feed in self.feeds:
-            feed()
+        if self.feeds:
+            for feed in self.feeds:
+                feed()

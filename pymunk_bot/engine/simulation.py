@@ -185,7 +185,7 @@ class Simulation:
         from the encoders (engine/bookkeeping.py). Returns the time now [s]."""
         self.steps += 1  # tick_clock, inlined: this runs every tick
         now = self.world.time = self.steps * self.dt
-        self._bookkeeping(now)
+        self._bookkeeping.after_tick(now)
         return now
 
     def tick_clock(self) -> float:
