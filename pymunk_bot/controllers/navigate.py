@@ -69,6 +69,11 @@ class NavigateController(Controller):
         self.tracker = MovingObstacleTracker()  # other robots, from successive scans
         self.passing = PassingSide()
         self.escape = Escape()  # out of stalls where the LiDAR vetoes every arc the path asks
+        # A LiDAR slower than the controller hands it the same scan on several ticks: each is
+        # remembered once, placed with the pose it was taken from (not the pose now, which a
+        # turn on the spot moves by tens of degrees: walls copied around the robot).
+        self._remembered_scan: float | None = None  # [s] time of the last scan remembered
+        self._last_pose: tuple[float, np.ndarray] | None = None  # (time [s], pose) last tick
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -108,7 +113,10 @@ class NavigateController(Controller):
         points: np.ndarray | None = None
         if scan is not None:
             points = scan_points(scan)
-            self._remember(obs.pose, points, scan)
+            if scan.time != self._remembered_scan:
+                self._remembered_scan = scan.time
+                self._remember(self._pose_at(scan.time, obs), points, scan)
+        self._last_pose = (obs.time, np.asarray(obs.pose, dtype=float))
         if self.follower is None:
             if obs.time < self._next_retry or not self._plan(obs, goal, tolerance):
                 return self._stop()
@@ -224,6 +232,22 @@ class NavigateController(Controller):
         return False
 
     # ------------------------------------------------------------------ unmapped obstacles
+    def _pose_at(self, when: float, obs: Observation) -> np.ndarray:
+        """The pose estimate at ``when`` [s] (a scan's time, at or before ``obs.time``):
+        interpolated between the last tick's estimate and this one's, the nearest of the two
+        outside them."""
+        now = np.asarray(obs.pose, dtype=float)
+        last = self._last_pose
+        if last is None or when >= obs.time or last[0] >= obs.time:
+            return now
+        then, before = last
+        if when <= then:
+            return before
+        f = (when - then) / (obs.time - then)
+        turn = math.remainder(float(now[2] - before[2]), math.tau)  # [rad] the shorter way
+        return np.array([before[0] + f * (now[0] - before[0]), before[1] + f * (now[1] - before[1]),
+                         before[2] + f * turn])
+
     def _remember(self, pose, points: np.ndarray, scan) -> None:
         """Keep returns the map cannot explain; forget remembered ones a beam now passes."""
         x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
