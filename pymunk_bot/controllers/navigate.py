@@ -234,11 +234,13 @@ class NavigateController(Controller):
     # ------------------------------------------------------------------ unmapped obstacles
     def _pose_at(self, when: float, obs: Observation) -> np.ndarray:
         """The pose estimate at ``when`` [s] (a scan's time, at or before ``obs.time``):
-        interpolated between the last tick's estimate and this one's, the nearest of the two
-        outside them."""
+        interpolated between the previous tick's estimate and this one's, the previous one's
+        if older. Without a previous tick just before (the first, or after ticks that stopped
+        early: arrived, localizing), this one's."""
         now = np.asarray(obs.pose, dtype=float)
         last = self._last_pose
-        if last is None or when >= obs.time or last[0] >= obs.time:
+        if (last is None or when >= obs.time or last[0] >= obs.time
+                or obs.time - last[0] > 1.5 / self.rate):  # [s] more than a control period
             return now
         then, before = last
         if when <= then:
