@@ -5,10 +5,11 @@
 2. Follow: pure pursuit proposes a command; with a LiDAR the Dynamic Window Approach filters it
    (the nearest arc on which the robot can still stop before anything it sees).
 3. Watch: scan returns the map does not explain are remembered (and forgotten once a beam
-   passes through them). When they block the path ahead, or the robot makes no progress along
-   the path for ``stuck_time``, it replans around them; a replan that leaves it blocked by
-   what it sees (its LiDAR vetoes every arc the path asks for) backs it off into free space
-   first (:class:`~pymunk_bot.controllers.escape.Escape`).
+   passes through them), each scan once, placed with the pose estimate of its time. When
+   they block the path ahead, or the robot makes no progress along the path for
+   ``stuck_time``, it replans around them; a replan that leaves it blocked by what it sees
+   (its LiDAR vetoes every arc the path asks for) backs it off into free space first
+   (:class:`~pymunk_bot.controllers.escape.Escape`).
 4. Fail clearly: no path on the map itself is a permanent failure at once; no path only because
    of unmapped obstacles is retried until ``give_up_after`` seconds have passed, and so is no
    progress along any path (:class:`~pymunk_bot.controllers.progress.ProgressWatch`: replans
