@@ -33,6 +33,7 @@ from pymunk_bot.controllers.avoid import dwa_params
 from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 from pymunk_bot.controllers.escape import Escape, to_robot_frame
 from pymunk_bot.controllers.progress import PROGRESS_STEP
+from pymunk_bot.controllers.scan_pose import ScanPoses
 from pymunk_bot.controllers.waypoints import PathFollower, pursuit_gains
 
 LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
@@ -73,8 +74,7 @@ class NavigateController(Controller):
         # A LiDAR slower than the controller hands it the same scan on several ticks: each is
         # remembered once, placed with the pose it was taken from (not the pose now, which a
         # turn on the spot moves by tens of degrees: walls copied around the robot).
-        self._remembered_scan: float | None = None  # [s] time of the last scan remembered
-        self._last_pose: tuple[float, np.ndarray] | None = None  # (time [s], pose) last tick
+        self.scan_poses = ScanPoses(self.rate)
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -114,10 +114,9 @@ class NavigateController(Controller):
         points: np.ndarray | None = None
         if scan is not None:
             points = scan_points(scan)
-            if scan.time != self._remembered_scan:
-                self._remembered_scan = scan.time
-                self._remember(self._pose_at(scan.time, obs), points, scan)
-        self._last_pose = (obs.time, np.asarray(obs.pose, dtype=float))
+        taken_from = self.scan_poses.new_scan_pose(obs)
+        if taken_from is not None and points is not None:
+            self._remember(taken_from, points, scan)
         if self.follower is None:
             if obs.time < self._next_retry or not self._plan(obs, goal, tolerance):
                 return self._stop()
@@ -233,24 +232,6 @@ class NavigateController(Controller):
         return False
 
     # ------------------------------------------------------------------ unmapped obstacles
-    def _pose_at(self, when: float, obs: Observation) -> np.ndarray:
-        """The pose estimate at ``when`` [s] (a scan's time, at or before ``obs.time``):
-        interpolated between the previous tick's estimate and this one's, the previous one's
-        if older. Without a previous tick just before (the first, or after ticks that stopped
-        early: arrived, localizing), this one's."""
-        now = np.asarray(obs.pose, dtype=float)
-        last = self._last_pose
-        if (last is None or when >= obs.time or last[0] >= obs.time
-                or obs.time - last[0] > 1.5 / self.rate):  # [s] more than a control period
-            return now
-        then, before = last
-        if when <= then:
-            return before
-        f = (when - then) / (obs.time - then)
-        turn = math.remainder(float(now[2] - before[2]), math.tau)  # [rad] the shorter way
-        return np.array([before[0] + f * (now[0] - before[0]), before[1] + f * (now[1] - before[1]),
-                         before[2] + f * turn])
-
     def _remember(self, pose, points: np.ndarray, scan) -> None:
         """Keep returns the map cannot explain; forget remembered ones a beam now passes."""
         x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
