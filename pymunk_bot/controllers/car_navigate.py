@@ -5,7 +5,8 @@ real footprint checked along every arc, that may back up. The path is cut where 
 changes; each segment is followed with pure pursuit (in reverse, with the rear as the front),
 braking to a stop at its end before the next begins. Off the path or without progress for
 ``stuck_time`` it replans from where it is. With a LiDAR, scan returns the map does not explain
-are remembered for a while; when they lie on the next 0.6 m of the path (checked with the
+are remembered for a while (each scan once, placed with the pose estimate of its time:
+pymunk_bot.controllers.scan_pose); when they lie on the next 0.6 m of the path (checked with the
 footprint, as the planner does) the car stops, and after a moment plans around them.
 """
 from __future__ import annotations
@@ -24,6 +25,7 @@ from pymunk_bot.planning.map import MapInfo
 from pymunk_bot.planning.pursuit import PathTracker, PursuitGains
 from pymunk_bot.planning.steering import car_pursue
 from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
+from pymunk_bot.controllers.scan_pose import ScanPoses
 
 OFF_PATH = 0.5  # [m] farther than this from the segment: replan
 SEGMENT_END = 0.08  # [m] a segment is done this close to its end
@@ -68,6 +70,10 @@ class CarNavigateController(Controller):
         self._blocked_since: float | None = None
         self._waiting_since: float | None = None
         self._next_retry = 0.0
+        # A LiDAR slower than the controller hands it the same scan on several ticks: each is
+        # remembered once, with the pose it was taken from (a tight turn moves the pose ~10 deg
+        # a tick: the walls copied beside themselves, stopping the car).
+        self.scan_poses = ScanPoses(self.rate)
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -93,8 +99,9 @@ class CarNavigateController(Controller):
             self.watch.restart()
         if self._failed:
             return STOP
-        if obs.scan is not None:
-            self._remember(obs)
+        taken_from = self.scan_poses.new_scan_pose(obs)
+        if taken_from is not None:
+            self._remember(obs, taken_from)
         tolerance = self.config.tolerance if self.config.tolerance is not None else obs.goal_tolerance
         pose = np.asarray(obs.pose, dtype=float)
         if self._arrived(pose, goal, tolerance) and (not self.segments or len(self.segments) == 1
@@ -198,8 +205,9 @@ class CarNavigateController(Controller):
         poses = self._segment_poses[len(self._segment_poses) - len(self.segments)]
         return float(poses[-1, 2])
 
-    def _remember(self, obs: Observation) -> None:
-        """Keep the scan returns the map does not explain (world frame), for a while."""
+    def _remember(self, obs: Observation, taken_from: np.ndarray) -> None:
+        """Keep the returns of ``obs.scan`` the map does not explain (world frame, the scan
+        placed at ``taken_from`` [x, y, theta]), for a while."""
         if obs.scan is None:
             raise ValueError("_remember needs an observation with a LiDAR scan")
         points = scan_points(obs.scan)
@@ -209,7 +217,7 @@ class CarNavigateController(Controller):
         if not len(points):
             return
         points = points[np.hypot(points[:, 0], points[:, 1]) < UNMAPPED_RANGE]
-        x, y, theta = (float(v) for v in obs.pose[:3])
+        x, y, theta = (float(v) for v in taken_from[:3])
         c, s = math.cos(theta), math.sin(theta)
         wx, wy = x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]
         g = self.grid

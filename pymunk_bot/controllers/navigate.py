@@ -5,10 +5,11 @@
 2. Follow: pure pursuit proposes a command; with a LiDAR the Dynamic Window Approach filters it
    (the nearest arc on which the robot can still stop before anything it sees).
 3. Watch: scan returns the map does not explain are remembered (and forgotten once a beam
-   passes through them). When they block the path ahead, or the robot makes no progress along
-   the path for ``stuck_time``, it replans around them; a replan that leaves it blocked by
-   what it sees (its LiDAR vetoes every arc the path asks for) backs it off into free space
-   first (:class:`~pymunk_bot.controllers.escape.Escape`).
+   passes through them), each scan once, placed with the pose estimate of its time. When
+   they block the path ahead, or the robot makes no progress along the path for
+   ``stuck_time``, it replans around them; a replan that leaves it blocked by what it sees
+   (its LiDAR vetoes every arc the path asks for) backs it off into free space first
+   (:class:`~pymunk_bot.controllers.escape.Escape`).
 4. Fail clearly: no path on the map itself is a permanent failure at once; no path only because
    of unmapped obstacles is retried until ``give_up_after`` seconds have passed, and so is no
    progress along any path (:class:`~pymunk_bot.controllers.progress.ProgressWatch`: replans
@@ -32,6 +33,7 @@ from pymunk_bot.controllers.avoid import dwa_params
 from pymunk_bot.controllers.base import STOP, Command, Controller, Observation, RobotSpec
 from pymunk_bot.controllers.escape import Escape, to_robot_frame
 from pymunk_bot.controllers.progress import PROGRESS_STEP
+from pymunk_bot.controllers.scan_pose import ScanPoses
 from pymunk_bot.controllers.waypoints import PathFollower, pursuit_gains
 
 LOOK_AHEAD_FOR_BLOCKS = 2.5  # [m] of path ahead checked against unmapped obstacles
@@ -69,6 +71,10 @@ class NavigateController(Controller):
         self.tracker = MovingObstacleTracker()  # other robots, from successive scans
         self.passing = PassingSide()
         self.escape = Escape()  # out of stalls where the LiDAR vetoes every arc the path asks
+        # A LiDAR slower than the controller hands it the same scan on several ticks: each is
+        # remembered once, placed with the pose it was taken from (not the pose now, which a
+        # turn on the spot moves by tens of degrees: walls copied around the robot).
+        self.scan_poses = ScanPoses(self.rate)
 
     def set_map(self, world_map: MapInfo) -> None:
         self.map = world_map if self.config.map_movable else world_map.without_movable()
@@ -108,7 +114,9 @@ class NavigateController(Controller):
         points: np.ndarray | None = None
         if scan is not None:
             points = scan_points(scan)
-            self._remember(obs.pose, points, scan)
+        taken_from = self.scan_poses.new_scan_pose(obs)
+        if taken_from is not None and points is not None:
+            self._remember(taken_from, points, scan)
         if self.follower is None:
             if obs.time < self._next_retry or not self._plan(obs, goal, tolerance):
                 return self._stop()

@@ -10,6 +10,7 @@ import pytest
 from builders import robot
 
 from pymunk_bot import Simulation
+from pymunk_bot.config.loader import parse_scenario
 from pymunk_bot.geometry.footprint import Footprint
 from pymunk_bot.geometry.plane import box_corners
 from pymunk_bot.planning.grid import ClearanceGrid
@@ -132,3 +133,26 @@ def test_a_car_plans_around_a_crate_that_is_not_on_its_map(make_sim):
     assert car.goal_reached, car.controller.message
     assert car.collisions == 0
     assert sim.world.obstacles[0].body.position.x == pytest.approx(5.0, abs=0.01)
+
+
+@pytest.mark.parametrize("rate", [5.0, 7.0])  # [Hz] slower than the 10 Hz controller; in step or not
+def test_a_car_turning_round_a_wall_does_not_block_itself_with_its_own_scans(rate):
+    # The goal is behind a wall; the car drives round its end in a tight turn (1.7 rad/s). The
+    # controller is handed the LiDAR's latest scan on every tick; placed with a later tick's
+    # pose, a scan puts the walls 10 deg off and the car stops for "unmapped" copies of them
+    # (7 Hz, starting away from the wall's end: 103 such returns, stopped for 9 s).
+    wall = {"type": "wall", "start": [0.0, 2.0], "end": [4.5, 2.0], "thickness": 0.2}
+    for heading in np.radians([0.0, 90.0, 180.0, 270.0]):  # [rad] facing every way at first
+        car = {"name": "car", "pose": [1.0, 1.0, float(heading)], **CAR,
+               "lidar": {"beams": 270, "max_range": 8.0, "rate": rate},
+               "controller": {"type": "navigate"},
+               "goal": {"position": [1.0, 3.0], "tolerance": 0.3}}
+        sim = Simulation(parse_scenario({"name": "t", "world": {"size": [6.0, 4.0]},
+                                         "obstacles": [wall], "robots": [car]}, "test"))
+        r = sim.robots["car"]
+        stopped = False
+        while sim.time < 20.0 and not r.goal_reached:
+            sim.step()
+            stopped = stopped or "not on the map" in r.controller.message
+        assert r.goal_reached and r.collisions == 0, (heading, r.controller.message)
+        assert not stopped, heading  # nothing but the map is there: nothing to stop for
