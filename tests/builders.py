@@ -14,6 +14,17 @@ def scenario(robots: list[dict], obstacles: list[dict] | None = None, size=(20.0
     return {"name": "test", "world": world, "obstacles": obstacles or [], "robots": robots, **extra}
 
 
+def drive_to_goal(sim, name: str, limit: float = 20.0) -> bool:
+    """Step ``sim`` until robot ``name`` reaches its goal or ``limit`` [s] have passed; returns
+    whether its controller ever waited for obstacles not on the map (its message says so)."""
+    r = sim.robots[name]
+    waited = False
+    while sim.time < limit and not r.goal_reached:
+        sim.step()
+        waited = waited or "not on the map" in r.controller.message
+    return waited
+
+
 def robot(pose, **keys) -> dict:
     return {"name": keys.pop("name", "r"), "pose": list(pose), **keys}
 

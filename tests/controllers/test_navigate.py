@@ -6,6 +6,7 @@ from pathlib import Path
 
 from pymunk_bot import Simulation
 
+from builders import drive_to_goal
 from helpers import LIDAR, maze_case, parallel, run_until_goal, scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -100,9 +101,6 @@ def test_turning_on_the_spot_does_not_wall_itself_in_with_its_own_scans(rate):
                  "goal": {"position": [1.0, 4.1], "tolerance": 0.25}}
         sim = Simulation(scenario((8.0, 5.0), walls, [robot]))
         r = sim.robots["r"]
-        blocked = False
-        while sim.time < 20.0 and not r.goal_reached:
-            sim.step()
-            blocked = blocked or "not on the map" in r.controller.message
+        blocked = drive_to_goal(sim, "r")
         assert r.goal_reached and r.collisions == 0, (heading, r.controller.message)
         assert not blocked, heading  # nothing but the map is there: nothing to wait for

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from builders import robot
+from builders import drive_to_goal, robot
 
 from pymunk_bot import Simulation
 from pymunk_bot.config.loader import parse_scenario
@@ -150,9 +150,6 @@ def test_a_car_turning_round_a_wall_does_not_block_itself_with_its_own_scans(rat
         sim = Simulation(parse_scenario({"name": "t", "world": {"size": [6.0, 4.0]},
                                          "obstacles": [wall], "robots": [car]}, "test"))
         r = sim.robots["car"]
-        stopped = False
-        while sim.time < 20.0 and not r.goal_reached:
-            sim.step()
-            stopped = stopped or "not on the map" in r.controller.message
+        stopped = drive_to_goal(sim, "car")
         assert r.goal_reached and r.collisions == 0, (heading, r.controller.message)
         assert not stopped, heading  # nothing but the map is there: nothing to stop for
