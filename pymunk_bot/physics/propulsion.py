@@ -29,9 +29,8 @@ import pymunk
 from pymunk_bot.physics.chipmunk import CALLS, addresses, read_motions, read_poses
 from pymunk_bot.robots.stacking import DriveUnits
 from pymunk_bot.physics.row_table import RowTable
-from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, STEER_COLUMNS,
-                                         WHEEL_SLOTS, aim_each, hold_coasting_wheels,
-                                         hold_each)
+from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, STEER_COLUMNS, aim_each,
+                                         hold_coasting_wheels, hold_each)
 from pymunk_bot.robots.drives.diff import DiffDriveGroup
 from pymunk_bot.physics.substeps import spin_reach
 
@@ -157,7 +156,7 @@ class Propulsion:
                 loose = still
 
     def _wheel_table(self, drives: DriveUnits) -> RowTable:
-        """What hold_coasting_wheels reads of a whole differential drive (WHEEL_SLOTS)."""
+        """What hold_coasting_wheels reads of a whole differential drive, in its slots' order."""
         group, f64, intp = drives.group, np.float64, np.intp
         return RowTable([(self, "_calls", intp, 1), (self, "chip", intp, 2),
                          (self, "steer", f64, 2), (drives, "member_rows", intp, 1),

@@ -147,22 +147,19 @@ def hold_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: n
     return count
 
 
-# The slots of hold_coasting_wheels' table (physics/row_table.py): Chipmunk's calls, the
-# steering's chip and steer rows, a differential drive's robots (rows of chip and steer, in
-# the drive's order), its wheel rows and track (robots/drives/diff.py), its twist rows
-# (ux, uy, omega), and hold_each's scratch of robots aimed.
-WHEEL_SLOTS = ("calls", "chip", "steer", "members", "commanded", "target", "turning", "travel",
-               "track", "twist_rows", "aimed")
-
-
 @numba.njit(cache=True)
 def hold_coasting_wheels(table: np.ndarray, h: float, substeps: int) -> int:
-    """A differential drive's robots in one pass (``table``: WHEEL_SLOTS): if every motor has
-    reached its target, the wheels coast through ``substeps`` substeps of ``h`` [s] and the
-    robots are held for them (:func:`hold_each`; returns the count of those aimed instead);
-    else nothing is done and -1 returned. One call, given one array, instead of the drive's
-    and the hold's, given thirteen: from Python, each array costs about what one robot's work
-    does."""
+    """A differential drive's robots in one pass: if every motor has reached its target, the
+    wheels coast through ``substeps`` substeps of ``h`` [s] and the robots are held for them
+    (:func:`hold_each`; returns the count of those aimed instead); else nothing is done and -1
+    returned. One call, given one array, instead of the drive's and the hold's, given
+    thirteen: from Python, each array costs about what one robot's work does.
+
+    ``table`` (:class:`~pymunk_bot.physics.row_table.RowTable`), slot by slot: Chipmunk's
+    calls; the steering's ``chip`` and ``steer`` rows; the drive's robots (their rows there, in
+    the drive's order); the drive's ``commanded``, ``target``, ``turning``, ``travel`` and
+    ``track`` (robots/drives/diff.py); its twist rows (ux, uy, omega); hold_each's scratch of
+    robots aimed."""
     calls, chip, steer = integers_1d(table, 0), integers_2d(table, 1), floats_2d(table, 2)
     members, aimed = integers_1d(table, 3), integers_1d(table, 10)
     twists = floats_2d(table, 9)
