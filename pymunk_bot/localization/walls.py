@@ -23,6 +23,14 @@ A long straight wall's *direction* is the same from wherever it is seen. So:
   keyframe's heading in the front end from one anchor scan was tried: one scan's direction is
   good to only 0.1-1 deg, every fix from an anchor shares its error, and the fixes jittered
   the submap the next match used.)
+
+Off by default (``SlamConfig.wall_landmarks``). Measured with the robustness benchmark it
+helped where the chain drifts slowly (warehouse typical 18 -> 19 of 20 within 5 cm, office
+median ATE 2.35 -> 1.75 cm) but not with uncalibrated odometry in the warehouse (15 -> 15 of
+20, median 3.85 -> 4.05 cm, seed 3's slow test 4.6 -> 5.2 cm): a real wall's direction, as a
+scan fits it, moves by tenths of a degree as the robot passes along it, an error its
+observations share, which no per-observation variance describes (docs/localization.md,
+"SLAM: walls as graph landmarks").
 """
 from __future__ import annotations
 
@@ -50,8 +58,8 @@ MIN_OVERLAP = 0.5  # [m] ... its extent overlaps the landmark's segment by this 
 SAME_WALL_GATE = math.radians(5.0)  # [rad] ... and its direction is within this of the landmark's
 WALL_KERNEL = 2.0  # [std] Cauchy scale of the wall factors: an observation this far off weighs half
 # The direction's variance as the graph takes it: the total-least-squares variance counts
-# the beams' noise only, and that is honest about one scan (the warehouse: true errors 0.10 /
-# 0.15 / 0.27 / 0.54 deg RMS for stated 0-0.1 / 0.1-0.2 / 0.2-0.4 / 0.4-1 deg), but a real
+# the beams' noise only, and that is honest about one scan (warehouse typical: true errors
+# 0.10 / 0.13 / 0.20 / 0.54 deg RMS for stated 0-0.1 / 0.1-0.2 / 0.2-0.4 / 0.4-1 deg), but a real
 # wall's faces are not one straight line, so the direction a scan fits moves by tenths of a
 # degree as the robot passes along it, the same for all its observations from there
 # (warehouse, typical, seed 5: one wall's direction from 12 keyframes along 3 m went
