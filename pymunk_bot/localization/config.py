@@ -157,10 +157,8 @@ class SlamConfig(Section):
     reject_free: bool = True
     surface_radius: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [m]
     # Long straight walls as landmarks of the pose graph (walls.py): each keyframe's walls tie
-    # its heading to the landmark's direction at the graph's optimizations. Off by default:
-    # measured, it fixed warehouse typical seed 16 but made warehouse uncalibrated worse
-    # (docs/localization.md, "SLAM: walls as graph landmarks").
-    wall_landmarks: bool = False
+    # its heading to the landmark's direction at the graph's optimizations.
+    wall_landmarks: bool = True
 
 
 class MappingConfig(Section):
