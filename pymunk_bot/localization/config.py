@@ -156,6 +156,9 @@ class SlamConfig(Section):
     moving_blob: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.8  # [m]; 0: returns one by one
     reject_free: bool = True
     surface_radius: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [m]
+    # Long straight walls as landmarks of the pose graph (walls.py): each keyframe's walls tie
+    # its heading to the landmark's direction at the graph's optimizations.
+    wall_landmarks: bool = True
 
 
 class MappingConfig(Section):

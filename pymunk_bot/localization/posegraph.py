@@ -12,6 +12,10 @@ information scaled by 1 / (1 + s / c^2) at the current poses. A closure that the
 graph contradicts by many of its own standard deviations then weighs next to nothing, so one
 wrong closure cannot bend the map; a right one agrees with the chain once the chain has given
 way, and its weight returns to about 1.
+
+Wall landmarks (walls.py) add a scalar node per landmark, its direction phi in the world
+(modulo pi), and a factor per observation: keyframe i saw the wall at direction d in its own
+frame, error e = (theta_i + d - phi) wrapped to half a turn, under Cauchy's kernel.
 """
 from __future__ import annotations
 
@@ -33,6 +37,25 @@ class Edge:
     z: np.ndarray  # measured pose of j in i's frame [x, y, theta]
     information: np.ndarray  # 3x3, of the error: x, y in j's frame (edge_information)
     robust: float = 0.0  # Cauchy kernel scale [chi]; 0: a plain least-squares edge
+
+
+@dataclass(frozen=True)
+class WallFactors:
+    """Keyframes' observations of wall landmarks (walls.py), one entry per observation."""
+
+    node: np.ndarray  # (k,) the keyframe that saw it
+    landmark: np.ndarray  # (k,) which landmark, 0 .. m-1
+    direction: np.ndarray  # (k,) [rad] the wall's direction in the keyframe's frame
+    information: np.ndarray  # (k,) [1/rad^2] of that direction
+    start: np.ndarray  # (m,) [rad] each landmark's world direction to start from
+    robust: float  # Cauchy kernel scale [chi]
+
+
+def _wall_errors(x: np.ndarray, phi: np.ndarray, walls: WallFactors) -> np.ndarray:
+    """Each wall observation's error [rad]: the keyframe's heading plus the seen direction,
+    less the landmark's, modulo pi."""
+    e = x[walls.node, 2] + walls.direction - phi[walls.landmark]
+    return (e + 0.5 * np.pi) % np.pi - 0.5 * np.pi
 
 
 def edge_information(world_covariance: np.ndarray, heading: float) -> np.ndarray:
@@ -93,12 +116,15 @@ def _chi2(x: np.ndarray, ii, jj, z, omega) -> np.ndarray:
 
 
 def optimize(poses: np.ndarray, edges: list[Edge], iterations: int = 10,
-             tolerance: float = 1e-6) -> tuple[np.ndarray, float]:
-    """Optimized poses (n, 3) and the final robust cost (sum of rho(e^T omega e))."""
+             tolerance: float = 1e-6, walls: WallFactors | None = None) -> tuple[np.ndarray, float]:
+    """Optimized poses (n, 3) and the final robust cost (sum of rho(e^T omega e)); ``walls``:
+    observations of wall landmarks, whose directions are solved for with the poses."""
     x = np.array(poses, dtype=float)
     n = x.shape[0]
     if not edges:
         return x, 0.0
+    m = 0 if walls is None else int(walls.start.size)
+    phi = np.zeros(0) if walls is None else np.array(walls.start, dtype=float)
     ii, jj, z, omega, robust = _stacked(edges)
     # sparse indices of each edge's four 3x3 blocks (ii, ij, ji, jj), fixed over iterations
     r3, c3 = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
@@ -118,16 +144,43 @@ def optimize(poses: np.ndarray, edges: list[Edge], iterations: int = 10,
         for node, part in ((ii, np.einsum("mab,mb->ma", at_om, e)),
                            (jj, np.einsum("mab,mb->ma", bt_om, e))):
             np.add.at(grad, (3 * node[:, None] + np.arange(3)).ravel(), part.ravel())
-        h = coo_matrix((vals, (rows, cols)), shape=(3 * n, 3 * n)).tocsc()
-        dx = spsolve(h, -grad).reshape(n, 3)
+        grad = np.concatenate([grad, np.zeros(m)])
+        wall_rows, wall_cols, wall_vals = _wall_terms(x, phi, walls, grad)
+        h = coo_matrix((np.concatenate([vals, wall_vals]),
+                        (np.concatenate([rows, wall_rows]), np.concatenate([cols, wall_cols]))),
+                       shape=(3 * n + m, 3 * n + m)).tocsc()
+        step = spsolve(h, -grad)
+        dx = step[:3 * n].reshape(n, 3)
         x += dx
         x[:, 2] = wrap(x[:, 2])
-        if np.abs(dx).max() < tolerance:
+        phi += step[3 * n:]
+        if np.abs(step).max() < tolerance:
             break
     chi2 = _chi2(x, ii, jj, z, omega)
     scale2 = np.where(robust > 0.0, robust, 1.0) ** 2
     cost = float(np.sum(np.where(robust > 0.0, scale2 * np.log1p(chi2 / scale2), chi2)))
+    if walls is not None:
+        wall_chi2 = walls.information * _wall_errors(x, phi, walls) ** 2
+        cost += float(np.sum(walls.robust ** 2 * np.log1p(wall_chi2 / walls.robust ** 2)))
     return x, cost
+
+
+def _wall_terms(x: np.ndarray, phi: np.ndarray, walls: WallFactors | None, grad: np.ndarray):
+    """The wall factors' Hessian entries (rows, cols, values) at ``x`` and landmark
+    directions ``phi``; their gradient is added to ``grad`` (length 3 n + m) in place.
+    d e / d theta_i = 1, d e / d phi = -1."""
+    if walls is None:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp), np.zeros(0)
+    e = _wall_errors(x, phi, walls)
+    w = walls.information * edge_weights(walls.information * e ** 2,
+                                         np.full(e.size, walls.robust))
+    theta = 3 * walls.node + 2
+    lm = 3 * x.shape[0] + walls.landmark
+    np.add.at(grad, theta, w * e)
+    np.add.at(grad, lm, -w * e)
+    rows = np.concatenate([theta, theta, lm, lm])
+    cols = np.concatenate([theta, lm, theta, lm])
+    return rows, cols, np.concatenate([w, -w, -w, w])
 
 
 def final_weights(poses: np.ndarray, edges: list[Edge]) -> np.ndarray:
