@@ -104,7 +104,8 @@ def long_walls(points: np.ndarray) -> list[Wall]:
         if np.count_nonzero(near) < MIN_WALL_POINTS:
             continue
         # the group's mean direction (doubled angles: a direction and its opposite are one)
-        mean = 0.5 * math.atan2(float(np.sin(2 * angle[near]).sum()), float(np.cos(2 * angle[near]).sum()))
+        doubled = 2.0 * angle[near]
+        mean = 0.5 * math.atan2(float(np.sin(doubled).sum()), float(np.cos(doubled).sum()))
         along = np.array([math.cos(mean), math.sin(mean)])
         across = np.array([-along[1], along[0]])
         for wall in _walls_along(points, fits.points[near], along, across):
@@ -120,7 +121,8 @@ def _on_wall(points: np.ndarray, wall: Wall) -> np.ndarray:
     along = (end - start) / max(float(np.hypot(*(end - start))), 1e-12)
     t = (points - start) @ along
     across = (points - start) @ np.array([-along[1], along[0]])
-    return (np.abs(across) <= OFFSET_TOLERANCE) & (t >= -OFFSET_TOLERANCE) & (t <= wall.length + OFFSET_TOLERANCE)
+    return ((np.abs(across) <= OFFSET_TOLERANCE) & (t >= -OFFSET_TOLERANCE)
+            & (t <= wall.length + OFFSET_TOLERANCE))
 
 
 def _walls_along(points: np.ndarray, centres: np.ndarray, along: np.ndarray,
@@ -222,7 +224,8 @@ class WallLandmarks:
         mine = np.sort(new @ along.T, axis=0)  # (2, n)
         overlap = np.minimum(mine[1], theirs[:, 1]) - np.maximum(mine[0], theirs[:, 0])
         miss = half_turn(float(pose[2]) + wall.direction - np.arctan2(along[:, 1], along[:, 0]))
-        same = (distance <= SAME_WALL_DISTANCE) & (overlap >= MIN_OVERLAP) & (np.abs(miss) <= SAME_WALL_GATE)
+        same = ((distance <= SAME_WALL_DISTANCE) & (overlap >= MIN_OVERLAP)
+                & (np.abs(miss) <= SAME_WALL_GATE))
         if taken:
             same[list(taken)] = False
         if not same.any():
