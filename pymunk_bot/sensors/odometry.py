@@ -83,7 +83,7 @@ class DiffOdometryGroup:
         place (``DriveGroup.travel``): one compiled call where the encoders only scale."""
         if self.plain:  # the usual case (no noise, no quantising): _integrate's first branch
             dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
-                         self._mid, True)
+                        self._mid, True)
             return
         self._integrate(travel, True)
 
@@ -91,14 +91,14 @@ class DiffOdometryGroup:
         """Dead reckoning from ``travel`` (n, 2) [m], zeroed after if ``taken``."""
         if self.plain:
             dead_reckon(travel, self.scale, self.believed_track, self.wheel_travel, self.pose,
-                         self._mid, taken)
+                        self._mid, taken)
             wheels = travel  # (not read again: plain encoders have no noise to propagate)
         else:
             wheels = self.encoders.measure(travel)
             if taken:
                 travel.fill(0.0)
             dead_reckon(wheels, self._unit_scale, self.believed_track, self.wheel_travel,
-                         self.pose, self._mid, False)
+                        self.pose, self._mid, False)
         if self._noisy:
             cos_h, sin_h, factor = self._mid
             ds = 0.5 * (wheels[:, 0] + wheels[:, 1])
@@ -171,8 +171,8 @@ def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
 
 @numba.njit(cache=True)
 def dead_reckon(wheels: np.ndarray, scale: np.ndarray, track: np.ndarray,
-                 wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray,
-                 taken: bool) -> None:
+                wheel_travel: np.ndarray, pose: np.ndarray, mid: np.ndarray,
+                taken: bool) -> None:
     """Each robot's encoder readings (n, 2) [m] (times ``scale``: encoders that only scale, or
     ones) added to its wheel travel, and its pose moved along the arc they make with the track
     width it believes [m]; fills ``mid`` (3, n): the mid-step cos, sin and chord factors.
