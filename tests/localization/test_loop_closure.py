@@ -162,8 +162,8 @@ def test_a_forged_closure_does_not_bend_the_map(office_loop):
     "issue 36: the front end's heading drift on the outbound leg is shared by the way back, "
     "which no closure can see; main passed (3.5 cm) only while navigate placed scans with a "
     "later pose and its detour's own drift cancelled it (outbound leg replaced by the truth: "
-    "8.98 cm); with each scan placed at its time, ATE 9.9 cm, with the wall landmarks 9.4 cm "
-    "(docs/localization.md)"))
+    "8.98 cm); with each scan placed at its time, ATE 9.9 cm (with the opt-in wall landmarks "
+    "9.4 cm) (docs/localization.md)"))
 def test_a_warehouse_tour_that_comes_back_closes_its_loop_and_undoes_the_drift():
     # Nav2's warehouse, there and back (seed 2: 180 beams, 5 m range, 2.5 cm noise, 5 Hz; its
     # heading random-walks along the aisle). Without closures its keyframes end 12 cm off.
@@ -196,10 +196,8 @@ def test_a_closure_moves_the_keyframes_instead_of_bending_their_headings():
     # (instrumented: bench.slam_heading_probe), so the one closure at the end bent ~180
     # keyframes' headings a little each, and the middle of the tour ended 10-15 cm off (ATE
     # 7.2 cm). With a floor of 0.06 deg the closure moves them instead: ATE 4.1 cm (4.6 cm
-    # at cbc4e6b). What is tested here is the chain edges' floor, so without the wall
-    # landmarks, which take this run to 5.0 cm (docs/localization.md, "SLAM: walls as graph
-    # landmarks": the one warehouse run they moved past 5 cm).
-    out = run_one("slam_revisit", "warehouse", "uncalibrated", 3, {"wall_landmarks": False})
+    # at cbc4e6b; 5.0 cm with the opt-in wall landmarks, docs/localization.md).
+    out = run_one("slam_revisit", "warehouse", "uncalibrated", 3)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")
     assert out.closures >= 1 and out.false_closures == 0, out.line()
