@@ -63,17 +63,17 @@ class Bookkeeping:
                  and odometry.plain]
         self.feeds = [odometry_feed(drive, odometry) for k, (drive, odometry) in enumerate(pairs)
                       if not fused or k != fused[0]]
-        self._calls, self._bodies = CALLS, bodies
         f64, intp = np.float64, np.intp
-        slots = [(self, "_calls", intp, 1), (self, "_bodies", intp, 1),
-                 (fleet, "xy", f64, 2), (fleet, "distance", f64, 1)]
+        slots: list[tuple[Any, str | None, Any, int]] = [
+            (CALLS, None, intp, 1), (bodies, None, intp, 1),
+            (fleet, "xy", f64, 2), (fleet, "distance", f64, 1)]
         if fused:
             drive, odometry = pairs[fused[0]]
             # the mid-step cos, sin, chord (read only by noisy encoders' propagation)
-            self._mid = np.empty((3, odometry.pose.shape[0]))
+            mid = np.empty((3, odometry.pose.shape[0]))
             slots += [(drive, "travel", f64, 2), (odometry, "scale", f64, 2),
                       (odometry, "believed_track", f64, 1), (odometry, "wheel_travel", f64, 2),
-                      (odometry, "pose", f64, 2), (self, "_mid", f64, 2)]
+                      (odometry, "pose", f64, 2), (mid, None, f64, 2)]
         self._pass = travel_and_reckon if fused else travel_from_bodies
         self._table = RowTable(slots)
 

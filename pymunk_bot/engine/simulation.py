@@ -183,8 +183,7 @@ class Simulation:
     def bookkeep(self) -> float:
         """After the physics: the clock, distance and goals from the robots' bodies, odometry
         from the encoders (engine/bookkeeping.py). Returns the time now [s]."""
-        self.steps += 1  # tick_clock, inlined: this runs every tick
-        now = self.world.time = self.steps * self.dt
+        now = self.tick_clock()
         self._bookkeeping.after_tick(now)
         return now
 

@@ -87,7 +87,6 @@ class Propulsion:
         self.steer[:, HELD:HELD + 3] = math.nan
         self.steer[:, COG_X], self.steer[:, COG_Y] = self.cog[:, 0], self.cog[:, 1]
         self._aimed = np.empty(self.n, dtype=np.intp)  # hold_each's robots left to aim
-        self._calls = CALLS  # (a row table's slot)
         # Whole differential drives: their settled motors coast and are held in one compiled
         # pass (steering.hold_coasting_wheels); other groups in two calls, the same arithmetic.
         self._wheels = [self._wheel_table(d) if isinstance(d.group, DiffDriveGroup)
@@ -158,12 +157,12 @@ class Propulsion:
     def _wheel_table(self, drives: DriveUnits) -> RowTable:
         """What hold_coasting_wheels reads of a whole differential drive, in its slots' order."""
         group, f64, intp = drives.group, np.float64, np.intp
-        return RowTable([(self, "_calls", intp, 1), (self, "chip", intp, 2),
+        return RowTable([(CALLS, None, intp, 1), (self, "chip", intp, 2),
                          (self, "steer", f64, 2), (drives, "member_rows", intp, 1),
                          (group, "commanded", f64, 2), (group, "target", f64, 2),
                          (group, "turning", f64, 2), (group, "travel", f64, 2),
                          (group, "track", f64, 1), (group, "twist_rows", f64, 2),
-                         (self, "_aimed", intp, 1)])
+                         (self._aimed, None, intp, 1)])
 
     def _settle(self, drives: DriveUnits, units: list[int], h: float, substeps: int,
                 steady: list[tuple[np.ndarray, Twists]]) -> list[int]:

@@ -30,9 +30,10 @@ ADDRESS, ROWS, COLUMNS = 0, 1, 2
 
 class RowTable:
     """The arrays of ``fields``, each (owner, attribute, dtype, dimensions) in the order the
-    pass reads them, as one table (:meth:`current`)."""
+    pass reads them, as one table (:meth:`current`); an attribute of None: the owner is the
+    array itself (one the pass's caller made and never rebinds)."""
 
-    def __init__(self, fields: Sequence[tuple[Any, str, Any, int]]) -> None:
+    def __init__(self, fields: Sequence[tuple[Any, str | None, Any, int]]) -> None:
         self.fields = [(owner, name, np.dtype(dtype), ndim) for owner, name, dtype, ndim in fields]
         self._table = np.zeros((len(self.fields), 3), dtype=np.intp)
         self._arrays: list[np.ndarray] = []  # what the addresses point into, kept alive
@@ -48,11 +49,12 @@ class RowTable:
     def _take(self) -> None:
         arrays = []
         for k, (owner, name, dtype, ndim) in enumerate(self.fields):
-            array = getattr(owner, name)
+            array = owner if name is None else getattr(owner, name)
             if not (isinstance(array, np.ndarray) and array.dtype == dtype
                     and array.ndim == ndim and array.flags.c_contiguous):
-                raise TypeError(f"{type(owner).__name__}.{name} must be a C-contiguous "
-                                f"{ndim}-D array of {dtype} for a compiled pass")
+                what = f"slot {k}" if name is None else f"{type(owner).__name__}.{name}"
+                raise TypeError(f"{what} must be a C-contiguous {ndim}-D array of {dtype} for "
+                                f"a compiled pass")
             self._table[k] = (array.ctypes.data, array.shape[0],
                               array.shape[1] if ndim == 2 else 1)
             arrays.append(array)
