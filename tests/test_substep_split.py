@@ -105,6 +105,26 @@ def test_one_solver_iteration_apart_moves_robots_as_ten() -> None:
     assert np.abs(poses[0] - poses[1]).max() < 1e-12
 
 
+def test_a_robot_apart_drives_the_arc_it_drives_alone() -> None:
+    # Held for the whole tick in the Space apart (its motors settled), as alone in the world
+    # it is held for the one pymunk step a tick that nothing near needs.
+    data = swarm_scenario(FLEET)
+    sim = Simulation.from_dict(data, source="swarm")
+    sim.run(2.0)
+    checked = 0
+    for entry in data["robots"][:12]:
+        robot = sim.robots[entry["name"]]
+        if robot.body.space is not sim.world.apart_space:
+            continue
+        alone = Simulation.from_dict(dict(data, robots=[entry]), source="alone")
+        alone.run(2.0)
+        x, y, theta = alone.robots[entry["name"]].pose
+        assert math.hypot(robot.pose[0] - x, robot.pose[1] - y) < 2e-4  # [m] after ~1 m
+        assert abs(robot.pose[2] - theta) < 1e-9
+        checked += 1
+    assert checked >= 8
+
+
 def test_asking_for_the_space_brings_every_robot_back() -> None:
     sim = _swarm()
     sim.run(0.5)

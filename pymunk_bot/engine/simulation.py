@@ -277,18 +277,23 @@ class Simulation:
         due = self._control.due(now)
         if not due:
             return
-        robots, controlled = self._robots, self._controlled
-        indices = [controlled[k] for k in due if not robots[controlled[k]].overridden]
+        fleet = self._built.fleet  # who drives each robot: no handle is read to ask
+        controlled, by_hand, observes = self._controlled, fleet.by_hand, fleet.observes
+        indices = [i for i in map(controlled.__getitem__, due) if not by_hand[i]]
         if not indices:
             return
+        robots = self._robots
         # A controller that reads no observation (constant commands) gets None: none is built.
-        # (A controller of the same shape that is no Controller subclass observes.)
-        observes = [getattr(robots[i].controller, "observes", True) for i in indices]
-        watching = [i for i, looks in zip(indices, observes) if looks]
-        observations = self._observer.observe_many(watching, now) if watching else iter(())
-        for i, looks in zip(indices, observes):
+        watching = [i for i in indices if observes[i]]
+        if not watching:
+            for i in indices:
+                robot = robots[i]
+                robot.follow(robot.controller.compute(None))
+            return
+        observations = self._observer.observe_many(watching, now)
+        for i in indices:
             robot = robots[i]
-            robot.follow(robot.controller.compute(next(observations) if looks else None))
+            robot.follow(robot.controller.compute(next(observations) if observes[i] else None))
 
     def due_lidars(self, now: float) -> list[int]:
         """Which of ``lidars`` have a scan due at ``now`` [s] (their schedules advance)."""

@@ -37,11 +37,10 @@ from typing import Sequence
 
 import numpy as np
 import pymunk
-from scipy.spatial import cKDTree
 
 from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.substeps import (MARGIN, Mover, motions, origin_speeds,
+from pymunk_bot.physics.substeps import (MARGIN, Mover, motions, near_pairs, origin_speeds,
                                          pair_gaps)
 from pymunk_bot.physics.world import World
 
@@ -136,8 +135,7 @@ class SplitPlanner:
         reach = self._reach
         travel = speeds * horizon  # [m] the most each origin moves
         clear = np.ones(reach.shape[0], dtype=bool)
-        pairs = cKDTree(origins).query_pairs(2.0 * float(reach.max() + travel.max()) + MARGIN,
-                                             output_type="ndarray")
+        pairs = near_pairs(origins, 2.0 * float(reach.max() + travel.max()) + MARGIN)
         if pairs.size:
             i, j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
             gap = pair_gaps(np.ascontiguousarray(origins), reach, i, j)  # one layout: one compile

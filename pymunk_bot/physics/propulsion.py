@@ -29,8 +29,9 @@ import pymunk
 from pymunk_bot.physics.chipmunk import CALLS, addresses, read_motions, read_poses
 from pymunk_bot.robots.stacking import DriveUnits
 from pymunk_bot.physics.row_table import RowTable
-from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, STEER_COLUMNS, aim_each,
-                                         hold_coasting_wheels, hold_each)
+from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, HELD_STEP,
+                                         STEER_COLUMNS, aim_each, hold_coasting_wheels,
+                                         hold_each)
 from pymunk_bot.robots.drives.diff import DiffDriveGroup
 from pymunk_bot.physics.substeps import spin_reach
 
@@ -84,9 +85,10 @@ class Propulsion:
         # moves the centre straight within a substep, so the origin's path needs a correction.
         self.cog = np.array([tuple(b.center_of_gravity) for b in self.bodies]).reshape(-1, 2)
         self.steer = np.zeros((self.n, STEER_COLUMNS))
-        self.steer[:, HELD:HELD + 3] = math.nan
+        self.steer[:, HELD:HELD_STEP + 1] = math.nan
         self.steer[:, COG_X], self.steer[:, COG_Y] = self.cog[:, 0], self.cog[:, 1]
         self._aimed = np.empty(self.n, dtype=np.intp)  # hold_each's robots left to aim
+        self._h_hold = np.empty(1)  # [s] one step for every robot held
         # Whole differential drives: their settled motors coast and are held in one compiled
         # pass (steering.hold_coasting_wheels); other groups in two calls, the same arithmetic.
         self._wheels = [self._wheel_table(d) if isinstance(d.group, DiffDriveGroup)
@@ -162,7 +164,7 @@ class Propulsion:
                          (group, "commanded", f64, 2), (group, "target", f64, 2),
                          (group, "turning", f64, 2), (group, "travel", f64, 2),
                          (group, "track", f64, 1), (group, "twist_rows", f64, 2),
-                         (self._aimed, None, intp, 1)])
+                         (self._aimed, None, intp, 1), (self._h_hold, None, f64, 1)])
 
     def _settle(self, drives: DriveUnits, units: list[int], h: float, substeps: int,
                 steady: list[tuple[np.ndarray, Twists]]) -> list[int]:
@@ -180,7 +182,9 @@ class Propulsion:
         [s]; those that cannot be held (see ``hold_each``) go on ``steady``, aimed for this
         substep and to be aimed every other."""
         ux, uy, omega = twists
-        count = hold_each(CALLS, self.chip, self.steer, members, ux, uy, omega, h, self._aimed)
+        self._h_hold[0] = h
+        count = hold_each(CALLS, self.chip, self.steer, members, ux, uy, omega, self._h_hold,
+                          self._aimed)
         self._aim_later(members, twists, count, steady)
 
     def _aim_later(self, members: np.ndarray, twists: Twists, count: int,
@@ -194,19 +198,37 @@ class Propulsion:
 
     def _step_split(self, h: float, substeps: int, h_last: float, apart: np.ndarray,
                     apart_next: np.ndarray) -> None:
-        """``step`` with the robots ``apart`` (a boolean row) stepping apart: every drive
-        advances each substep, as in any tick; the others are aimed substep by substep and
-        step in the contact Space, then those apart are aimed once, for the whole tick, and
-        their Space takes one step of it. Each robot's last aim is for the step it takes
-        first in the next tick: the tick when it steps apart then (``apart_next``), else
-        ``h_last``."""
+        """``step`` with the robots ``apart`` (a boolean row) stepping apart: those nearer
+        step in the contact Space, substep by substep, then those apart take one step of the
+        whole tick in theirs. Each robot's last aim is for the step it takes first in the next
+        tick: the tick when it steps apart then (``apart_next``), else ``h_last``. As in any
+        tick, a drive whose motors have settled coasts through it and its robots are held for
+        their step (a substep, or the tick apart), when the next one is as long; the others
+        are aimed before each of their steps, their drives advancing substep by substep."""
         assert self.apart_space is not None
         dt = h * substeps
-        near, away = np.flatnonzero(~apart), np.flatnonzero(apart)
+        own = np.where(apart, dt, h)  # [s] each robot's step in this tick
         first_next = np.where(apart_next, dt, h_last)  # [s] each robot's next step
-        ux = uy = omega = np.zeros(self.n)
+        ux, uy, omega = np.zeros(self.n), np.zeros(self.n), np.zeros(self.n)
+        aimed = np.ones(self.n, dtype=bool)  # aimed before each of its steps, not held
+        moving: list[tuple[Any, np.ndarray]] = []  # the drives advancing substep by substep
+        for drives in self._drives:
+            members, twists, units = drives.coast_settled(drives.every_unit, h, substeps)
+            if units:
+                moving.append((drives.group, members))
+                continue
+            assert twists is not None
+            ux[members], uy[members], omega[members] = _rows(twists)
+            held = members[own[members] == first_next[members]]
+            aimed[held] = False
+            count = hold_each(CALLS, self.chip, self.steer, held, ux[held], uy[held],
+                              omega[held], own[held], self._aimed)
+            aimed[held[self._aimed[:count]]] = True  # their anchors too far: aimed instead
+        near = np.flatnonzero(~apart & aimed)
+        away = np.flatnonzero(apart & aimed)
         for sub in range(substeps):
-            ux, uy, omega = self._gather(lambda group: group.advance(h))
+            for group, members in moving:
+                ux[members], uy[members], omega[members] = _rows(group.advance(h))
             if near.size:
                 self._h_next[0] = h
                 aim_each(CALLS, self.chip, self.steer, near, ux[near], uy[near], omega[near],
@@ -215,6 +237,7 @@ class Propulsion:
         if away.size:  # their motors advanced the whole tick, in substeps, as the others'
             aim_each(CALLS, self.chip, self.steer, away, ux[away], uy[away], omega[away], dt,
                      first_next[away])
+        if apart.any():
             self.apart_space.step(dt)
 
     def _gather(self, twists_of: Any) -> Twists:

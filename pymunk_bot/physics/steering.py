@@ -71,11 +71,11 @@ def anchor(ux: float, uy: float, omega: float, h: float, cx: float,
 
 
 # A robot's steering row (``steer``, floats): the twist its control body holds (NaN: none, it
-# is aimed substep by substep), whether its pivot's anchor is off the control body's centre
-# (1.0) and its ``cog`` [m]. ``chip``: each robot's (body, control body, pivot joint) as
-# Chipmunk addresses (:mod:`pymunk_bot.physics.chipmunk`).
-HELD, ANCHORED, COG_X, COG_Y = 0, 3, 4, 5
-STEER_COLUMNS = 6
+# is aimed substep by substep) and the step [s] it is held for, whether its pivot's anchor is
+# off the control body's centre (1.0) and its ``cog`` [m]. ``chip``: each robot's (body,
+# control body, pivot joint) as Chipmunk addresses (:mod:`pymunk_bot.physics.chipmunk`).
+HELD, HELD_STEP, ANCHORED, COG_X, COG_Y = 0, 3, 4, 5, 6
+STEER_COLUMNS = 7
 # A held robot's anchor is |u| / |omega| from the control body's centre; farther than this
 # [m] (an almost straight path) it is aimed substep by substep instead.
 MAX_ANCHOR = 1e6
@@ -90,7 +90,7 @@ def aim_one(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, k: int, ux: 
     if steer[k, ANCHORED] != 0.0:  # from holding: the anchor back to the centre
         set_vect(calls[SET_ANCHOR], chip[k, 2], 0.0, 0.0)
         steer[k, ANCHORED] = 0.0
-    steer[k, HELD] = steer[k, HELD + 1] = steer[k, HELD + 2] = math.nan
+    steer[k, HELD] = steer[k, HELD + 1] = steer[k, HELD + 2] = steer[k, HELD_STEP] = math.nan
     vx, vy = aim(get_scalar(calls[GET_ANGLE], body), get_scalar(calls[GET_SPIN], body), ux, uy,
                  omega, h, h_next, steer[k, COG_X], steer[k, COG_Y])
     set_vect(calls[SET_VELOCITY], control, vx, vy)
@@ -110,40 +110,53 @@ def aim_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: np
 
 
 @numba.njit(cache=True)
+def hold_one(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, k: int, ux: float,
+             uy: float, w: float, h: float) -> bool:
+    """Robot ``k`` held on its twist for a step of substeps ``h`` [s] (see
+    :mod:`pymunk_bot.physics.propulsion`): a turning one by its pivot's :func:`anchor`, its
+    control body spinning at omega ``w`` and headed as the robot will be at the solve; a
+    straight one aimed once. False: its anchor would lie beyond MAX_ANCHOR, and it is aimed for
+    this substep only."""
+    body, control = chip[k, 0], chip[k, 1]
+    if w == 0.0:  # a constant velocity: one aim lasts the step
+        aim_one(calls, chip, steer, k, ux, uy, w, h, h)
+        return True
+    if (steer[k, HELD] != ux or steer[k, HELD + 1] != uy or steer[k, HELD + 2] != w
+            or steer[k, HELD_STEP] != h):  # the anchor gives the chord of steps of h only
+        ax, ay = anchor(ux, uy, w, h, steer[k, COG_X], steer[k, COG_Y])
+        if not (abs(ax) <= MAX_ANCHOR and abs(ay) <= MAX_ANCHOR):
+            aim_one(calls, chip, steer, k, ux, uy, w, h, h)
+            return False
+        set_vect(calls[SET_VELOCITY], control, 0.0, 0.0)
+        set_scalar(calls[SET_SPIN], control, w)
+        set_vect(calls[SET_ANCHOR], chip[k, 2], ax, ay)
+        steer[k, ANCHORED] = 1.0
+        steer[k, HELD], steer[k, HELD + 1], steer[k, HELD + 2] = ux, uy, w
+        steer[k, HELD_STEP] = h
+    # At each solve the control body's heading equals the robot's (both turn at omega); in
+    # free space they already do, to the last bit, and the write is skipped.
+    heading = (get_scalar(calls[GET_ANGLE], body)
+               + (get_scalar(calls[GET_SPIN], body) - w) * h)
+    if heading != get_scalar(calls[GET_ANGLE], control):
+        set_scalar(calls[SET_ANGLE], control, heading)
+    return True
+
+
+@numba.njit(cache=True)
 def hold_each(calls: np.ndarray, chip: np.ndarray, steer: np.ndarray, members: np.ndarray,
-              ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, h: float,
+              ux: np.ndarray, uy: np.ndarray, omega: np.ndarray, steps: np.ndarray,
               aimed: np.ndarray) -> int:
-    """Robots ``members`` (their twists in the same order) held for a step of substeps ``h``
-    [s] (see :mod:`pymunk_bot.physics.propulsion`): a turning one by its pivot's
-    :func:`anchor`, its control body spinning at omega and headed as the robot will be at the
-    solve; a straight one aimed once. A robot whose anchor would lie beyond MAX_ANCHOR is aimed
-    for this substep only: the positions in ``members`` of those are put in ``aimed``, and
-    their count returned."""
+    """:func:`hold_one` for robots ``members`` (their twists in the same order), each for a
+    step of substeps ``steps`` [s]: each member's (robots stepping apart take one of the whole
+    tick, the others substeps), or (length 1) one for all. The positions in ``members`` of
+    those aimed instead are put in ``aimed``, and their count returned."""
+    each = steps.shape[0] > 1
     count = 0
     for j in range(members.shape[0]):
-        k, w = members[j], omega[j]
-        body, control = chip[k, 0], chip[k, 1]
-        if w == 0.0:  # a constant velocity: one aim lasts the step
-            aim_one(calls, chip, steer, k, ux[j], uy[j], w, h, h)
-            continue
-        if steer[k, HELD] != ux[j] or steer[k, HELD + 1] != uy[j] or steer[k, HELD + 2] != w:
-            ax, ay = anchor(ux[j], uy[j], w, h, steer[k, COG_X], steer[k, COG_Y])
-            if not (abs(ax) <= MAX_ANCHOR and abs(ay) <= MAX_ANCHOR):
-                aim_one(calls, chip, steer, k, ux[j], uy[j], w, h, h)
-                aimed[count] = j
-                count += 1
-                continue
-            set_vect(calls[SET_VELOCITY], control, 0.0, 0.0)
-            set_scalar(calls[SET_SPIN], control, w)
-            set_vect(calls[SET_ANCHOR], chip[k, 2], ax, ay)
-            steer[k, ANCHORED] = 1.0
-            steer[k, HELD], steer[k, HELD + 1], steer[k, HELD + 2] = ux[j], uy[j], w
-        # At each solve the control body's heading equals the robot's (both turn at omega); in
-        # free space they already do, to the last bit, and the write is skipped.
-        heading = (get_scalar(calls[GET_ANGLE], body)
-                   + (get_scalar(calls[GET_SPIN], body) - w) * h)
-        if heading != get_scalar(calls[GET_ANGLE], control):
-            set_scalar(calls[SET_ANGLE], control, heading)
+        if not hold_one(calls, chip, steer, members[j], ux[j], uy[j], omega[j],
+                        steps[j if each else 0]):
+            aimed[count] = j
+            count += 1
     return count
 
 
@@ -159,7 +172,7 @@ def hold_coasting_wheels(table: np.ndarray, h: float, substeps: int) -> int:
     calls; the steering's ``chip`` and ``steer`` rows; the drive's robots (their rows there, in
     the drive's order); the drive's ``commanded``, ``target``, ``turning``, ``travel`` and
     ``track`` (robots/drives/diff.py); its twist rows (ux, uy, omega); hold_each's scratch of
-    robots aimed."""
+    robots aimed; a scratch of one step [s]."""
     calls, chip, steer = integers_1d(table, 0), integers_2d(table, 1), floats_2d(table, 2)
     members, aimed = integers_1d(table, 3), integers_1d(table, 10)
     twists = floats_2d(table, 9)
@@ -168,4 +181,6 @@ def hold_coasting_wheels(table: np.ndarray, h: float, substeps: int) -> int:
                               floats_2d(table, 7), floats_1d(table, 8), h * substeps, ux,
                               omega):
         return -1
-    return hold_each(calls, chip, steer, members, ux, uy, omega, h, aimed)
+    step = floats_1d(table, 11)
+    step[0] = h
+    return hold_each(calls, chip, steer, members, ux, uy, omega, step, aimed)

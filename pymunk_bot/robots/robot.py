@@ -43,7 +43,8 @@ class RobotsByName(dict):
 
 class Fleet:
     """Every robot's per-tick bookkeeping: distance, goal, contact episodes, as arrays indexed
-    by robot, advanced by compiled passes (``robots/progress.py``) however many."""
+    by robot, advanced by compiled passes (``robots/progress.py``) however many; and who
+    drives each (``by_hand``, ``observes``: the simulation asks controllers by these rows)."""
 
     ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
             "distance_to_goal")
@@ -65,6 +66,11 @@ class Fleet:
                 self.tolerance[i] = c.goal.tolerance
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
+        # Held by a command set by hand (its controller waits), and whether its controller
+        # reads an observation (kept by the robot's handle: Robot.controller, Robot.command).
+        # Lists: the simulation reads a few items of them a tick, where numpy costs more.
+        self.by_hand = [False] * n
+        self.observes = [False] * n
         self._now = np.zeros(1)  # [s] the tick's time, as reach_goals takes it
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
         self._refresh_targets()
@@ -163,7 +169,6 @@ class Robot:
     control: pymunk.Body
     drive: Any
     odometry: Any
-    controller: Any
     localizer: Any
     metrics: Any
 
@@ -180,6 +185,7 @@ class Robot:
         self.__dict__.clear()
         self.name = name
         self._fleet, self._i = fleet, index
+        fleet.by_hand[index] = False
         self._drive_group, self._di = drive_group, drive_index
         self.sensors: list = []  # everything with update(time), in the order they read
         self._fitted: dict[str, Any] = {}  # "lidar", "imu", "bumper" -> the sensor
@@ -189,7 +195,6 @@ class Robot:
         self.metrics = None
         self.localization_score: Any = None  # estimate vs truth, when the scenario names a localizer
         self.nav_goal: tuple[float, float] | None = None  # where the controller drives
-        self._override = False
         self._followed: Any = None  # the controller's command the drive holds now (follow)
 
     # ------------------------------------------------------------------ sensors
@@ -349,21 +354,21 @@ class Robot:
             raise ValueError(f"a {self.config.drive} drive has no wheel speeds; use set_velocity")
         left, right = real_number("left", left), real_number("right", right)
         self._drive_group.set_wheel_speeds(self._di, left, right)  # raises before taking over
-        self._override, self._followed = True, None
+        self._fleet.by_hand[self._i], self._followed = True, None
 
     def command(self, command: Command) -> None:
         """Drive with this :class:`Command` until :meth:`clear_command`; the controller waits."""
         self._drive_group.set_command(self._di, command)  # raises before taking over
-        self._override, self._followed = True, None
+        self._fleet.by_hand[self._i], self._followed = True, None
 
     def clear_command(self) -> None:
         """Give the robot back to its controller."""
-        self._override, self._followed = False, None
+        self._fleet.by_hand[self._i], self._followed = False, None
 
     def take_over(self) -> None:
         """A command set for this robot's drive outside its handle (the vector env's batched
         commands) holds it, as :meth:`command` does; the controller waits."""
-        self._override, self._followed = True, None
+        self._fleet.by_hand[self._i], self._followed = True, None
 
     def follow(self, command: Any) -> None:
         """Drive with the controller's ``command`` (the simulation asks the controller only
@@ -383,4 +388,16 @@ class Robot:
     @property
     def overridden(self) -> bool:
         """True while a command set by hand (or teleop) holds the robot."""
-        return self._override
+        return self._fleet.by_hand[self._i]
+
+    @property
+    def controller(self) -> Any:
+        """What drives this robot when no command set by hand holds it (None: nothing)."""
+        return self._controller
+
+    @controller.setter
+    def controller(self, controller: Any) -> None:
+        # Whether it reads an observation is read now, once: a fleet's controllers are then
+        # asked by rows (a controller of the same shape that is no Controller subclass observes).
+        self._controller = controller
+        self._fleet.observes[self._i] = getattr(controller, "observes", True)
