@@ -29,6 +29,9 @@ class Controller:
     rate: float = 10.0  # [Hz]
     needs_map: bool = False  # True: the simulation calls set_map() before the first compute()
     observes: bool = True  # False: compute() reads nothing and is called with None (none built)
+    # True (with observes False): compute(None) gives one command for ever, and is asked once
+    # each time the robot is given back to it (a fleet's constant controllers cost nothing).
+    constant: bool = False
     _localizing_since: float | None = None  # [s] when the estimate last became untrustworthy
     _watched_goal: tuple[float, float] | None = None  # the goal the progress watch is for
     _given_up = False  # the watch ran out for this goal

@@ -10,9 +10,15 @@ class VelocityController(Controller):
 
     def __init__(self, config: VelocityControllerConfig, robot: RobotSpec) -> None:
         super().__init__(config)
-        self.command = Command(config.v, config.omega, config.vy)
+        self._command = Command(config.v, config.omega, config.vy)
 
     observes = False  # a constant command: no observation is built for it
+    constant = True  # and it is asked once
+
+    @property
+    def command(self) -> Command:
+        """The body velocity it holds (fixed: give the robot another controller to change it)."""
+        return self._command
 
     def compute(self, obs: Observation | None) -> Command:
-        return self.command
+        return self._command

@@ -13,9 +13,16 @@ class WheelsController(Controller):
         if robot.drive != "diff":
             raise ValueError(f"wheels drives diff robots only (this one is {robot.drive}); "
                              f"use velocity")
-        self.speeds = (config.left, config.right)
+        self._speeds = (config.left, config.right)
 
     observes = False  # a constant command: no observation is built for it
+    constant = True  # and it is asked once
+
+    @property
+    def speeds(self) -> tuple[float, float]:
+        """The wheel speeds (left, right) [m/s] it holds (fixed: give the robot another
+        controller to change them)."""
+        return self._speeds
 
     def compute(self, obs: Observation | None) -> tuple[float, float]:
-        return self.speeds  # wheel speeds: the diff drive takes them as they are
+        return self._speeds  # wheel speeds: the diff drive takes them as they are

@@ -278,22 +278,19 @@ class Simulation:
         if not due:
             return
         fleet = self._built.fleet  # who drives each robot: no handle is read to ask
-        controlled, by_hand, observes = self._controlled, fleet.by_hand, fleet.observes
-        indices = [i for i in map(controlled.__getitem__, due) if not by_hand[i]]
+        controlled, by_hand, held = self._controlled, fleet.by_hand, fleet.holds_constant
+        # Not those driven by hand, nor constant controllers whose command the drive holds.
+        indices = [i for i in map(controlled.__getitem__, due) if not (by_hand[i] or held[i])]
         if not indices:
             return
-        robots = self._robots
+        robots, observes, constant = self._robots, fleet.observes, fleet.constant
         # A controller that reads no observation (constant commands) gets None: none is built.
         watching = [i for i in indices if observes[i]]
-        if not watching:
-            for i in indices:
-                robot = robots[i]
-                robot.follow(robot.controller.compute(None))
-            return
-        observations = self._observer.observe_many(watching, now)
+        observations = self._observer.observe_many(watching, now) if watching else iter(())
         for i in indices:
             robot = robots[i]
             robot.follow(robot.controller.compute(next(observations) if observes[i] else None))
+            held[i] = constant[i]
 
     def due_lidars(self, now: float) -> list[int]:
         """Which of ``lidars`` have a scan due at ``now`` [s] (their schedules advance)."""

@@ -66,11 +66,14 @@ class Fleet:
                 self.tolerance[i] = c.goal.tolerance
         self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
         self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
-        # Held by a command set by hand (its controller waits), and whether its controller
-        # reads an observation (kept by the robot's handle: Robot.controller, Robot.command).
-        # Lists: the simulation reads a few items of them a tick, where numpy costs more.
+        # Held by a command set by hand (its controller waits); whether its controller reads
+        # an observation; whether it gives one command for ever (Controller.constant), and
+        # that command is held (kept by the robot's handle: Robot.controller, Robot.command,
+        # and the simulation). Lists: a tick reads a few items of them, where numpy costs more.
         self.by_hand = [False] * n
         self.observes = [False] * n
+        self.constant = [False] * n
+        self.holds_constant = [False] * n
         self._now = np.zeros(1)  # [s] the tick's time, as reach_goals takes it
         self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
         self._refresh_targets()
@@ -364,6 +367,7 @@ class Robot:
     def clear_command(self) -> None:
         """Give the robot back to its controller."""
         self._fleet.by_hand[self._i], self._followed = False, None
+        self._fleet.holds_constant[self._i] = False  # a constant controller is asked again
 
     def take_over(self) -> None:
         """A command set for this robot's drive outside its handle (the vector env's batched
@@ -399,5 +403,8 @@ class Robot:
     def controller(self, controller: Any) -> None:
         # Whether it reads an observation is read now, once: a fleet's controllers are then
         # asked by rows (a controller of the same shape that is no Controller subclass observes).
+        fleet, i = self._fleet, self._i
         self._controller = controller
-        self._fleet.observes[self._i] = getattr(controller, "observes", True)
+        fleet.observes[i] = getattr(controller, "observes", True)
+        fleet.constant[i] = not fleet.observes[i] and getattr(controller, "constant", False)
+        fleet.holds_constant[i] = False
