@@ -234,3 +234,28 @@ def test_a_teleport_in_a_stacked_copy_counts_no_distance():
     copies.step()
     assert robots[1].distance - before[1] < 0.01
     assert robots[0].distance - before[0] < 0.01
+
+
+def test_a_copy_rebuilt_among_others_still_stops_at_the_arena_wall():
+    """With adaptive substeps (the vector env's default) a copy's rebuild keeps what the
+    shared substep planner knows of the fixed world (its cells are not built again for every
+    reset): the rebuilt copy's robot, driven at the arena's wall, stops at it."""
+    data = load_scenario(None).model_dump(exclude_unset=True)
+    data["obstacles"] = []  # open ground up to the wall at x = 10 m
+    data["robots"][0].pop("controller", None)
+    data["robots"][0]["pose"] = [7.0, 3.0, 0.0]
+    config = parse_scenario(data, "wall")
+    copies = Replicas(config, [1, 2, 3])
+    gate = copies._batch.gate
+    assert gate is not None  # adaptive substeps
+    for round_ in range(3):
+        copies.reset(round_ % 3, seed=10 + round_)
+        assert copies._batch.gate.fixed is gate.fixed  # kept, not built again
+        for sim in copies.sims:
+            sim.robots["r1"].set_velocity(sim.robots["r1"].spec.max_speed, 0.0)
+        for _ in range(300):  # 5 s: at most 3 m from x = 7 m, into the wall
+            copies.step()
+        radius = copies.sims[round_ % 3].robots["r1"].spec.radius
+        for sim in copies.sims:
+            x = sim.robots["r1"].pose[0]
+            assert 10.0 - radius - 0.05 < x < 10.0 - radius + 0.01  # at the wall, not through it

@@ -1,6 +1,7 @@
 """How many pymunk substeps per dt a scenario needs so that nothing tunnels (pure geometry)."""
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -136,9 +137,11 @@ class SubstepNeed:
         """Substeps with every robot at its top speed: the scenario's count."""
         return self.count(self.top_speed)
 
+    @functools.cached_property
     def limits(self) -> tuple[float, ...]:
         """The highest robot speeds [m/s] that 1, 2, ... ``full - 1`` substeps hold (each found
-        by bisection, from below): a table for ticks that cannot afford :meth:`count`."""
+        by bisection, from below): a table for ticks that cannot afford :meth:`count` (found
+        once: copies of a scenario rebuilt among others share it)."""
         found = []
         for k in range(1, self.full):
             low, high = 0.0, self.top_speed

@@ -56,10 +56,11 @@ class Run(Protocol):
 class Batch:
     """``runs`` (in ``ground``'s Space, their robots ``propulsion``'s, run after run), ticked
     as one; ``stack``: the runs' bookkeeping stacked (:mod:`pymunk_bot.robots.stacking`), None
-    to keep each run's own."""
+    to keep each run's own; ``before``: the batch these runs were in until one of them was
+    rebuilt (what it knew of the fixed world is kept)."""
 
     def __init__(self, runs: Sequence[Run], ground: World, propulsion: Propulsion,
-                 stack: "Stack | None" = None) -> None:
+                 stack: "Stack | None" = None, before: "Batch | None" = None) -> None:
         self.runs = tuple(runs)
         self.ground, self.propulsion, self.stack = ground, propulsion, stack
         # Copies stacked: one bookkeeping pass over every copy's robots (each its copy's time).
@@ -89,7 +90,8 @@ class Batch:
             self.gate = SubstepGate(ground.contact_space,
                                     [m for run in self.runs for m in run.built.movers],
                                     self.substeps, self.dt, ground.take_disturbed, ground.need,
-                                    propulsion.fastest_driven, lambda: ground.fixed_version)
+                                    propulsion.fastest_driven, lambda: ground.fixed_version,
+                                    before.gate.fixed if before and before.gate else None)
         # Robots that nothing can reach step apart (large fleets of one run).
         self.split: SplitPlanner | None = None
         if (self.gate is not None and not propulsion.copies and ground.can_split

@@ -131,4 +131,4 @@ class Replicas:
         if self._propulsion is not None:
             propulsion.adopt(self._propulsion)
         self._propulsion = propulsion
-        self._batch = Batch(self.sims, self.ground, propulsion, self._stack)
+        self._batch = Batch(self.sims, self.ground, propulsion, self._stack, self._batch)

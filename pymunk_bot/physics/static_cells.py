@@ -56,7 +56,8 @@ class StaticCells:
         self._moving = moving
         self._version = version
         self._seen: int | None = None  # the version the cells were checked at
-        self._key: tuple | None = None  # the shapes the cells were built from
+        self._key: tuple | None = None  # the Space's shapes when the cells were last checked
+        self._fixed: list[pymunk.Shape] | None = None  # the fixed shapes the cells were built from
         self._origin = (0.0, 0.0)  # [m] the grid's lower-left corner
         self._cell = 1.0  # [m]
         self._table = np.zeros((1, 1), dtype=np.int32)  # summed-area table of marked cells
@@ -119,7 +120,21 @@ class StaticCells:
 
     def forget(self) -> None:
         """Fixed bodies may have moved: the next :meth:`refresh` builds the cells again."""
-        self._key = self._seen = None
+        self._key = self._seen = self._fixed = None
+
+    def watching(self, moving: Collection[pymunk.Body]) -> "StaticCells":
+        """These cells, for another set of ``moving`` bodies in the same Space (a copy of a
+        scenario rebuilt among others: its new robots come, its old ones go, and the fixed
+        world, unless its version says otherwise, is what it was, so its cells are kept)."""
+        self._moving = moving
+        self._key = None  # the shapes are compared at the next refresh, the fixed ones kept
+        return self
+
+    def _fixed_shapes(self, shapes: tuple[pymunk.Shape, ...]) -> list[pymunk.Shape]:
+        """Of ``shapes``, those of the fixed world: no sensor, no body of the moving ones."""
+        moving = self._moving
+        return [shape for shape in shapes
+                if not shape.sensor and shape.body is not None and shape.body not in moving]
 
     def refresh(self) -> None:
         """Build the cells again if a shape came or went (or after :meth:`forget`): looked
@@ -133,8 +148,10 @@ class StaticCells:
         if key == self._key:
             return
         self._key = key
-        fixed = [shape for shape in key
-                 if not shape.sensor and shape.body is not None and shape.body not in self._moving]
+        fixed = self._fixed_shapes(key)
+        if fixed == self._fixed:  # the shapes that moved came or went: the fixed ones stand
+            return
+        self._fixed = fixed
         boxes = np.array([tuple(shape.cache_bb()) for shape in fixed], dtype=float).reshape(-1, 4)
         self._everywhere = not np.isfinite(boxes).all()
         if boxes.shape[0] == 0 or self._everywhere:  # nothing fixed, or nothing to mark

@@ -163,22 +163,26 @@ class SubstepGate:
     for any speed bound (its ``full`` is ``full``); ``driven(seconds)``: the fastest
     any robot's footprint can be driven within ``seconds`` [m/s] (either None: every tick with
     substeps takes ``full``); ``fixed_version()``: a count that changes when fixed shapes may
-    have changed (``World.fixed_version``; None: the Space's shapes compared at every test)."""
+    have changed (``World.fixed_version``; None: the Space's shapes compared at every test);
+    ``fixed``: the cells of the fixed world a gate before this one on the same Space built
+    (kept when the fixed shapes are the same)."""
 
     def __init__(self, space: pymunk.Space, movers: Sequence[Mover], full: int, dt: float,
                  disturbed: Callable[[], bool], need: SubstepNeed | None = None,
                  driven: Callable[[float], float] | None = None,
-                 fixed_version: Callable[[], int] | None = None) -> None:
+                 fixed_version: Callable[[], int] | None = None,
+                 fixed: StaticCells | None = None) -> None:
         self.space = space
         self.disturbed = disturbed
         self._driven = driven
         # The highest speed [m/s] that each count from 1 up holds: a count is a bisection.
-        self._limits = None if need is None else need.limits()
+        self._limits = None if need is None else need.limits
         self.ticks = 0  # ticks counted so far (the gate's own clock: copies reset theirs)
         self.movers = [m for m in movers if m.body.shapes]
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         # where the fixed shapes are (looked at again when fixed_version() changes)
-        self.fixed = StaticCells(space, self._bodies, fixed_version)
+        self.fixed = (StaticCells(space, self._bodies, fixed_version) if fixed is None
+                      else fixed.watching(self._bodies))
         # The movers as Chipmunk addresses, read by a compiled loop, and their (x, y, vx, vy, omega)
         self._addresses = addresses([m.body for m in self.movers])
         self._state = np.empty((len(self.movers), 5))
