@@ -125,6 +125,32 @@ def test_a_robot_apart_drives_the_arc_it_drives_alone() -> None:
     assert checked >= 8
 
 
+def test_a_lidar_fleet_steps_apart_and_sees_the_robots_apart() -> None:
+    # The caster reads both Spaces: robots with LiDARs step apart too, their shapes with
+    # them, and every scan is what pymunk gives over both (rays end on robots apart).
+    from pymunk_bot.sensors.raycast import Spaces, reference_cast
+
+    sim = Simulation.from_dict(swarm_scenario(FLEET, beams=32, max_range=4.0), source="swarm")
+    world = sim.world
+    both = Spaces((world.contact_space, world.apart_space))
+    scans = on_robots_apart = 0
+    for _ in range(60):
+        sim.step()
+        for robot in list(sim.robots.values())[:40]:
+            scan = robot.lidar.latest
+            if scan is None or scan.time != sim.time:
+                continue
+            origin, angles = tuple(robot.body.position), robot.lidar.angles + robot.body.angle
+            want = reference_cast(both, origin, angles, 4.0, robot.shape.filter)
+            assert np.array_equal(scan.ranges, want)
+            contact_only = reference_cast(world.contact_space, origin, angles, 4.0,
+                                          robot.shape.filter)
+            on_robots_apart += int((contact_only != want).any())
+            scans += 1
+    assert _apart(sim) > FLEET // 2 and not world.whole
+    assert scans >= 200 and on_robots_apart >= scans // 2
+
+
 def test_asking_for_the_space_brings_every_robot_back() -> None:
     sim = _swarm()
     sim.run(0.5)

@@ -27,9 +27,11 @@ of those ticks ends, at their top speeds (or faster, if they go faster now):
 It plans only for fleets of ``SPLIT_FROM`` robots or more, steered as rows
 (``Propulsion.batched``), in a world of its own
 (copies of a scenario share one Space), and only while nobody holds the world's Space
-(``World.space``): a LiDAR, a crowd, a metric that queries the world, or a user's code that
-asks for the Space bring every robot back for the rest of the run, so whatever looks at the
-world sees all of it. A teleport brings them back too, and the next tick plans anew.
+(``World.space``): a crowd, a metric that queries the world, or a user's code that asks for
+the Space bring every robot back for the rest of the run, so whatever looks at the world sees
+all of it. LiDARs do not: the world's ray caster reads both Spaces, and where it does, a
+robot's shapes go apart with it (``sensors/raycast/spaces.py``). A teleport brings them back
+too, and the next tick plans anew.
 """
 from __future__ import annotations
 

@@ -110,7 +110,8 @@ class World:
         """The world's pymunk Space, with every body in it. Robots that nothing can reach
         within the coming ticks may step in a Space of their own (:mod:`pymunk_bot.physics.apart`)
         while nobody looks; asking for this brings them back, for the rest of the run (a
-        LiDAR, a crowd, a metric or a user's query sees the whole world)."""
+        crowd, a metric or a user's query sees the whole world; a LiDAR's caster reads both
+        Spaces instead: :meth:`ray_caster`)."""
         self.whole = True
         self.gather()
         self.touched()
@@ -132,10 +133,14 @@ class World:
         take their shapes out of the contact Space."""
         if robots:
             assert self.apart_space is not None
-            # Their shapes leave every Space: nothing can touch them there, and the contact
-            # Space need not sort them each substep (whoever queries the world gathers first).
-            self._space.remove(*[shape for body, _ in robots for shape in body.shapes])
+            shapes = [shape for body, _ in robots for shape in body.shapes]
+            # Nothing can touch them there, and the contact Space need not sort their shapes
+            # each substep. Their shapes leave every Space (whoever queries the world gathers
+            # first), or, where LiDARs look, go with them (the caster reads both Spaces).
+            self._space.remove(*shapes)
             _move(self._space, self.apart_space, robots)
+            if self._caster is not None:
+                self.apart_space.add(*shapes)
             self._apart.update(robots)
             self.layout += 1
 
@@ -143,8 +148,11 @@ class World:
         """Move these robots from the apart Space back to the contact Space, shapes too."""
         if robots:
             assert self.apart_space is not None
+            shapes = [shape for body, _ in robots for shape in body.shapes]
+            if self._caster is not None:
+                self.apart_space.remove(*shapes)
             _move(self.apart_space, self._space, robots)
-            self._space.add(*[shape for body, _ in robots for shape in body.shapes])
+            self._space.add(*shapes)
             for body, _ in robots:
                 del self._apart[body]
             self.layout += 1
@@ -244,13 +252,16 @@ class World:
 
     def ray_caster(self) -> Any:
         """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:
-        only worlds with a LiDAR pay for its geometry tables; one per space)."""
+        only worlds with a LiDAR pay for its geometry tables; one per space). It casts against
+        both Spaces, so robots may still step apart: from then on their shapes go with them."""
         ground = getattr(self, "_ground", None)
         if ground is not None:
             return ground.ray_caster()
         if self._caster is None:
-            from pymunk_bot.sensors.raycast import RayCaster
-            self._caster = RayCaster(self.space)
+            from pymunk_bot.sensors.raycast import RayCaster, Spaces
+            self.gather()  # none apart while the shapes' rule changes
+            self._caster = RayCaster(self._space if self.apart_space is None
+                                     else Spaces((self._space, self.apart_space)))
         return self._caster
 
     def count_contacts(self, shape: pymunk.Shape, on_begin: Callable[[], None]) -> None:

@@ -420,3 +420,33 @@ def test_the_tracer_is_compiled_unless_switched_off(tracer):
     kernel = RayCaster(space)._kernel
     assert (kernel is not None) == (tracer == "numba")
     assert RayCaster(space, compiled=False)._kernel is None
+
+
+def test_robots_in_a_second_space_are_cast_against_as_in_one() -> None:
+    """Spaces: robots (bodies and shapes) moved to a second Space are seen as if they were in
+    the first, ray for ray, whether the caster traces or pymunk answers (the robots move
+    between the Spaces between frames, as robots stepping apart do)."""
+    from pymunk_bot.sensors.raycast import Spaces
+
+    one, robots = mixed_world(3)
+    two, _ = mixed_world(3)  # the same world, its robots to be split over two Spaces
+    apart = pymunk.Space()
+    moving = [b for b in two.bodies if b.body_type == pymunk.Body.DYNAMIC]
+    caster = RayCaster(Spaces((two, apart)))
+    rng = np.random.default_rng(0)
+    for frame in range(4):
+        for body in moving:  # every frame some robots change Space
+            if rng.random() < 0.5:
+                source, target = (two, apart) if body.space is two else (apart, two)
+                shapes = list(body.shapes)
+                source.remove(body, *shapes)
+                target.add(body, *shapes)
+        caster.begin_frame()
+        assert any(b.space is apart for b in moving) and any(b.space is two for b in moving)
+        for body in robots[:6]:
+            origin = tuple(body.position)
+            shape_filter = next(iter(body.shapes)).filter
+            want = reference_cast(one, origin, FAN, 6.0, shape_filter)
+            both = Spaces((two, apart))
+            assert np.array_equal(reference_cast(both, origin, FAN, 6.0, shape_filter), want)
+            assert np.array_equal(caster.cast(origin, FAN, 6.0, shape_filter), want), frame

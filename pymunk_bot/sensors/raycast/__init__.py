@@ -44,9 +44,11 @@ Modules (all but this one are internal):
 - ``kernels``: the exact per-pair Chipmunk formulas.
 - ``compiled``: ``fan``, ``scene`` and ``kernels`` in one numba loop (loaded on first use).
 - ``caster``: ``RayCaster``, which ties these together and picks pymunk fallbacks.
+- ``spaces``: ``Spaces``, several Spaces cast against as one (a world's robots stepping apart).
 """
 
 from pymunk_bot.sensors.raycast.caster import RayCaster
 from pymunk_bot.sensors.raycast.reference import reference_cast
+from pymunk_bot.sensors.raycast.spaces import Spaces
 
-__all__ = ["RayCaster", "reference_cast"]
+__all__ = ["RayCaster", "Spaces", "reference_cast"]

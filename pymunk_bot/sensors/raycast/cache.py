@@ -12,6 +12,7 @@ from typing import Callable
 import numpy as np
 import pymunk
 
+from pymunk_bot.sensors.raycast.spaces import Spaces
 from pymunk_bot.sensors.raycast.primitives import (AX, AY, BX, BY, RAD, ROWS, BodyReader, Collector, World, body_transform,
                        kind_slices, merge, moved)
 
@@ -82,11 +83,14 @@ class _Frame:
 class SceneCache:
     """Static geometry kept in world coordinates; dynamic geometry moved on every cast.
 
-    Rebuilt when the space's shapes change (compared by identity on every cast) or a
+    Rebuilt when the space's shapes change (compared by identity on every cast; the same
+    shapes in another order, as robots moving between Spaces leave them, are no change) or a
     static body's transform changes."""
 
-    def __init__(self, space: pymunk.Space, move_into: Callable[..., None] | None = None) -> None:
-        """``move_into``: the compiled mover (compiled.move_into), or None to move with numpy."""
+    def __init__(self, space: "pymunk.Space | Spaces",
+                 move_into: Callable[..., None] | None = None) -> None:
+        """``space``: a pymunk Space, or several as one (:class:`~.spaces.Spaces`);
+        ``move_into``: the compiled mover (compiled.move_into), or None to move with numpy."""
         self.space = space
         self._move_into = move_into
         self._key: tuple[pymunk.Shape, ...] | None = None
@@ -112,6 +116,9 @@ class SceneCache:
         body, so in a world where only robots move that skips the per-cast transform."""
         if not self._framed or self._frame is None:
             key = tuple(self.space.shapes)
+            if key != self._key and self._key is not None and len(key) == len(self._key) \
+                    and set(key) == set(self._key):
+                self._key = key  # the same shapes in another order (robots that changed Space)
             if key != self._key or any(body_transform(b) != tf
                                        for b, tf in self._static_tf.items()):
                 self._build(key)

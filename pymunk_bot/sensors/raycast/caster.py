@@ -21,6 +21,7 @@ from pymunk_bot.sensors.raycast.primitives import World
 from pymunk_bot.sensors.raycast.reference import check_args, endpoints, reference_cast
 from pymunk_bot.sensors.raycast.scene import DENSE_SHAPES, Scene, trace_rings
 from pymunk_bot.sensors.raycast.sides import side_directions, side_lohi, sides_many
+from pymunk_bot.sensors.raycast.spaces import Spaces
 
 # Up to this many rays, pymunk's own segment_query_first per ray costs less than the fast path's
 # fixed cost per cast (measured: the two meet near 40 rays among 20 moving robots).
@@ -58,9 +59,11 @@ class _Job:
 class RayCaster:
     """Casts batches of rays against every shape in a pymunk Space."""
 
-    def __init__(self, space: pymunk.Space, compiled: bool | None = None) -> None:
-        """``compiled``: trace with numba (True), with numpy (False), or numba when it can be
-        imported and PYMUNK_BOT_NUMBA is not 0 (None). Both give pymunk's answers."""
+    def __init__(self, space: "pymunk.Space | Spaces", compiled: bool | None = None) -> None:
+        """``space``: a pymunk Space, or several cast against as one (:class:`~.spaces.Spaces`:
+        a world's robots that step apart); ``compiled``: trace with numba (True), with numpy
+        (False), or numba when it can be imported and PYMUNK_BOT_NUMBA is not 0 (None). Both
+        give pymunk's answers."""
         self.space = space
         self._kernel = _load_kernel(compiled)
         mover: Callable[..., None] | None = None

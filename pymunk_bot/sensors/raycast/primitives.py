@@ -15,6 +15,8 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
+from pymunk_bot.sensors.raycast.spaces import Spaces
+
 # cpvnormalize adds CPFLOAT_MIN (DBL_MIN) to the length; kept for bit-equal normals.
 _DBL_MIN = sys.float_info.min
 # From this many moving bodies, one pymunk.batch read beats reading them one by one.
@@ -54,7 +56,8 @@ def transforms(bodies: list[pymunk.Body]) -> np.ndarray:
 
 
 class BodyReader:
-    """:func:`transforms` of a fixed list of bodies, read in one ``pymunk.batch`` call.
+    """:func:`transforms` of a fixed list of bodies, read in one ``pymunk.batch`` call per
+    Space (``space``: a pymunk Space, or :class:`~.spaces.Spaces`).
 
     The batch gives each body's position (the transform's translation, as ``position``) and
     angle; the rotation is Chipmunk's ``cpvforangle`` of that angle, the C library's cos and
@@ -64,11 +67,12 @@ class BodyReader:
 
     FIELDS = batch.BodyFields.BODY_ID | batch.BodyFields.POSITION | batch.BodyFields.ANGLE
 
-    def __init__(self, space: pymunk.Space, bodies: list[pymunk.Body]) -> None:
-        self.space, self.bodies = space, bodies
+    def __init__(self, space: "pymunk.Space | Spaces", bodies: list[pymunk.Body]) -> None:
+        self.spaces = space.spaces if isinstance(space, Spaces) else (space,)
+        self.bodies = bodies
         self._ids = np.array([b.id for b in bodies], dtype=np.uintp)
-        self._rows: np.ndarray | None = None  # where each body sits in the batch's order
-        self._buffer = batch.Buffer()
+        self._rows: np.ndarray | None = None  # where each body sits in the batches' order
+        self._buffers = [batch.Buffer() for _ in self.spaces]
         self.batched = len(bodies) >= _BATCH_BODIES and all(
             (math.cos(b.angle), math.sin(b.angle)) == tuple(b.rotation_vector) for b in bodies)
 
@@ -76,15 +80,23 @@ class BodyReader:
         """(4, n) cos, sin, tx, ty of the bodies now."""
         if not self.batched:
             return transforms(self.bodies)
-        self._buffer.clear()
-        batch.get_space_bodies(self.space, self.FIELDS, self._buffer)
-        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)
+        ids_read, states = [], []
+        for space, buffer in zip(self.spaces, self._buffers):
+            buffer.clear()
+            batch.get_space_bodies(space, self.FIELDS, buffer)
+            ids_read.append(np.frombuffer(buffer.int_buf(), dtype=np.uintp))
+            states.append(np.frombuffer(buffer.float_buf()).reshape(-1, 3))
+        ids = ids_read[0] if len(ids_read) == 1 else np.concatenate(ids_read)
         rows = self._rows
         if rows is None or rows.shape[0] and (rows.max() >= ids.shape[0]
                                               or not np.array_equal(ids[rows], self._ids)):
-            order = {int(body_id): k for k, body_id in enumerate(ids.tolist())}
-            rows = self._rows = np.array([order[int(i)] for i in self._ids], dtype=np.intp)
-        xya = np.frombuffer(self._buffer.float_buf()).reshape(-1, 3)[rows]
+            # The bodies came, went or changed Space since: find each one again.
+            sorter = np.argsort(ids, kind="stable")
+            at = np.searchsorted(ids, self._ids, sorter=sorter)
+            if (at >= ids.shape[0]).any() or not np.array_equal(ids[sorter[at]], self._ids):
+                raise KeyError("a moving body of the cast scene is in none of its Spaces")
+            rows = self._rows = sorter[at]
+        xya = (states[0] if len(states) == 1 else np.concatenate(states))[rows]
         angles = xya[:, 2].tolist()
         return np.array(([math.cos(a) for a in angles], [math.sin(a) for a in angles],
                          xya[:, 0], xya[:, 1]))

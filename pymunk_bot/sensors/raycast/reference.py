@@ -9,8 +9,13 @@ from __future__ import annotations
 
 import math
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pymunk
+
+if TYPE_CHECKING:
+    from pymunk_bot.sensors.raycast.spaces import Spaces
 
 
 def check_args(origin: tuple[float, float], angles: np.ndarray,
@@ -53,8 +58,8 @@ def endpoints_many(ox: np.ndarray, oy: np.ndarray, ang: np.ndarray,
     return cos, sin, ends
 
 
-def reference_cast(space: pymunk.Space, origin: tuple[float, float], angles: np.ndarray,
-                   max_range: float,
+def reference_cast(space: "pymunk.Space | Spaces", origin: tuple[float, float],
+                   angles: np.ndarray, max_range: float,
                    shape_filter: pymunk.ShapeFilter = pymunk.ShapeFilter()) -> np.ndarray:
     """The ground truth: one ``segment_query_first`` per ray; ``alpha * max_range`` or ``max_range``."""
     ox, oy, ang, rng = check_args(origin, angles, max_range)
