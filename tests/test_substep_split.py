@@ -13,7 +13,7 @@ import pymunk
 import pytest
 
 from bench.fleet import swarm_scenario
-from pymunk_bot.engine import batch
+from pymunk_bot.physics import world as physics_world
 from pymunk_bot.engine.simulation import Simulation
 
 FLEET = 200  # robots
@@ -21,7 +21,7 @@ FLEET = 200  # robots
 
 @pytest.fixture(autouse=True)
 def split_from_fleet(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(batch, "SPLIT_FROM", FLEET)
+    monkeypatch.setattr(physics_world, "SPLIT_FROM", FLEET)
 
 
 def _swarm(**changes: object) -> Simulation:

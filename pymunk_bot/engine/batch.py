@@ -20,7 +20,7 @@ from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.sensors.lidar import Lidar
 from pymunk_bot.sensors.lidar_rows import LidarRows
 from pymunk_bot.physics.substeps import SubstepGate
-from pymunk_bot.physics.apart import SPLIT_FROM, SplitPlanner
+from pymunk_bot.physics.apart import SplitPlanner
 from pymunk_bot.physics.world import World
 
 if TYPE_CHECKING:
@@ -92,10 +92,10 @@ class Batch:
                                     self.substeps, self.dt, ground.take_disturbed, ground.need,
                                     propulsion.fastest_driven, lambda: ground.fixed_version,
                                     before.gate.fixed if before and before.gate else None)
-        # Robots that nothing can reach step apart (large fleets of one run).
+        # Robots that nothing can reach step apart (fleets of SPLIT_FROM robots, in a world
+        # of their own: physics/world.py).
         self.split: SplitPlanner | None = None
-        if (self.gate is not None and not propulsion.copies and ground.can_split
-                and propulsion.n >= SPLIT_FROM):
+        if self.gate is not None and not propulsion.copies and ground.can_split:
             assert ground.apart_space is not None
             self.split = SplitPlanner(ground.apart_space, propulsion.bodies, self.gate.movers,
                                       self.gate.fixed, self.dt)

@@ -24,8 +24,8 @@ of those ticks ends, at their top speeds (or faster, if they go faster now):
   cells the gate built stand; a robot that a teleport put inside a fixed shape (a negative
   distance) stays.
 
-It plans only for fleets of ``SPLIT_FROM`` robots or more, steered as rows
-(``Propulsion.batched``), in a world of its own
+It plans only for fleets of ``SPLIT_FROM`` robots or more (physics/world.py: only their
+worlds have a Space apart), in a world of its own
 (copies of a scenario share one Space), and only while nobody holds the world's Space
 (``World.space``): a crowd, a metric that queries the world, or a user's code that asks for
 the Space bring every robot back for the rest of the run, so whatever looks at the world sees
@@ -47,12 +47,6 @@ from pymunk_bot.physics.substeps import (MARGIN, Mover, motions, near_pairs, ori
 from pymunk_bot.physics.world import World
 
 PLAN_TICKS = 4  # ticks between two decisions
-# Fleets smaller than this step in one Space: below it, deciding and the second Space's step
-# cost about what the substeps they save do (the swarm of benchmarks/fleet.py, 6 s from 0.5 s,
-# CPU time, one run: 1000 robots 12.42x real time apart against 12.45x in one Space, 2000
-# robots 5.97x against 4.54x, 5000 robots 2.05x against 1.21x; 100 robots, 3 s: 82x against
-# 109x).
-SPLIT_FROM = 2000
 
 
 class SplitPlanner:
