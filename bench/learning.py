@@ -130,18 +130,24 @@ def vector_vs_separate(num_envs: int = 16, steps: int = 10, repeats: int = 25,
             statistics.median(ratios))
 
 
-def vector_rate(num_envs: int = 16, steps: int = 50, repeats: int = 15) -> float:
+def vector_rate(num_envs: int = 16, steps: int = 50, repeats: int = 15,
+                episode: float | None = None) -> float:
     """Env steps per CPU second of the native vector env with a new uniform random action
     every step, stepped on its own as a training loop steps it (the median of ``repeats``
     blocks of ``steps`` steps, after a warm-up block). ``vector_vs_separate`` interleaves
     blocks of 16 single envs, whose cache traffic slows the vector env's blocks by ~8 %: right
-    for their ratio, not for the rate a user sees."""
+    for their ratio, not for the rate a user sees. ``episode``: episodes of that many seconds
+    [s] (each copy then resets every ``episode`` x 10 steps, its resets timed too), else
+    an hour (no reset)."""
     import gymnasium as gym
 
     import pymunk_bot.envs  # noqa: F401
 
+    kwargs = _env_kwargs()
+    if episode is not None:
+        kwargs["max_episode_time"] = episode
     vec = gym.make_vec("pymunk_bot/Navigation-v0", num_envs=num_envs,
-                       vectorization_mode="vector_entry_point", **_env_kwargs())
+                       vectorization_mode="vector_entry_point", **kwargs)
     vec.reset(seed=0)
     draw = np.random.default_rng(0)
     rates = []
@@ -214,6 +220,7 @@ VECTOR_TARGET = 2.0  # issue 12: 16 envs as one vector env >= 2x 16 separate env
 # of it (below ENV_TARGET: the ratio above is the stricter demand) and 10,000 is VECTOR_RATE_RATIO.
 BARE_RATE_HERE = 1_470.0  # [env steps per CPU second]
 VECTOR_RATE_RATIO = 10_000.0 / BARE_RATE_HERE  # the vector env's rate / the bare loop's, at least
+SHORT_EPISODE = 5.0  # [s] episodes that end while a training loop runs: resets timed too
 SCALING_TARGET = 1.8  # issue 23: the process sweep on 2 workers against serial
 # Runs of the scaling sweep (about a minute serial): starting a worker costs about 1 s (0.6 s
 # of imports, 0.3 s for numba to load its compiled code), which a short sweep cannot amortise
@@ -252,6 +259,11 @@ def run(quick: bool = False) -> dict:
           f"{results['vector_16_random_rate']:8.0f} env steps/s, "
           f"{results['vector_16_random_rate_ratio']:.2f}x the bare loop's (target >= "
           f"{VECTOR_RATE_RATIO:.2f}x)")
+    results["vector_16_short_episodes_rate"] = vector_rate(repeats=5 if quick else 15,
+                                                           episode=SHORT_EPISODE)
+    print(f"  the same with {SHORT_EPISODE:g} s episodes (each copy reset every "
+          f"{round(10 * SHORT_EPISODE)} steps): "
+          f"{results['vector_16_short_episodes_rate']:8.0f} env steps/s")
     print(f"Sweep of {60 if quick else 200} runs (2 s simulated each), 2 workers "
           "(wall times include starting the workers)")
     sweep = sweep_backends(60 if quick else 200)
