@@ -94,12 +94,14 @@ class SceneCache:
         self.space = space
         self._move_into = move_into
         self._key: tuple[pymunk.Shape, ...] | None = None
+        self._static_shapes: list[pymunk.Shape] | None = None  # those the static tables hold
+        self._static_tf: dict[pymunk.Body, tuple[float, float, float, float]] = {}
         self._framed = False  # True once frames are used: the scene is frozen between them
         self._frame: _Frame | None = None  # this frame's scene, built on demand
         self._last_tf: np.ndarray | None = None  # moving bodies' transforms when last read
 
     def invalidate(self) -> None:
-        self._key = None
+        self._key = self._static_shapes = None
         self._frame = None
 
     def begin_frame(self) -> None:
@@ -119,8 +121,7 @@ class SceneCache:
             if key != self._key and self._key is not None and len(key) == len(self._key) \
                     and set(key) == set(self._key):
                 self._key = key  # the same shapes in another order (robots that changed Space)
-            if key != self._key or any(body_transform(b) != tf
-                                       for b, tf in self._static_tf.items()):
+            if key != self._key or self._static_moved():
                 self._build(key)
             self._frame = _Frame()
         keep, n_keep, static_keep, n_static_keep = self._admitted_for(f)
@@ -214,23 +215,8 @@ class SceneCache:
         self._admitted: dict[pymunk.ShapeFilter,
                              tuple[np.ndarray, int, np.ndarray | None, int]] = {}
 
-        collect = Collector()
-        for i, s in enumerate(static):
-            collect.add(s, i)
-        rows, owner, counts, bound = collect.tables()
-        self._static_tf = {b: body_transform(b)
-                           for b in {id(_body(s)): _body(s) for s in static}.values()}
-        tf = np.array([self._static_tf[_body(s)] for s in static]).reshape(-1, 4).T
-        rows, bound = moved(rows, bound, tf, owner, np.arange(len(static)))
-        static_world = World(rows, owner, counts, bound)
-        box = bounding_boxes(static_world)
-        self.static_boxes = box  # (4, n_static) l, b, r, t [m]
-        self._static = corner_flags(static_world, box)
-        # Sorted coordinates of the static boxes' vertical and horizontal side lines.
-        finite = np.isfinite(box).all(axis=0)
-        self.side_x: list[float] = np.unique(box[[0, 2]][:, finite]).tolist()
-        self.side_y: list[float] = np.unique(box[[1, 3]][:, finite]).tolist()
-        self.side_lines = (np.array(self.side_x), np.array(self.side_y))  # the same, as arrays
+        if static != self._static_shapes or self._static_moved():
+            self._build_static(static)  # else the same fixed shapes where they were: kept
 
         collect = Collector()
         for i, s in enumerate(dynamic):
@@ -258,6 +244,33 @@ class SceneCache:
         self._seen: dict[int, tuple[np.ndarray, np.ndarray, int]] = {}
         self._last_tf = None  # moving bodies' transforms when last read
         self._key = key
+
+    def _static_moved(self) -> bool:
+        """Whether a static body has moved since the static tables were built."""
+        return any(body_transform(b) != tf for b, tf in self._static_tf.items())
+
+    def _build_static(self, static: list[pymunk.Shape]) -> None:
+        """The static shapes' tables in world coordinates, their bounding boxes, corner flags
+        and side lines (built again only when a static shape comes, goes or moves: a copy of
+        a scenario rebuilt among others changes moving shapes alone)."""
+        collect = Collector()
+        for i, s in enumerate(static):
+            collect.add(s, i)
+        rows, owner, counts, bound = collect.tables()
+        self._static_tf = {b: body_transform(b)
+                           for b in {id(_body(s)): _body(s) for s in static}.values()}
+        tf = np.array([self._static_tf[_body(s)] for s in static]).reshape(-1, 4).T
+        rows, bound = moved(rows, bound, tf, owner, np.arange(len(static)))
+        static_world = World(rows, owner, counts, bound)
+        box = bounding_boxes(static_world)
+        self.static_boxes = box  # (4, n_static) l, b, r, t [m]
+        self._static = corner_flags(static_world, box)
+        # Sorted coordinates of the static boxes' vertical and horizontal side lines.
+        finite = np.isfinite(box).all(axis=0)
+        self.side_x: list[float] = np.unique(box[[0, 2]][:, finite]).tolist()
+        self.side_y: list[float] = np.unique(box[[1, 3]][:, finite]).tolist()
+        self.side_lines = (np.array(self.side_x), np.array(self.side_y))  # the same, as arrays
+        self._static_shapes = static
 
     def _admitted_for(self, f: pymunk.ShapeFilter) -> tuple[np.ndarray, int, np.ndarray | None, int]:
         """Shapes the query filter does not reject (cpShapeFilterReject, negated) and their
