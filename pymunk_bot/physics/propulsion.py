@@ -240,13 +240,6 @@ class Propulsion:
         if apart.any():
             self.apart_space.step(dt)
 
-    def _gather(self, twists_of: Any) -> Twists:
-        """(ux, uy, omega) of every robot, each group's from ``twists_of(group)``."""
-        ux, uy, omega = np.empty(self.n), np.empty(self.n), np.empty(self.n)
-        for group, idx in self.groups:
-            ux[idx], uy[idx], omega[idx] = twists_of(group)
-        return ux, uy, omega
-
     def adopt(self, previous: "Propulsion") -> None:
         """Take over what ``previous`` knew of the bodies both steer (the twists held, the
         anchors off centre), as a fleet of copies rebuilds its Propulsion after one copy's

@@ -261,8 +261,8 @@ class World:
 
     def ray_caster(self) -> Any:
         """The world's shared :class:`~pymunk_bot.sensors.raycast.RayCaster` (made on first use:
-        only worlds with a LiDAR pay for its geometry tables; one per space). It casts against
-        both Spaces, so robots may still step apart: from then on their shapes go with them."""
+        only worlds with a LiDAR pay for its geometry tables; one per space). Where robots may
+        step apart it casts against both Spaces, and from then on their shapes go with them."""
         ground = getattr(self, "_ground", None)
         if ground is not None:
             return ground.ray_caster()

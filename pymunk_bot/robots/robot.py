@@ -44,7 +44,8 @@ class RobotsByName(dict):
 class Fleet:
     """Every robot's per-tick bookkeeping: distance, goal, contact episodes, as arrays indexed
     by robot, advanced by compiled passes (``robots/progress.py``) however many; and who
-    drives each (``by_hand``, ``observes``: the simulation asks controllers by these rows)."""
+    drives each (``by_hand``, ``observes``, ``constant``, ``holds_constant``: the simulation
+    asks controllers by these rows)."""
 
     ROWS = ("xy", "distance", "collisions", "goal", "tolerance", "time_to_goal",
             "distance_to_goal")
