@@ -9,7 +9,6 @@ phase methods (``act``, ``tick_clock``, ``bookkeep``, ``due_lidars``, ``read``, 
 """
 from __future__ import annotations
 
-import math
 import time as wallclock
 from typing import TYPE_CHECKING, Any, Protocol, Sequence
 
@@ -71,7 +70,7 @@ class Batch:
         self._only = self.runs[0] if self._count == 1 and stack is None else None
         first = self.runs[0]
         self.dt, self.substeps = first.dt, first.substeps
-        self._substep = math.nan  # [s] the substep the worlds were last told of
+        self._following = 0  # the substep count the worlds were last told of (0: none yet)
         # Which runs have work before and after the physics: a tick skips the rest.
         self.acting = tuple(run for run in self.runs if run.acts)
         self.reading = tuple(run for run in self.runs if run.reads)
@@ -100,6 +99,11 @@ class Batch:
             self.split = SplitPlanner(ground.apart_space, propulsion.bodies, self.gate.movers,
                                       self.gate.fixed, self.dt)
             propulsion.step_apart_in(ground.apart_space)
+        # Phase 2, chosen once: a named substep count, substeps where contacts can start, or
+        # those and robots stepping apart.
+        self._step_physics = (self._physics_every_substep if self.gate is None
+                              else self._physics_apart if self.split is not None
+                              else self._physics)
 
     @property
     def single_substep_ticks(self) -> int:
@@ -128,7 +132,7 @@ class Batch:
         started = wallclock.perf_counter()
         for run in self.acting:
             run.act()
-        self._physics()
+        self._step_physics()
         nows = [self._only.bookkeep()] if self._only is not None else self._bookkeep()
         if self.lidars is not None:
             assert self.caster is not None
@@ -140,32 +144,42 @@ class Batch:
         for run in self.runs:
             run.finish(share)
 
+    def _physics_every_substep(self) -> None:
+        """Phase 2 with a named substep count: the drives and pymunk, every substep."""
+        self.propulsion.step(self.dt / self.substeps, self.substeps)
+
     def _physics(self) -> None:
-        """Phase 2: the drives and pymunk, with as many substeps as contacts need."""
+        """Phase 2: the drives and pymunk, with as many substeps as contacts need (one pymunk
+        step where no contact can start: physics/substeps.py)."""
+        assert self.gate is not None
+        substeps, following = self.gate.counts()
+        dt = self.dt
+        self.propulsion.step(dt / substeps, substeps, dt / following)
+        if following != self._following:
+            self._substep_after(following)
+
+    def _physics_apart(self) -> None:
+        """Phase 2 where robots may step apart (physics/apart.py): the robots nothing can
+        reach take one step of the tick in a Space of their own."""
         gate, split, propulsion, dt = self.gate, self.split, self.propulsion, self.dt
-        if gate is None:
-            propulsion.step(dt / self.substeps, self.substeps)
+        assert gate is not None and split is not None
+        world = self.runs[0].world
+        if split.apart.any() and split.layout != world.layout:
+            split.reset()  # someone gathered the robots (asked for the world's Space)
+        if not world.can_split:
+            self._physics()
             return
-        if split is not None:  # physics/apart.py
-            world = self.runs[0].world
-            if split.apart.any() and split.layout != world.layout:
-                split.reset()  # someone gathered the robots (asked for the world's Space)
-            if world.can_split:
-                disturbed = world.take_disturbed()
-                if disturbed:  # a teleport: every robot back, decided anew
-                    split.settle(world, propulsion, np.zeros(split.n, dtype=bool))
-                    split.reset(disturbed=True)
-                apart, following_apart = split.apart, split.next_apart(propulsion)
-                substeps, following = gate.counts_apart(
-                    disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
-                propulsion.step(dt / substeps, substeps, dt / following,
-                                (apart, following_apart))
-                split.settle(world, propulsion, following_apart)
-                self._substep_after(dt / following)
-                return
-        substeps, following = gate.counts()  # one pymunk step where no contact can start
-        propulsion.step(dt / substeps, substeps, dt / following)  # (physics/substeps.py)
-        self._substep_after(dt / following)
+        disturbed = world.take_disturbed()
+        if disturbed:  # a teleport: every robot back, decided anew
+            split.settle(world, propulsion, np.zeros(split.n, dtype=bool))
+            split.reset(disturbed=True)
+        apart, following_apart = split.apart, split.next_apart(propulsion)
+        substeps, following = gate.counts_apart(
+            disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
+        propulsion.step(dt / substeps, substeps, dt / following, (apart, following_apart))
+        split.settle(world, propulsion, following_apart)
+        if following != self._following:
+            self._substep_after(following)
 
     def _scan(self, nows: list[float]) -> None:
         """Phase 4's LiDARs: every one due, of every run, in one cast (``nows``: each run's
@@ -181,13 +195,12 @@ class Batch:
             assert self.caster is not None and self.lidars is not None
             self.lidars.scan(self.caster, due, times, self.propulsion.pose_array)
 
-    def _substep_after(self, substep: float) -> None:
+    def _substep_after(self, following: int) -> None:
         """Every run's world learns the substep [s] the bodies' velocities now move in (for
-        the IMUs), when it changed."""
-        if substep != self._substep:
-            self._substep = substep
-            for run in self.runs:
-                run.world.substep = substep
+        the IMUs): the tick's over ``following``, the next tick's substep count."""
+        self._following = following
+        for run in self.runs:
+            run.world.substep = self.dt / following
 
     def _bookkeep(self) -> list[float]:
         """Phase 3: every run's clock, then distance, goals and odometry; the runs' times [s]."""
