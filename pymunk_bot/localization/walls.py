@@ -10,8 +10,10 @@ A long straight wall's *direction* is the same from wherever it is seen. So:
 
 - :func:`long_walls` extracts the straight lines at least MIN_WALL_LENGTH long from one scan
   (robot frame): local line fits (icp.Reference.surfaces) grouped by direction and offset,
-  each group refitted by total least squares over its raw end points, with the variance of
-  the fitted direction (inflated for correlated beams, as the ICP's per-point variance).
+  each group split where its end points leave a gap wider than MAX_WALL_GAP along it (a row
+  of racks is not a wall, nor are a doorway's two sides one) and each part refitted by total
+  least squares over its raw end points, with the variance of the fitted direction (inflated
+  for correlated beams, as the ICP's per-point variance).
 - :class:`WallLandmarks` keeps each wall as a landmark: a wall *segment* (its ends as the
   keyframe that first saw it saw them) with a direction in the world. A later keyframe's wall
   is that landmark's observation only when it lies on the segment's line and overlaps the
@@ -54,6 +56,12 @@ MIN_WALL_POINTS = 10  # end points on a wall, at least
 # warehouse map's bend 0.5-0.7 deg between parts), and consecutive scans see the same stones.
 MIN_DIRECTION_STD = math.radians(0.1)
 MAX_WALL_STD = math.radians(1.0)  # [rad] a wall whose direction is less sure is not used
+# [m] end points farther apart than this along a line are two surfaces, not one wall: the
+# Nav2 depot's rows of racks (faces 1.3 m wide, 1.5-1.7 m apart, in line within a cell) fitted
+# as one wall had a direction that depended on which racks were in view, and the south wall
+# is cut where a pillar stands out of it, between its parts 0.88 deg apart
+# (docs/localization.md, "SLAM: why the walls pulled the depot's headings").
+MAX_WALL_GAP = 0.5
 SAME_WALL_DISTANCE = 0.3  # [m] a wall is a landmark's when both its ends lie this near its line
 MIN_OVERLAP = 0.5  # [m] ... its extent overlaps the landmark's segment by this much
 SAME_WALL_GATE = math.radians(5.0)  # [rad] ... and its direction is within this of the landmark's
@@ -144,20 +152,39 @@ def _walls_along(points: np.ndarray, centres: np.ndarray, along: np.ndarray,
         on = (np.abs(points @ across - line) <= OFFSET_TOLERANCE) & (t >= s.min()) & (t <= s.max())
         if np.count_nonzero(on) < MIN_WALL_POINTS:
             continue
-        wall = points[on]
-        centred = wall - wall.mean(axis=0)
-        values, vectors = np.linalg.eigh(centred.T @ centred / wall.shape[0])
-        spread_across, spread_along = float(values[0]), float(values[1])
-        if spread_along < (MIN_WALL_LENGTH / 4.0) ** 2:  # a few points, not a wall's length
-            continue
-        # total least squares: var(direction) = var(across) / sum of squared spreads along
-        variance = POINT_CORRELATION * spread_across / (wall.shape[0] * spread_along)
-        direction = float(np.mod(math.atan2(vectors[1, 1], vectors[0, 1]), np.pi))
-        t = centred @ vectors[:, 1]
-        ends = wall.mean(axis=0) + np.outer([t.min(), t.max()], vectors[:, 1])
-        found.append(Wall(direction, max(variance, MIN_DIRECTION_STD ** 2),
-                          float(t.max() - t.min()), ends))
+        for run in _runs(points[on], along):
+            wall = _fitted(run)
+            if wall is not None:
+                found.append(wall)
     return found
+
+
+def _runs(points: np.ndarray, along: np.ndarray) -> list[np.ndarray]:
+    """``points`` on one line split where none lies within MAX_WALL_GAP of the next along it
+    (``along``: the line's direction): surfaces apart, not one wall."""
+    order = np.argsort(points @ along)
+    splits = np.flatnonzero(np.diff(points[order] @ along) > MAX_WALL_GAP) + 1
+    return [points[part] for part in np.split(order, splits)]
+
+
+def _fitted(wall: np.ndarray) -> Wall | None:
+    """The wall through end points ``wall`` (m, 2) by total least squares, if they are enough
+    and span a wall's length."""
+    if wall.shape[0] < MIN_WALL_POINTS:
+        return None
+    centred = wall - wall.mean(axis=0)
+    values, vectors = np.linalg.eigh(centred.T @ centred / wall.shape[0])
+    spread_across, spread_along = float(values[0]), float(values[1])
+    if spread_along < (MIN_WALL_LENGTH / 4.0) ** 2:  # a few points, not a wall's length
+        return None
+    t = centred @ vectors[:, 1]
+    if t.max() - t.min() < MIN_WALL_LENGTH:  # a run cut off by a gap
+        return None
+    # total least squares: var(direction) = var(across) / sum of squared spreads along
+    variance = POINT_CORRELATION * spread_across / (wall.shape[0] * spread_along)
+    direction = float(np.mod(math.atan2(vectors[1, 1], vectors[0, 1]), np.pi))
+    ends = wall.mean(axis=0) + np.outer([t.min(), t.max()], vectors[:, 1])
+    return Wall(direction, max(variance, MIN_DIRECTION_STD ** 2), float(t.max() - t.min()), ends)
 
 
 class WallLandmarks:
