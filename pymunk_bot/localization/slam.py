@@ -20,8 +20,9 @@
   (Cauchy's kernel of scale ``loop_kernel``, posegraph.py): a wrong one the rest of the graph
   contradicts weighs next to nothing. ``closures`` records each accepted one,
   ``closures_rejected`` counts candidates that failed verification.
-- **Walls** (``wall_landmarks``, opt-in, walls.py). Each keyframe's long straight walls are
-  observations of wall landmarks (a segment seen overlapping, not any parallel wall); each is
+- **Walls** (``wall_landmarks``, on by default, walls.py). Each keyframe's long straight walls
+  (unbroken by gaps) are observations of wall landmarks (a segment seen overlapping, not any
+  parallel wall); each is
   a factor between the keyframe's heading and the landmark's direction in the graph, so every
   keyframe that sees a wall refines its direction and holds the others' headings to it.
 - **Back end.** After a loop closure the graph is optimized (posegraph.py, sparse Gauss-Newton),

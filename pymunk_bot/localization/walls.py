@@ -26,14 +26,16 @@ A long straight wall's *direction* is the same from wherever it is seen. So:
   good to only 0.1-1 deg, every fix from an anchor shares its error, and the fixes jittered
   the submap the next match used.)
 
-Opt-in (``SlamConfig.wall_landmarks``). Measured with the robustness benchmark (every
-``slam_revisit`` row, 20 seeds): warehouse typical 18 -> 19 of 20 within 5 cm, office
-uncalibrated 16 -> 17, no row worse; but on the Nav2 depot map, which it was not built on, 9
-of its 10 typical tours ended farther off (median ATE 1.65 -> 2.25 cm), so it is not the
-default until that is understood. A wall's direction, as a scan fits it, moves by tenths
-of a degree as the robot passes along it, an error its observations share, so each weighs
-as 1 in WALL_VARIANCE_SCALE and the graph takes them in only at its optimizations after loop
-closures (docs/localization.md, "SLAM: walls as graph landmarks").
+On by default (``SlamConfig.wall_landmarks``). Measured with the robustness benchmark (every
+``slam_revisit`` row; docs/localization.md, "SLAM: walls as graph landmarks" and "SLAM: why
+the walls pulled the depot's headings"). On the Nav2 depot map, which they were not built
+on, the first walls made 9 of 10 typical tours end farther off (median ATE 1.65 -> 2.25 cm):
+rows of racks fitted as one wall whose direction depended on the racks in view, and the south
+wall held to one direction across a part the map draws 0.88 deg off the rest. With walls split
+at gaps the depot's medians are the walls-off ones or lower and no row has fewer runs within
+5 cm. A wall's direction, as a scan fits it, moves by tenths of a degree as the robot passes
+along it, an error its observations share, so each weighs as 1 in WALL_VARIANCE_SCALE and the
+graph takes them in only at its optimizations after loop closures.
 """
 from __future__ import annotations
 

@@ -162,8 +162,8 @@ def test_a_forged_closure_does_not_bend_the_map(office_loop):
     "issue 36: the front end's heading drift on the outbound leg is shared by the way back, "
     "which no closure can see; main passed (3.5 cm) only while navigate placed scans with a "
     "later pose and its detour's own drift cancelled it (outbound leg replaced by the truth: "
-    "8.98 cm); with each scan placed at its time, ATE 9.9 cm (with the opt-in wall landmarks "
-    "9.4 cm) (docs/localization.md)"))
+    "8.98 cm); with each scan placed at its time, ATE 9.9 cm without the wall landmarks, "
+    "11.2 cm with them (the default) (docs/localization.md)"))
 def test_a_warehouse_tour_that_comes_back_closes_its_loop_and_undoes_the_drift():
     # Nav2's warehouse, there and back (seed 2: 180 beams, 5 m range, 2.5 cm noise, 5 Hz; its
     # heading random-walks along the aisle). Without closures its keyframes end 12 cm off.
@@ -196,7 +196,7 @@ def test_a_closure_moves_the_keyframes_instead_of_bending_their_headings():
     # (instrumented: bench.slam_heading_probe), so the one closure at the end bent ~180
     # keyframes' headings a little each, and the middle of the tour ended 10-15 cm off (ATE
     # 7.2 cm). With a floor of 0.06 deg the closure moves them instead: ATE 4.1 cm (4.6 cm
-    # at cbc4e6b; 5.0 cm with the opt-in wall landmarks, docs/localization.md).
+    # at cbc4e6b without the wall landmarks; 4.4 cm with them, the default since walls3).
     out = run_one("slam_revisit", "warehouse", "uncalibrated", 3)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")
@@ -210,7 +210,8 @@ def test_chain_edges_state_the_scan_matches_own_certainty_in_a_warehouse():
     # were 2 mm along and 1.7 mm across the aisles (RMS), their matches' stated std 3.5 and
     # 2.6 mm; the 1 cm edge floor made each edge 1 cm sure every way, and the one closure
     # spread its correction over the positions as much as the headings: ATE 5.8 cm, map
-    # precision 0.912. With a 3 mm floor: ATE 4.6 cm, precision 0.921.
+    # precision 0.912. With a 3 mm floor: ATE 4.6 cm, precision 0.921 (2.5 cm with the wall
+    # landmarks, the default since walls3: test_wall_landmarks.py).
     out = run_one("slam_revisit", "warehouse", "typical", 12)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")

@@ -111,16 +111,17 @@ def test_walls_as_landmarks_hold_the_heading_the_chain_drifts():
 
 
 @pytest.mark.slow
-def test_walls_bring_a_warehouse_tour_that_drifted_within_5_cm():
-    # Nav2's warehouse, a loop around a shelf (seed 16: 180 beams, 5 m, 2.5 cm noise, typical
-    # odometry): with its one loop closure alone the keyframes end at ATE 5.6 cm; with the
-    # walls in the graph, 4.5 cm.
-    out = run_one("slam_revisit", "warehouse", "typical", 16, {"wall_landmarks": True})
+def test_walls_take_half_the_drift_out_of_a_warehouse_tour():
+    # Nav2's warehouse, a loop around a shelf (seed 12: typical odometry; the chain-floor test's
+    # tour in test_loop_closure.py): with its loop closure alone the keyframes end at ATE 4.6
+    # cm; with the walls in the graph (the default), 2.5 cm.
+    out = run_one("slam_revisit", "warehouse", "typical", 12)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")
-    without = run_one("slam_revisit", "warehouse", "typical", 16)  # the default: no walls
-    assert out.success and out.ate <= 0.05, out.line()
-    assert without.ate > 0.05, without.line()
+    without = run_one("slam_revisit", "warehouse", "typical", 12, {"wall_landmarks": False})
+    assert out.success and out.ate <= 0.035, out.line()
+    assert without.ate >= 0.04, without.line()
+
 
 def _scan_of_segments(segments: list[tuple[float, float, float, float]], beams: int = 360,
                       max_range: float = 8.0, noise: float = 0.01,
