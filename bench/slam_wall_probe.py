@@ -166,16 +166,16 @@ def _without(landmarks, *dropped: int):
     """A copy of ``landmarks`` (walls.WallLandmarks) with the landmarks ``dropped`` unseen."""
     out = copy.deepcopy(landmarks)
     keep = [i for i, l in enumerate(out._landmark) if l not in dropped]
-    for name in ("_node", "_landmark", "_direction", "_variance", "_extent"):
+    for name in ("_node", "_landmark", "_direction", "_variance"):
         setattr(out, name, [getattr(out, name)[i] for i in keep])
     for l in dropped:
         out._keyframes[l] = set()
     return out
 
 
-# The wall models the final graph is optimized again with (walls.py's constants).
-VARIANTS = {"one_direction": {"STRETCH_LENGTH": 1e9, "STRETCH_STD": math.radians(1e-3)},
-            "stretches": {}}
+# The wall models the final graph is optimized again with: walls.py's constants that its
+# factors read (WALL_VARIANCE_SCALE, WALL_KERNEL), as each variant sets them.
+VARIANTS: dict[str, dict[str, float]] = {"walls": {}, "variance_x20": {"WALL_VARIANCE_SCALE": 20.0}}
 
 
 def offline(family: str, profile: str, seed: int) -> dict:
