@@ -17,7 +17,9 @@ with margins far above rounding, so the choice never changes a result.
 How it is fast: shapes the filter rejects are dropped, back-facing polygon edges are
 dropped by Chipmunk's own plane test, shapes out of range by their bounding circles, and
 each primitive meets only the rays inside the angle it subtends (the rays are sorted by
-angle, so that is an index range). The loop over primitives and their rays is compiled with
+angle, so that is an index range); once every ray of a cast has hit something, the compiled
+tracer passes over primitives whose shapes lie beyond its farthest hit, and each ray over
+those beyond its own. The loop over primitives and their rays is compiled with
 numba (``compiled``); without numba, numpy does the same work in arrays, tracing dense
 scenes in rings of growing distance so rays already stopped nearby skip far shapes. Static
 geometry is cached in world coordinates; moving bodies are moved once per frame, and a

@@ -22,6 +22,7 @@ _TWO_PI = 2.0 * math.pi
 _PARALLEL_EPS = 10e-6  # as kernels._PARALLEL_EPS (Chipmunk's 10e-6)
 _EDGE_MARGIN = 1e-7  # as scene._EDGE_MARGIN
 _EDGE_NEAR = 1e-5  # as scene.EDGE_NEAR
+LOOK_AGAIN = 32  # primitives traced between two looks at the farthest hit (once every ray hit)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -218,15 +219,32 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
         if d >= 0.0 and d <= near_plane and not _rejects(shape_filters, owner[j], group,
                                                           categories, mask):
             on_plane = True
+    # Once every ray has hit something, a primitive whose shape lies farther than the
+    # farthest hit cannot lower any ray's alpha: it is passed over (the farthest hit is
+    # looked at again every LOOK_AGAIN primitives traced), and so is a ray already nearer.
+    unhit = 0
+    for i in range(n):
+        if best[i] >= 1.0:
+            unhit += 1
+    farthest = 1.0  # [alpha] at least the farthest any ray still reaches
+    traced = 0
     for j in range(m):
         if j < ne and not d_edge[j] >= 0.0:
             continue
         o = owner[j]  # no ray reaches a shape whose bounding circle is out of range
         cx, cy, reach = bound[0, o] - ox, bound[1, o] - oy, rng + bound[2, o] + slack
-        if cx * cx + cy * cy > reach * reach or _rejects(shape_filters, o, group, categories,
-                                                          mask):
+        d2 = cx * cx + cy * cy
+        if d2 > reach * reach or _rejects(shape_filters, o, group, categories, mask):
             continue
         kind = 0 if j < ne else (1 if j < ne + nf else (2 if j < ne + nf + nc else 3))
+        least = -1.0  # [alpha] the least a hit on the shape can have (-1: not known)
+        if unhit == 0 and kind != 1:  # (flags, within rounding of their shape, are kept)
+            least = (math.sqrt(d2) - bound[2, o] - slack) / rng
+            traced += 1
+            if traced % LOOK_AGAIN == 0:
+                farthest = best.max()
+            if least > farthest:
+                continue
         ax, ay = rows[AX, j] - ox, rows[AY, j] - oy
         bx, by = rows[BX, j] - ox, rows[BY, j] - oy
         if kind == 3 and ax * by - ay * bx < 0.0:  # segments: A to B counter-clockwise
@@ -254,6 +272,8 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
             first, stop = _ray_range(lo, lo + (span + 2.0 * half), st, t0, inv, err)
         for e in range(first, stop):
             ray = order[e % n]
+            if best[ray] < least:  # it has hit something nearer than the shape can be
+                continue
             bx_, by_ = ends[0, ray], ends[1, ray]
             if kind == 0:  # cpPolyShapeSegmentQuery's plane
                 nx, ny = rows[NX, j], rows[NY, j]
@@ -267,6 +287,7 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
                 one_t = 1.0 - t
                 dt = nx * (oy * one_t + by_ * t) - ny * (ox * one_t + bx_ * t)
                 if rows[DTMIN, j] <= dt and dt <= rows[DTMAX, j] and t < best[ray]:
+                    unhit -= best[ray] >= 1.0
                     best[ray] = t
             elif kind == 1:  # near a box corner lying on its shape: pymunk decides
                 flagged[n_flagged] = ray
@@ -275,10 +296,12 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
                 cx, cy = rows[AX, j], rows[AY, j]
                 t = _circle_alpha(ox - cx, oy - cy, bx_ - cx, by_ - cy, rows[RAD, j])
                 if t < best[ray]:
+                    unhit -= best[ray] >= 1.0
                     best[ray] = t
             else:
                 t = _segment_alpha(rows, j, ox, oy, bx_, by_)
                 if t < best[ray]:
+                    unhit -= best[ray] >= 1.0
                     best[ray] = t
         if n_flagged > flagged.shape[0] - 3 * n:
             return -1  # no room for another primitive's rays: the caller asks pymunk
