@@ -65,12 +65,11 @@ class Propulsion:
         self.apart_space: pymunk.Space | None = None  # where robots step apart, once they may
         self.bodies, self.controls = list(bodies), list(controls)
         self.copies = copies
-        self.groups = [(g, np.asarray(idx, dtype=np.intp)) for g, idx in groups]
         # What is advanced: each group, or each stacked group with the first row of each
         # copy's part (``stacked`` gives (group, robot indices, part starts)).
         self._drives = ([DriveUnits(g, list(idx), np.asarray(starts, dtype=np.intp))
                          for g, idx, starts in stacked] if stacked
-                        else [DriveUnits(g, idx.tolist(), None) for g, idx in self.groups])
+                        else [DriveUnits(g, [int(i) for i in idx], None) for g, idx in groups])
         self.n = len(self.bodies)
         self.pivots = [next(c for c in control.constraints if isinstance(c, pymunk.PivotJoint))
                        for control in self.controls]

@@ -189,7 +189,6 @@ class Robot:
         self.__dict__.clear()
         self.name = name
         self._fleet, self._i = fleet, index
-        fleet.by_hand[index] = False
         self._drive_group, self._di = drive_group, drive_index
         self.sensors: list = []  # everything with update(time), in the order they read
         self._fitted: dict[str, Any] = {}  # "lidar", "imu", "bumper" -> the sensor
