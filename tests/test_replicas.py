@@ -259,3 +259,36 @@ def test_a_copy_rebuilt_among_others_still_stops_at_the_arena_wall():
         for sim in copies.sims:
             x = sim.robots["r1"].pose[0]
             assert 10.0 - radius - 0.05 < x < 10.0 - radius + 0.01  # at the wall, not through it
+
+
+def _fields(sim: Simulation) -> list[np.ndarray]:
+    """Every per-robot field of a copy's groups (their ``ROWS``, and their encoders')."""
+    built = sim.built
+    groups = [built.fleet] + [g for g, _ in built.drive_groups + built.odometry_groups]
+    groups += [g.encoders for g, _ in built.odometry_groups]
+    return [getattr(g, name) for g in groups for name in type(g).ROWS]
+
+
+def test_every_copy_holds_its_rows_in_the_shared_arrays_from_birth_and_a_reset_rebinds_none():
+    """Copies are built on rows they share (robots/rows.py): each copy's per-robot fields are
+    its block of one array per field from the start; a copy rebuilt writes its fresh state into
+    the same block, and no other copy's arrays, nor the stack's, move."""
+    config = _two_robot_fleet()
+    copies = Replicas(config, [5, 6, 7])
+    stack = copies._stack
+    assert stack is not None
+    before = [[f.ctypes.data for f in _fields(sim)] for sim in copies.sims]
+    whole = stack.fleet.distance
+    for sim in copies.sims:
+        for field in _fields(sim):
+            assert field.base is not None and not field.flags.owndata  # a view, from birth
+    for sim in copies.sims:
+        sim.robots["a"].set_velocity(0.5, 0.2)
+    for _ in range(60):
+        copies.step()
+    assert copies.sims[1].robots["a"].distance > 0.3
+    copies.reset(1, seed=9)
+    assert copies.sims[1].robots["a"].distance == 0.0  # fresh rows, written in place
+    assert [[f.ctypes.data for f in _fields(sim)] for sim in copies.sims] == before
+    assert copies._stack is not None and copies._stack.fleet.distance is whole
+    assert whole[2:4].tolist() == [0.0, 0.0]  # copy 1's rows of the whole, fresh too

@@ -1,7 +1,6 @@
 """Compiled passes given their arrays by address (physics/row_table.py): the table checks what
-it is given, follows stacking when it rebinds fields, and the passes built on it (a
-differential drive's coast and hold, the bookkeeping after the physics) give the very floats
-that the components' own calls give."""
+it is given, and the passes built on it (a differential drive's coast and hold, the
+bookkeeping after the physics) give the very floats that the components' own calls give."""
 from __future__ import annotations
 
 from typing import Any
@@ -11,7 +10,6 @@ import pytest
 
 from pymunk_bot.engine.simulation import Simulation
 from pymunk_bot.physics.row_table import RowTable
-from pymunk_bot.robots.stacking import join_rows
 
 
 class _Rows:
@@ -27,17 +25,6 @@ def test_the_table_refuses_an_array_a_pass_cannot_view_in_place() -> None:
     rows.xy = np.zeros((3, 2), dtype=np.float32)
     with pytest.raises(TypeError, match="float64"):
         RowTable([(rows, "xy", np.float64, 2)])
-
-
-def test_the_table_follows_fields_that_stacking_rebinds() -> None:
-    parts, whole = [_Rows(2), _Rows(3)], _Rows(5)
-    table = RowTable([(parts[1], "xy", np.float64, 2)])
-    before = table.current().copy()
-    join_rows(whole, parts, ["xy"])  # parts[1].xy is now rows 2-4 of whole.xy
-    after = table.current()
-    assert after[0, 0] == parts[1].xy.ctypes.data != before[0, 0]
-    assert after[0, 0] == whole.xy.ctypes.data + 2 * whole.xy.strides[0]
-    assert list(after[0, 1:]) == [3, 2]
 
 
 def _scenario(odometry: dict[str, Any] | None = None) -> dict[str, Any]:

@@ -75,11 +75,11 @@ class Bookkeeping:
                       (odometry, "believed_track", f64, 1), (odometry, "wheel_travel", f64, 2),
                       (odometry, "pose", f64, 2), (mid, None, f64, 2)]
         self._pass = travel_and_reckon if fused else travel_from_bodies
-        self._table = RowTable(slots)
+        self._table = RowTable(slots)  # (it keeps the arrays it points to alive)
 
     def after_tick(self, now: Any) -> None:
         """The tick ending at ``now`` [s] (one for all, or each robot's as an array)."""
-        self._pass(self._table.current())
+        self._pass(self._table.table)
         if self.fleet.goals_pending:
             self.fleet.arrive(now)
         if self.feeds:

@@ -35,6 +35,7 @@ from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.physics.substeps import Mover, reach_of
 from pymunk_bot.robots.readings import RobotSpec
 from pymunk_bot.robots.robot import Fleet, Robot
+from pymunk_bot.robots.rows import OWN, Rows
 from pymunk_bot.sensors.attach import attach_sensors
 from pymunk_bot.sensors.schedule import Schedule
 from pymunk_bot.physics.world import World
@@ -80,11 +81,14 @@ class MapSource:
 
 
 def build(config: ScenarioConfig, seed: int, source: str,
-          handles: dict[str, Robot] | None = None, world: World | None = None) -> Built:
+          handles: dict[str, Robot] | None = None, world: World | None = None,
+          rows: Rows = OWN) -> Built:
     """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew.
-    ``world``: a world already made for it (a copy on a shared ground), else a new one."""
+    ``world``: a world already made for it (a copy on a shared ground), else a new one.
+    ``rows``: where its groups keep their per-robot state (a copy's rows of the arrays its
+    copies share: :mod:`pymunk_bot.robots.rows`), else arrays of their own."""
     with _collector_paused():
-        return _build(config, seed, source, handles, world)
+        return _build(config, seed, source, handles, world, rows)
 
 
 @contextmanager
@@ -102,21 +106,21 @@ def _collector_paused() -> Iterator[None]:
 
 
 def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Robot] | None,
-           world: World | None) -> Built:
+           world: World | None, rows: Rows) -> Built:
     """:func:`build`, the collector paused."""
     rng = np.random.default_rng(seed)
     world_rng, sensor_rng = rng.spawn(2)
     (mind_rng,) = rng.spawn(1)  # controllers and localizers
     (actor_rng,) = rng.spawn(1)  # pedestrians (spawned last: earlier streams stay as they were)
     world = World(config) if world is None else world
-    fleet = Fleet(list(config.robots))
+    fleet = Fleet(list(config.robots), rows.within("fleet"))
     fleet.extent = config.world.extent  # goals set from code must lie in the arena
     n = len(config.robots)
     robots: dict[str, Robot] = {}
     by_drive: dict[str, list[int]] = {}
     for i, rc in enumerate(config.robots):
         by_drive.setdefault(rc.drive, []).append(i)
-    drive_groups = [(drives.get(name)([config.robots[i] for i in idx]), idx)
+    drive_groups = [(_make_drive(name, [config.robots[i] for i in idx], rows), idx)
                     for name, idx in by_drive.items()]
     handles = handles or {}
     for group, idx in drive_groups:
@@ -133,7 +137,7 @@ def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Ro
     odometry_rngs = world_rng.spawn(n)
     odometry_groups = []
     for group, idx in drive_groups:
-        odometry = _make_odometry(group, [odometry_rngs[i] for i in idx])
+        odometry = _make_odometry(group, [odometry_rngs[i] for i in idx], rows)
         for j, i in enumerate(idx):
             ordered[i].odometry = odometry.handle(j)
         odometry_groups.append((odometry, idx))
@@ -195,12 +199,24 @@ def _movers(world: World, robots: list[Robot]) -> list[Mover]:
     return movers
 
 
-def _make_odometry(group: Any, rngs: list[np.random.Generator]) -> Any:
-    """The drive group's odometry: the one registered under its drive's name, else its own."""
+def _make_drive(name: str, configs: list[Any], rows: Rows) -> Any:
+    """The drive group of kind ``name`` for these robots; one that names its per-robot fields
+    (``ROWS``) keeps them on ``rows``."""
+    kind = drives.get(name)
+    if getattr(kind, "ROWS", ()):
+        return kind(configs, rows.within(f"drive:{name}"))
+    return kind(configs)
+
+
+def _make_odometry(group: Any, rngs: list[np.random.Generator], rows: Rows) -> Any:
+    """The drive group's odometry: the one registered under its drive's name, else its own.
+    That of a drive whose fields are rows (``ROWS``) keeps its own on ``rows`` too."""
     kind = group.configs[0].drive
-    if kind in odometry_kinds:
-        return odometry_kinds.get(kind)(group, rngs)
-    return group.make_odometry(rngs)
+    if kind not in odometry_kinds:
+        return group.make_odometry(rngs)
+    if getattr(type(group), "ROWS", ()):
+        return odometry_kinds.get(kind)(group, rngs, rows=rows.within(f"odometry:{kind}"))
+    return odometry_kinds.get(kind)(group, rngs)
 
 
 def _make_body(robot: Robot, rc: Any, world: World, group: Any, j: int, group_id: int) -> None:

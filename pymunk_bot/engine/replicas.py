@@ -24,6 +24,7 @@ from pymunk_bot.engine.batch import Batch
 from pymunk_bot.physics.settings import MAX_REPLICAS
 from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.engine.simulation import Simulation
+from pymunk_bot.robots.rows import SharedRows
 from pymunk_bot.robots.stacking import Stack
 from pymunk_bot.physics.world import World
 
@@ -40,7 +41,10 @@ class Replicas:
         if not 1 <= len(seeds) <= MAX_REPLICAS:
             raise ValueError(f"a shared space holds 1 to {MAX_REPLICAS} copies (got {len(seeds)})")
         self.ground = World.ground(config)
-        self.sims = [Simulation(config, seed, source, ground=self.ground, replica=r)
+        # Every copy's per-robot state, in arrays the copies share from birth (robots/rows.py).
+        self.rows = SharedRows(len(seeds))
+        self.sims = [Simulation(config, seed, source, ground=self.ground, replica=r,
+                                rows=self.rows.of_copy(r))
                      for r, seed in enumerate(seeds)]
         for actor in self.sims[0].world.actors:
             if not getattr(actor, "keeps_to_its_copy", False):  # it may meet the other copies
@@ -111,11 +115,9 @@ class Replicas:
 
     def _assemble(self) -> None:
         """One Propulsion for every copy's robots and their bookkeeping stacked (both rebuilt
-        after a reset: a copy's bodies are new), keeping what the old Propulsion knew about
-        the bodies that stayed."""
-        if self._stack is not None:
-            self._stack.split()
-        self._stack = Stack.of(self.sims) if len(self.sims) > 1 else None
+        after a reset: a copy's bodies are new, its rows hold its fresh state), keeping what
+        the old Propulsion knew about the bodies that stayed."""
+        self._stack = Stack.of(self.sims, self.rows) if len(self.sims) > 1 else None
         bodies: list[pymunk.Body] = []
         controls: list[pymunk.Body] = []
         groups: list[tuple[Any, list[int]]] = []

@@ -21,6 +21,7 @@ from pymunk_bot.engine.observing import Observer, observe
 from pymunk_bot.engine.bookkeeping import Bookkeeping
 from pymunk_bot.robots.readings import Observation
 from pymunk_bot.robots.robot import Robot, RobotsByName
+from pymunk_bot.robots.rows import OWN, Rows
 from pymunk_bot.sensors.schedule import TIME_TOLERANCE, ScheduleArray
 from pymunk_bot.physics.world import World
 
@@ -31,8 +32,9 @@ class Simulation:
     One tick (:meth:`step`) runs in the order :meth:`Batch.step <pymunk_bot.engine.batch.Batch.step>`
     gives: a run of its own is a batch of one.
 
-    ``ground`` and ``replica``: this run is copy ``replica`` of its scenario on a ground shared
-    with other copies (:class:`~pymunk_bot.engine.replicas.Replicas` builds, steps and resets these).
+    ``ground``, ``replica`` and ``rows``: this run is copy ``replica`` of its scenario on a
+    ground shared with other copies, its robots' state in its rows of the arrays they share
+    (:class:`~pymunk_bot.engine.replicas.Replicas` builds, steps and resets these).
     """
 
     world: World
@@ -40,13 +42,13 @@ class Simulation:
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None, *, ground: World | None = None,
-                 replica: int | None = None) -> None:
+                 replica: int | None = None, rows: Rows = OWN) -> None:
         self.config = config
         self.source = source or f"scenario '{config.name}'"  # names the file in errors
         self.seed: int = check_seed(config.seed if seed is None else seed) or 0
         self.robots: dict[str, Robot] = RobotsByName()  # a missing name lists the robots
         self.observers: list[Callable[["Simulation"], Any]] = []  # run after every step
-        self._ground, self._replica = ground, replica
+        self._ground, self._replica, self._rows = ground, replica, rows
         self._build()
 
     @classmethod
@@ -68,7 +70,7 @@ class Simulation:
                 self.world.retire([b for r in self._robots for b in (r.body, r.control)])
             world = World(self.config, self._ground, self._replica)
         built: Built = build(self.config, self.seed, self.source, handles=self.robots,
-                             world=world)
+                             world=world, rows=self._rows)
         self._built = built
         self.robots.clear()
         self.robots.update(built.robots)  # the same dict and the same handles after a reset

@@ -123,7 +123,7 @@ class Propulsion:
             if h_last != h:
                 moving = drives.every_unit
             elif wheels is not None:  # a whole differential drive: one compiled pass
-                count = hold_coasting_wheels(wheels.current(), h, substeps)
+                count = hold_coasting_wheels(wheels.table, h, substeps)
                 moving = [] if count >= 0 else drives.every_unit
                 if count > 0:
                     self._aim_later(drives.member_rows, drives.group.twists, count, steady)

@@ -8,10 +8,9 @@ views each array in place (:func:`floats_1d`, :func:`floats_2d`, :func:`integers
 :func:`integers_2d`), without a copy. The arrays' order is the pass's contract: it names each
 slot, and the table checks every array's type, dimensions and layout when it takes it.
 
-An array is named by its owner and attribute and read from the owner again whenever
-:mod:`pymunk_bot.robots.stacking` has rebound per-robot fields (its ``generation``): stacking
-copies of a scenario is what gives an object new arrays after it is built; everything else
-changes them in place.
+An array is named by its owner and attribute and read from the owner once: per-robot fields
+are never rebound after their group is built (copies of a scenario hold theirs in shared arrays
+from birth: :mod:`pymunk_bot.robots.rows`), only changed in place.
 """
 from __future__ import annotations
 
@@ -22,44 +21,30 @@ import numpy as np
 from numba import types
 from numba.extending import intrinsic
 
-from pymunk_bot.robots import stacking
-
 # A slot of the table: the array's address, its rows and its columns (1 for a 1-D array).
 ADDRESS, ROWS, COLUMNS = 0, 1, 2
 
 
 class RowTable:
     """The arrays of ``fields``, each (owner, attribute, dtype, dimensions) in the order the
-    pass reads them, as one table (:meth:`current`); an attribute of None: the owner is the
-    array itself (one the pass's caller made and never rebinds)."""
+    pass reads them, as one table (``table``: each array's address, rows and columns); an
+    attribute of None: the owner is the array itself (one the pass's caller made and never
+    rebinds)."""
 
     def __init__(self, fields: Sequence[tuple[Any, str | None, Any, int]]) -> None:
-        self.fields = [(owner, name, np.dtype(dtype), ndim) for owner, name, dtype, ndim in fields]
-        self._table = np.zeros((len(self.fields), 3), dtype=np.intp)
+        self.table = np.zeros((len(fields), 3), dtype=np.intp)
         self._arrays: list[np.ndarray] = []  # what the addresses point into, kept alive
-        self._generation = -1
-        self.current()
-
-    def current(self) -> np.ndarray:
-        """The table, read anew from the owners if stacking has rebound fields since."""
-        if self._generation != stacking.generation:
-            self._take()
-        return self._table
-
-    def _take(self) -> None:
-        arrays = []
-        for k, (owner, name, dtype, ndim) in enumerate(self.fields):
+        for k, (owner, name, dtype, ndim) in enumerate(fields):
+            dtype = np.dtype(dtype)
             array = owner if name is None else getattr(owner, name)
             if not (isinstance(array, np.ndarray) and array.dtype == dtype
                     and array.ndim == ndim and array.flags.c_contiguous):
                 what = f"slot {k}" if name is None else f"{type(owner).__name__}.{name}"
                 raise TypeError(f"{what} must be a C-contiguous {ndim}-D array of {dtype} for "
                                 f"a compiled pass")
-            self._table[k] = (array.ctypes.data, array.shape[0],
-                              array.shape[1] if ndim == 2 else 1)
-            arrays.append(array)
-        self._arrays = arrays
-        self._generation = stacking.generation
+            self.table[k] = (array.ctypes.data, array.shape[0],
+                             array.shape[1] if ndim == 2 else 1)
+            self._arrays.append(array)
 
 
 @intrinsic

@@ -13,7 +13,7 @@ from pymunk_bot.robots.command import Command
 from pymunk_bot.config.schema import RobotConfig
 from pymunk_bot.robots.progress import reach_goals, travel_rows
 from pymunk_bot.robots.readings import RobotSpec
-from pymunk_bot.robots.stacking import join_rows, split_rows
+from pymunk_bot.robots.rows import OWN, Rows
 
 
 def real_number(name: str, value: Any) -> float:
@@ -52,21 +52,24 @@ class Fleet:
     # (x0, y0, x1, y1) [m] of the arena, for checking goals set from code (build sets it)
     extent: tuple[float, float, float, float] | None = None
 
-    def __init__(self, configs: list[RobotConfig]) -> None:
+    def __init__(self, configs: list[RobotConfig], rows: Rows = OWN) -> None:
         n = len(configs)
         self.configs = configs
         self.stacked_in: tuple[Fleet, int] | None = None  # (stack, first row) while stacked
-        self.xy = np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2)  # [m]
-        self.distance = np.zeros(n)  # true path length [m]
-        self.collisions = np.zeros(n, dtype=np.int64)  # contact episodes
-        self.goal = np.full((n, 2), np.nan)  # task goal [m]; NaN: none
-        self.tolerance = np.full(n, 0.2)  # [m]
+        goal = np.full((n, 2), np.nan)  # task goal [m]; NaN: none
+        tolerance = np.full(n, 0.2)  # [m]
         for i, c in enumerate(configs):
             if c.goal is not None:
-                self.goal[i] = c.goal.position
-                self.tolerance[i] = c.goal.tolerance
-        self.time_to_goal = np.full(n, np.nan)  # [s]; NaN: not reached yet
-        self.distance_to_goal = np.full(n, np.nan)  # path length when reached [m]
+                goal[i] = c.goal.position
+                tolerance[i] = c.goal.tolerance
+        hold = rows.hold
+        self.xy = hold("xy", np.array([c.pose[:2] for c in configs], dtype=float).reshape(n, 2))
+        self.distance = hold("distance", np.zeros(n))  # true path length [m]
+        self.collisions = hold("collisions", np.zeros(n, dtype=np.int64))  # contact episodes
+        self.goal, self.tolerance = hold("goal", goal), hold("tolerance", tolerance)
+        self.time_to_goal = hold("time_to_goal", np.full(n, np.nan))  # [s]; NaN: not reached
+        # path length when reached [m]
+        self.distance_to_goal = hold("distance_to_goal", np.full(n, np.nan))
         # Held by a command set by hand (its controller waits); whether its controller reads
         # an observation; whether it gives one command for ever (Controller.constant), and
         # that command is held (kept by the robot's handle: Robot.controller, Robot.command,
@@ -76,30 +79,21 @@ class Fleet:
         self.constant = [False] * n
         self.holds_constant = [False] * n
         self._now = np.zeros(1)  # [s] the tick's time, as reach_goals takes it
-        self._pending = np.flatnonzero(~np.isnan(self.goal[:, 0]))
-        self._refresh_targets()
-        self.advance(self.xy, 0.0)  # goals started inside are reached at t = 0
+        self.watch_unreached()
+        if rows.fresh:
+            self.advance(self.xy, 0.0)  # goals started inside are reached at t = 0
 
     @classmethod
-    def stacked(cls, parts: list["Fleet"]) -> "Fleet":
-        """The fleets of copies as one (see :mod:`pymunk_bot.robots.stacking`); ``advance`` then
-        takes each robot's time [s] as an array."""
-        whole = cls([c for part in parts for c in part.configs])
-        join_rows(whole, parts, cls.ROWS)
+    def stacked(cls, parts: list["Fleet"], rows: Rows) -> "Fleet":
+        """The fleets of copies as one, on ``rows`` (the whole of the rows the parts hold:
+        :mod:`pymunk_bot.robots.rows`); ``advance`` then takes each robot's time [s] as an
+        array."""
+        whole = cls([c for part in parts for c in part.configs], rows)
         offset = 0
-        for part in parts + [whole]:
-            part.watch_unreached()
-            if part is not whole:
-                part.stacked_in = (whole, offset)
-                offset += part.goal.shape[0]
-        return whole
-
-    def split(self, parts: list["Fleet"]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_rows(self, parts, self.ROWS)
         for part in parts:
-            part.stacked_in = None
-            part.watch_unreached()
+            part.stacked_in = (whole, offset)
+            offset += part.goal.shape[0]
+        return whole
 
     def watch_unreached(self) -> None:
         """Every goal not reached yet is pending."""

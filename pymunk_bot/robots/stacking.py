@@ -1,12 +1,12 @@
 """Copies of one scenario bookkept in one pass: the copies' fleets, drive groups and odometry
-stacked into one object each, whose arrays hold every copy's rows (copy 0's robots first).
+each as one group over the rows every copy holds (copy 0's robots first).
 
-Each copy keeps its own objects, and its robots' handles still read them, but their per-robot
-fields become views of the stacked object's arrays, so a write on either side is seen by both.
-A class opts in by naming its per-robot fields (``ROWS``) and giving a ``stacked(parts)``
-classmethod, which builds the whole from the parts' configs and joins their rows with
-:func:`join_rows`, and ``split(parts)``, which gives each part arrays of its own again (before
-a copy is rebuilt). Its methods must then change those fields in place, never rebind them.
+The copies are built on :class:`~pymunk_bot.robots.rows.SharedRows`: each copy's groups keep
+their per-robot fields (``ROWS``) in its block of shared arrays from birth, and a group here
+holds the whole arrays (a class opts in by naming ``ROWS`` and giving ``stacked(parts, rows)``,
+which builds the whole from the parts' configs on those rows). Each copy keeps its own objects,
+and its robots' handles read them: a write on either side is seen by both, and nothing is
+rebound when a copy is rebuilt.
 
 Per-tick work on the stack (coast, travel, odometry, distance and goals: engine/bookkeeping.py
 for the last three) does the arithmetic a copy's own objects do on their rows, operation for
@@ -18,91 +18,46 @@ from typing import Any, Sequence
 
 import numpy as np
 
-# Counts the times per-robot fields were rebound (join_rows, split_rows): compiled passes that
-# hold arrays by address take them anew when it changes (physics/row_table.py).
-generation = 0
-
-
-def join_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
-    """Each of ``fields`` of ``whole`` becomes the parts' rows one after another, and each
-    part's field a view of its rows."""
-    global generation
-    generation += 1
-    for name in fields:
-        values = [np.asarray(getattr(part, name)) for part in parts]
-        joined = np.concatenate(values)
-        setattr(whole, name, joined)
-        start = 0
-        for part, value in zip(parts, values):
-            setattr(part, name, joined[start:start + value.shape[0]])
-            start += value.shape[0]
-
-
-def split_rows(whole: Any, parts: Sequence[Any], fields: Sequence[str]) -> None:
-    """Each part's ``fields`` back to arrays of its own, copied from its rows of ``whole``."""
-    global generation
-    generation += 1
-    for name in fields:
-        joined, start = getattr(whole, name), 0
-        for part in parts:
-            rows = len(getattr(part, name))
-            setattr(part, name, joined[start:start + rows].copy())
-            start += rows
-
-
-def join_odometry(whole: Any, parts: Sequence[Any]) -> None:
-    """:func:`join_rows` of an odometry group's ``ROWS`` and of its encoders' ``ROWS``."""
-    join_rows(whole, parts, whole.ROWS)
-    join_rows(whole.encoders, [part.encoders for part in parts], whole.encoders.ROWS)
-
-
-def split_odometry(whole: Any, parts: Sequence[Any]) -> None:
-    """:func:`split_rows` of an odometry group's ``ROWS`` and of its encoders' ``ROWS``."""
-    split_rows(whole, parts, whole.ROWS)
-    split_rows(whole.encoders, [part.encoders for part in parts], whole.encoders.ROWS)
+from pymunk_bot.robots.rows import SharedRows
 
 
 class Stack:
-    """The fleets, drive groups and odometry groups of ``sims`` (copies of one scenario), each
-    stacked into one; see :meth:`of`."""
+    """The fleets, drive groups and odometry groups of ``sims`` (copies of one scenario, built
+    on ``shared``), each as one over every copy's rows; see :meth:`of`."""
 
-    def __init__(self, sims: Sequence[Any]) -> None:
-        self._fleets = [sim.built.fleet for sim in sims]
-        self.fleet = type(self._fleets[0]).stacked(self._fleets)
+    def __init__(self, sims: Sequence[Any], shared: SharedRows) -> None:
+        whole = shared.whole()
+        fleets = [sim.built.fleet for sim in sims]
+        self.fleet = type(fleets[0]).stacked(fleets, whole.within("fleet"))
         self.per_copy = len(sims[0].robots)  # robots of each copy
         slots = len(sims[0].built.drive_groups)
-        self._drives = [[sim.built.drive_groups[j][0] for sim in sims] for j in range(slots)]
-        self._odometry = [[sim.built.odometry_groups[j][0] for sim in sims] for j in range(slots)]
         # Each whole, with its robots' indices and the first row of each copy's part.
         self.drive_groups: list[tuple[Any, list[int], list[int]]] = []
         self.pairs: list[tuple[Any, Any]] = []  # (drive group, its odometry), stacked
-        for j, (drives, odometries) in enumerate(zip(self._drives, self._odometry)):
+        for j in range(slots):
+            drives = [sim.built.drive_groups[j][0] for sim in sims]
+            odometries = [sim.built.odometry_groups[j][0] for sim in sims]
+            kind = drives[0].configs[0].drive  # the name its rows are kept under (build.py)
             members = [copy * self.per_copy + i for copy, sim in enumerate(sims)
                        for i in sim.built.drive_groups[j][1]]
             starts = np.cumsum([0] + [part.n for part in drives[:-1]]).tolist()
-            whole = type(drives[0]).stacked(drives)
-            self.drive_groups.append((whole, members, starts))
-            self.pairs.append((whole, type(odometries[0]).stacked(odometries)))
+            drive = type(drives[0]).stacked(drives, whole.within(f"drive:{kind}"))
+            self.drive_groups.append((drive, members, starts))
+            self.pairs.append((drive, type(odometries[0]).stacked(
+                odometries, whole.within(f"odometry:{kind}"))))
         # Robot (copy * per_copy + index in its copy) -> (its stacked drive group, its row).
         self.row_of = {robot: (whole, row) for whole, members, _ in self.drive_groups
                        for row, robot in enumerate(members)}
 
     @classmethod
-    def of(cls, sims: Sequence[Any]) -> "Stack | None":
-        """The stack of these copies, or None if some group cannot be stacked (its class
-        names no ``ROWS``) or a copy has no robots."""
+    def of(cls, sims: Sequence[Any], shared: SharedRows) -> "Stack | None":
+        """The stack of these copies (built on ``shared``), or None if some group cannot be
+        stacked (its class names no ``ROWS``) or a copy has no robots."""
         first = sims[0].built
         groups = [first.fleet] + [g for g, _ in first.drive_groups + first.odometry_groups]
         if not first.robots or not all(getattr(type(g), "ROWS", ()) for g in groups):
             return None
-        return cls(sims)
-
-    def split(self) -> None:
-        """Every copy's objects back on arrays of their own (the stack is not used after)."""
-        self.fleet.split(self._fleets)
-        for (drive, odometry), drives, odometries in zip(self.pairs, self._drives, self._odometry):
-            drive.split(drives)
-            odometry.split(odometries)
+        return cls(sims, shared)
 
 
 class DriveUnits:

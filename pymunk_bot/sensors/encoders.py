@@ -12,24 +12,27 @@ from typing import Any, Sequence
 import numpy as np
 
 from pymunk_bot.geometry.arcs import integrate_arcs
+from pymunk_bot.robots.rows import OWN, Rows
 
 
 class EncoderBank:
     """Encoders of every robot of a group: ``scale`` (n, k), ``noise_var`` (n,) [m^2 per m],
-    ``resolution`` (n,) [m per tick]; one generator per robot, drawn in wheel order."""
+    ``resolution`` (n,) [m per tick]; one generator per robot, drawn in wheel order; ``rows``:
+    where the per-robot state lives (:mod:`pymunk_bot.robots.rows`)."""
 
     ROWS = ("_cumulative", "_ticks")  # the per-robot state
 
     def __init__(self, scale: np.ndarray, noise_var: np.ndarray, resolution: np.ndarray,
-                 rngs: Sequence[np.random.Generator]) -> None:
+                 rngs: Sequence[np.random.Generator], rows: Rows = OWN) -> None:
         self.scale = np.asarray(scale, dtype=float)
         self.noise_var = np.asarray(noise_var, dtype=float)
         self.resolution = np.asarray(resolution, dtype=float)
         self._rngs = list(rngs)
         self.noisy = np.flatnonzero(self.noise_var > 0.0).tolist()
         self._quantised = np.flatnonzero(self.resolution > 0.0)
-        self._cumulative = np.zeros_like(self.scale)  # measured travel before quantisation [m]
-        self._ticks = np.zeros_like(self.scale)  # whole ticks counted so far
+        # measured travel before quantisation [m]
+        self._cumulative = rows.hold("_cumulative", np.zeros_like(self.scale))
+        self._ticks = rows.hold("_ticks", np.zeros_like(self.scale))  # whole ticks so far
 
     @property
     def quantised(self) -> bool:

@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from pymunk_bot.geometry.arcs import arc_step
-from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.robots.rows import OWN, Rows
 from pymunk_bot.sensors.encoders import EncoderBank
 
 
@@ -35,22 +35,26 @@ class DiffOdometryGroup:
     ROWS = ("pose", "wheel_travel", "covariance")  # the per-robot state (and the encoders')
 
     def __init__(self, configs: Sequence[Any], start_poses: Sequence[Sequence[float]],
-                 track_widths: Sequence[float], rngs: Sequence[np.random.Generator]) -> None:
+                 track_widths: Sequence[float], rngs: Sequence[np.random.Generator],
+                 rows: Rows = OWN) -> None:
         self.configs = list(configs)
         self.track_widths = list(track_widths)  # [m] the true ones
         n = len(self.configs)
         self.rngs = list(rngs)
-        self.pose = np.array(start_poses, dtype=float).reshape(n, 3)  # [x, y, theta] (unwrapped)
+        # [x, y, theta] (unwrapped)
+        self.pose = rows.hold("pose", np.array(start_poses, dtype=float).reshape(n, 3))
         self.believed_track = np.array(
             [t * (1.0 + c.track_width_error) for t, c in zip(track_widths, configs)])  # [m]
         self.scale = np.array([(1.0 + c.left_scale_error, 1.0 + c.right_scale_error)
                                for c in configs]).reshape(n, 2)
         self.noise_var = np.array([c.wheel_noise_std ** 2 for c in configs])  # [m^2 per m]
         self.encoders = EncoderBank(self.scale, self.noise_var,
-                                    np.array([c.encoder_resolution for c in configs]), self.rngs)
+                                    np.array([c.encoder_resolution for c in configs]), self.rngs,
+                                    rows.within("encoders"))
         self._noisy = self.encoders.noisy
-        self.wheel_travel = np.zeros((n, 2))  # what odometry has integrated per wheel [m]
-        self.covariance = np.zeros((n, 3, 3))
+        # what odometry has integrated per wheel [m]
+        self.wheel_travel = rows.hold("wheel_travel", np.zeros((n, 2)))
+        self.covariance = rows.hold("covariance", np.zeros((n, 3, 3)))
         # Encoders that only scale are applied in the compiled step (dead_reckon, which the
         # engine's bookkeeping pass calls too); others measure first.
         self.plain = not self._noisy and not self.encoders.quantised
@@ -58,19 +62,13 @@ class DiffOdometryGroup:
         self._mid = np.empty((3, n))  # cos, sin of the mid-step heading and chord factor
 
     @classmethod
-    def stacked(cls, parts: list["DiffOdometryGroup"]) -> "DiffOdometryGroup":
-        """The groups of copies as one, on arrays, drawing from the same generators (see
-        :mod:`pymunk_bot.robots.stacking`)."""
+    def stacked(cls, parts: list["DiffOdometryGroup"], rows: Rows) -> "DiffOdometryGroup":
+        """The groups of copies as one on ``rows``, the whole of the rows the parts hold (see
+        :mod:`pymunk_bot.robots.rows`), drawing from the same generators."""
         configs = [c for part in parts for c in part.configs]
-        whole = cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
-                    [t for part in parts for t in part.track_widths],
-                    [rng for part in parts for rng in part.rngs])
-        join_odometry(whole, parts)
-        return whole
-
-    def split(self, parts: list["DiffOdometryGroup"]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_odometry(self, parts)
+        return cls(configs, [(0.0, 0.0, 0.0)] * len(configs),
+                   [t for part in parts for t in part.track_widths],
+                   [rng for part in parts for rng in part.rngs], rows)
 
     def update(self, travel: Any) -> None:
         """Integrate one tick's true (left, right) wheel travel [m], shape (n, 2)."""
@@ -162,11 +160,11 @@ class Odometry:
         self._group.update(travel)
 
 
-def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
-    """The odometry of every robot of a drive ``group`` (one generator each): what
-    ``plugins.odometry`` pairs with the drive of the same name."""
+def of_diff_drive(group: Any, rngs: Sequence[np.random.Generator], rows: Rows = OWN) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each), its per-robot
+    state on ``rows``: what ``plugins.odometry`` pairs with the drive of the same name."""
     return DiffOdometryGroup([c.odometry for c in group.configs], [c.pose for c in group.configs],
-                             group.track.tolist(), rngs)
+                             group.track.tolist(), rngs, rows)
 
 
 @numba.njit(cache=True)

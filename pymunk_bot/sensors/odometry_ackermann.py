@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.robots.rows import OWN, Rows
 from pymunk_bot.sensors.encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
@@ -26,17 +26,18 @@ class AckermannOdometryGroup:
     ROWS = ("pose", "wheel_travel", "steering", "covariance")  # per robot (and the encoders')
 
     def __init__(self, configs: Sequence[Any], wheelbase: np.ndarray, track: np.ndarray,
-                 rngs: Sequence[np.random.Generator]) -> None:
+                 rngs: Sequence[np.random.Generator], rows: Rows = OWN) -> None:
         self.configs = list(configs)
         self.geometry = (np.asarray(wheelbase, dtype=float), np.asarray(track, dtype=float))
         odo = [c.odometry for c in self.configs]
         n = len(odo)
         self.rngs = list(rngs)
-        self.pose = np.array([c.pose for c in self.configs], dtype=float).reshape(n, 3)
+        self.pose = rows.hold("pose", np.array([c.pose for c in self.configs],
+                                               dtype=float).reshape(n, 3))
         self.encoders = EncoderBank(
             np.array([(1 + o.left_scale_error, 1 + o.right_scale_error) for o in odo]).reshape(n, 2),
             np.array([o.wheel_noise_std ** 2 for o in odo]),
-            np.array([o.encoder_resolution for o in odo]), self.rngs)
+            np.array([o.encoder_resolution for o in odo]), self.rngs, rows.within("encoders"))
         self.believed_wheelbase = np.array(
             [w * (1 + o.wheelbase_error) for w, o in zip(wheelbase, odo)])  # [m]
         self.steer_scale = np.array([1 + o.steer_scale_error for o in odo])
@@ -45,24 +46,20 @@ class AckermannOdometryGroup:
         self.steer_var = np.array([o.steer_noise_std ** 2 for o in odo])  # [rad^2 per m]
         self._steer_noisy = np.flatnonzero(self.steer_var > 0).tolist()
         self._random = sorted(set(self.encoders.noisy) | set(self._steer_noisy))
-        self.wheel_travel = np.zeros((n, 2))  # measured rear-wheel travel [m]
-        self.steering = np.zeros(n)  # the steering sensor's last reading [rad]
-        self.covariance = np.zeros((n, 3, 3))
+        # measured rear-wheel travel [m]
+        self.wheel_travel = rows.hold("wheel_travel", np.zeros((n, 2)))
+        self.steering = rows.hold("steering", np.zeros(n))  # the steering sensor's last [rad]
+        self.covariance = rows.hold("covariance", np.zeros((n, 3, 3)))
 
     @classmethod
-    def stacked(cls, parts: list["AckermannOdometryGroup"]) -> "AckermannOdometryGroup":
-        """The groups of copies as one, drawing from the same generators (see
-        :mod:`pymunk_bot.robots.stacking`)."""
-        whole = cls([c for part in parts for c in part.configs],
-                    np.concatenate([part.geometry[0] for part in parts]),
-                    np.concatenate([part.geometry[1] for part in parts]),
-                    [rng for part in parts for rng in part.rngs])
-        join_odometry(whole, parts)
-        return whole
-
-    def split(self, parts: list["AckermannOdometryGroup"]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_odometry(self, parts)
+    def stacked(cls, parts: list["AckermannOdometryGroup"],
+                rows: Rows) -> "AckermannOdometryGroup":
+        """The groups of copies as one on ``rows``, the whole of the rows the parts hold (see
+        :mod:`pymunk_bot.robots.rows`), drawing from the same generators."""
+        return cls([c for part in parts for c in part.configs],
+                   np.concatenate([part.geometry[0] for part in parts]),
+                   np.concatenate([part.geometry[1] for part in parts]),
+                   [rng for part in parts for rng in part.rngs], rows)
 
     def update(self, travel: Any) -> None:
         travel = np.asarray(travel, dtype=float)
@@ -110,7 +107,8 @@ class AckermannOdometryGroup:
         return OdometryHandle(self, i)
 
 
-def of_ackermann_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
-    """The odometry of every robot of a drive ``group`` (one generator each): what
-    ``plugins.odometry`` pairs with the drive of the same name."""
-    return AckermannOdometryGroup(group.configs, group.wheelbase, group.track, rngs)
+def of_ackermann_drive(group: Any, rngs: Sequence[np.random.Generator],
+                       rows: Rows = OWN) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each), its per-robot
+    state on ``rows``: what ``plugins.odometry`` pairs with the drive of the same name."""
+    return AckermannOdometryGroup(group.configs, group.wheelbase, group.track, rngs, rows)

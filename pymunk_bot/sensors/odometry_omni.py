@@ -12,7 +12,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from pymunk_bot.robots.drives.omni import wheel_matrix
-from pymunk_bot.robots.stacking import join_odometry, split_odometry
+from pymunk_bot.robots.rows import OWN, Rows
 from pymunk_bot.sensors.encoders import EncoderBank, OdometryHandle, integrate_twist
 
 
@@ -22,41 +22,37 @@ class OmniOdometryGroup:
     ROWS = ("pose", "wheel_travel", "covariance")  # the per-robot state (and the encoders')
 
     def __init__(self, configs: Sequence[Any], wheels: np.ndarray,
-                 rngs: Sequence[np.random.Generator]) -> None:
+                 rngs: Sequence[np.random.Generator], rows: Rows = OWN) -> None:
         self.configs = list(configs)
         self.wheels = np.asarray(wheels)  # the drive's true wheel matrices
         self.rngs = list(rngs)
         n = len(self.configs)
-        self.pose = np.array([c.pose for c in self.configs], dtype=float).reshape(n, 3)
+        self.pose = rows.hold("pose", np.array([c.pose for c in self.configs],
+                                               dtype=float).reshape(n, 3))
         self.used = np.array([4 if c.wheels == "mecanum" else 3 for c in self.configs])
         scale = np.ones((n, 4))
         for i, c in enumerate(self.configs):
             errors = c.odometry.scale_errors[:self.used[i]]
             scale[i, :len(errors)] += errors
         self.encoders = EncoderBank(scale, np.array([c.odometry.wheel_noise_std ** 2 for c in configs]),
-                                    np.array([c.odometry.encoder_resolution for c in configs]), rngs)
+                                    np.array([c.odometry.encoder_resolution for c in configs]), rngs,
+                                    rows.within("encoders"))
         believed = np.array([wheel_matrix(c.wheels, c.wheel_distance * (1 + c.odometry.wheel_distance_error))
                              for c in self.configs])
         # Least-squares inverse over the wheels each robot has (the unused column stays zero).
         self.inverse = np.zeros((n, 3, 4))
         for i, k in enumerate(self.used):
             self.inverse[i, :, :k] = np.linalg.pinv(believed[i, :k])
-        self.wheel_travel = np.zeros((n, 4))  # measured rim travel [m]
-        self.covariance = np.zeros((n, 3, 3))
+        self.wheel_travel = rows.hold("wheel_travel", np.zeros((n, 4)))  # measured rim travel [m]
+        self.covariance = rows.hold("covariance", np.zeros((n, 3, 3)))
 
     @classmethod
-    def stacked(cls, parts: list["OmniOdometryGroup"]) -> "OmniOdometryGroup":
-        """The groups of copies as one, drawing from the same generators (see
-        :mod:`pymunk_bot.robots.stacking`)."""
-        whole = cls([c for part in parts for c in part.configs],
-                    np.concatenate([part.wheels for part in parts]),
-                    [rng for part in parts for rng in part.rngs])
-        join_odometry(whole, parts)
-        return whole
-
-    def split(self, parts: list["OmniOdometryGroup"]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_odometry(self, parts)
+    def stacked(cls, parts: list["OmniOdometryGroup"], rows: Rows) -> "OmniOdometryGroup":
+        """The groups of copies as one on ``rows``, the whole of the rows the parts hold (see
+        :mod:`pymunk_bot.robots.rows`), drawing from the same generators."""
+        return cls([c for part in parts for c in part.configs],
+                   np.concatenate([part.wheels for part in parts]),
+                   [rng for part in parts for rng in part.rngs], rows)
 
     def update(self, travel: Any) -> None:
         wheels = self.encoders.measure(np.asarray(travel, dtype=float))
@@ -87,7 +83,7 @@ class OmniOdometryGroup:
         return OdometryHandle(self, i)
 
 
-def of_omni_drive(group: Any, rngs: Sequence[np.random.Generator]) -> Any:
-    """The odometry of every robot of a drive ``group`` (one generator each): what
-    ``plugins.odometry`` pairs with the drive of the same name."""
-    return OmniOdometryGroup(group.configs, group.wheels, rngs)
+def of_omni_drive(group: Any, rngs: Sequence[np.random.Generator], rows: Rows = OWN) -> Any:
+    """The odometry of every robot of a drive ``group`` (one generator each), its per-robot
+    state on ``rows``: what ``plugins.odometry`` pairs with the drive of the same name."""
+    return OmniOdometryGroup(group.configs, group.wheels, rngs, rows)

@@ -18,6 +18,7 @@ from pymunk_bot.robots.command import Command
 from pymunk_bot.geometry.footprint import of_robot
 from pymunk_bot.robots.readings import RobotSpec
 from pymunk_bot.robots.drives.base import DriveGroup, limit_step
+from pymunk_bot.robots.rows import OWN, Rows
 
 
 class AckermannDriveGroup(DriveGroup):
@@ -27,7 +28,7 @@ class AckermannDriveGroup(DriveGroup):
     ROWS = ("target_speed", "target_steer", "speed", "steer", "driven_speed", "driven_steer",
             "travel")
 
-    def __init__(self, configs: Sequence[Any]) -> None:
+    def __init__(self, configs: Sequence[Any], rows: Rows = OWN) -> None:
         super().__init__(configs)
         self.wheelbase = np.array([c.wheelbase for c in configs], dtype=float)  # [m]
         self.track = np.array([c.track_width for c in configs], dtype=float)  # [m]
@@ -36,15 +37,17 @@ class AckermannDriveGroup(DriveGroup):
         self.max_v = np.array([c.max_speed for c in configs], dtype=float)  # [m/s]
         self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2]
         self._min_radius = np.array([c.min_turn_radius() for c in configs])  # [m]
-        self.target_speed = np.zeros(self.n)  # [m/s] after the limit
-        self.target_steer = np.zeros(self.n)  # [rad] after the limit
-        self.speed = np.zeros(self.n)  # acceleration-limited speed of the rear axle [m/s]
-        self.steer = np.zeros(self.n)  # slew-limited steering angle [rad]
-        self.driven_speed = np.zeros(self.n)  # what the rear wheels did in the last substep
-        self.driven_steer = np.zeros(self.n)
+        hold, n = rows.hold, self.n
+        self.target_speed = hold("target_speed", np.zeros(n))  # [m/s] after the limit
+        self.target_steer = hold("target_steer", np.zeros(n))  # [rad] after the limit
+        self.speed = hold("speed", np.zeros(n))  # acceleration-limited rear-axle speed [m/s]
+        self.steer = hold("steer", np.zeros(n))  # slew-limited steering angle [rad]
+        # what the rear wheels did in the last substep [m/s, rad]
+        self.driven_speed = hold("driven_speed", np.zeros(n))
+        self.driven_steer = hold("driven_steer", np.zeros(n))
         # Encoder input per robot: rear-left, rear-right travel [m] and the integral of
         # tan(delta) over the distance driven [m] (what a steering sensor sees along the way).
-        self.travel = np.zeros((self.n, 3))
+        self.travel = hold("travel", np.zeros((n, 3)))
 
     # ------------------------------------------------------------------ commands
     def set_steering(self, i: int, speed: float, steer: float) -> None:

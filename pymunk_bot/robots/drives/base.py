@@ -14,7 +14,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from pymunk_bot.robots.command import Command
-from pymunk_bot.robots.stacking import join_rows, split_rows
+from pymunk_bot.robots.rows import OWN, Rows
 
 
 class DriveGroup:
@@ -22,30 +22,26 @@ class DriveGroup:
 
     name = ""
     holonomic = False  # True: accepts a lateral speed vy
-    # The per-robot state, each a field with a row per robot, changed only in place: copies of
-    # a scenario sharing a space then keep it stacked (see pymunk_bot.robots.stacking). Empty: a
-    # group of its own per copy.
+    # The per-robot state, each a field with a row per robot that the constructor takes from
+    # its ``rows`` (``rows.hold(name, initial)``) and the methods change only in place: copies
+    # of a scenario sharing a space then hold theirs in shared arrays from birth, and one group
+    # over them all bookkeeps them at once (see pymunk_bot.robots.rows). Empty: a group of its
+    # own per copy (the constructor then takes only the configs).
     ROWS: tuple[str, ...] = ()
     # Encoder input accumulated since it was last taken (rows per robot, drive-specific
     # columns), changed in place: what its odometry integrates after each tick.
     travel: np.ndarray
 
-    def __init__(self, configs: Sequence[Any]) -> None:
+    def __init__(self, configs: Sequence[Any], rows: Rows = OWN) -> None:
         self.configs = list(configs)
         self.n = len(self.configs)
 
     # ------------------------------------------------------------------ stacking
     @classmethod
-    def stacked(cls, parts: list[Any]) -> Any:
-        """The groups of copies as one group whose ``ROWS`` hold every part's rows, each
-        part's ``ROWS`` viewing its own (see :mod:`pymunk_bot.robots.stacking`)."""
-        whole = cls([c for part in parts for c in part.configs])
-        join_rows(whole, parts, cls.ROWS)
-        return whole
-
-    def split(self, parts: list[Any]) -> None:
-        """Undo :meth:`stacked`: each part on arrays of its own."""
-        split_rows(self, parts, self.ROWS)
+    def stacked(cls, parts: list[Any], rows: Rows) -> Any:
+        """The groups of copies as one group on ``rows``, the whole of the rows the parts hold
+        (see :mod:`pymunk_bot.robots.rows`)."""
+        return cls([c for part in parts for c in part.configs], rows)
 
     def settled_rows(self) -> np.ndarray:
         """:meth:`settled` robot by robot (a stacked group's); never, unless a drive can tell."""

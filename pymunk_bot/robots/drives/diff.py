@@ -15,6 +15,7 @@ import numpy as np
 from pymunk_bot.physics import settings as physics
 from pymunk_bot.robots.command import Command
 from pymunk_bot.robots.drives.base import DriveGroup
+from pymunk_bot.robots.rows import OWN, Rows
 
 
 def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
@@ -28,16 +29,20 @@ class DiffDriveGroup(DriveGroup):
     name = "diff"
     ROWS = ("target", "commanded", "turning", "travel")  # the per-robot state
 
-    def __init__(self, configs: Sequence[Any]) -> None:
+    def __init__(self, configs: Sequence[Any], rows: Rows = OWN) -> None:
         super().__init__(configs)
         self.track = np.array([c.track_width for c in configs], dtype=float)  # [m]
         self.max_wheel = np.array([c.max_wheel_speed for c in configs], dtype=float)  # [m/s]
         self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2] per wheel
         # Per robot (left, right), a row each.
-        self.target = np.zeros((self.n, 2))  # commanded wheel speeds after the speed limit [m/s]
-        self.commanded = np.zeros((self.n, 2))  # acceleration-limited speeds to the motors [m/s]
-        self.turning = np.zeros((self.n, 2))  # speeds the wheels turn at in this substep [m/s]
-        self.travel = np.zeros((self.n, 2))  # wheel travel since it was last taken [m]
+        wheels = np.zeros((self.n, 2))
+        # commanded wheel speeds after the speed limit [m/s]
+        self.target = rows.hold("target", wheels)
+        # acceleration-limited speeds to the motors [m/s]
+        self.commanded = rows.hold("commanded", wheels.copy())
+        # speeds the wheels turn at in this substep [m/s]
+        self.turning = rows.hold("turning", wheels.copy())
+        self.travel = rows.hold("travel", wheels.copy())  # wheel travel since last taken [m]
         # The same as floats: cheaper than numpy's scalars robot by robot.
         self._track = self.track.tolist()
         self._every = np.arange(self.n, dtype=np.intp)

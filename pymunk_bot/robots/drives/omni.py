@@ -14,6 +14,7 @@ from pymunk_bot.robots.command import Command
 from pymunk_bot.geometry.footprint import of_robot
 from pymunk_bot.robots.readings import RobotSpec
 from pymunk_bot.robots.drives.base import DriveGroup, limit_step
+from pymunk_bot.robots.rows import OWN, Rows
 
 OMNI3_ANGLES = (math.pi / 2, math.pi / 2 + 2 * math.pi / 3, math.pi / 2 + 4 * math.pi / 3)
 
@@ -41,16 +42,16 @@ class OmniDriveGroup(DriveGroup):
     holonomic = True
     ROWS = ("target", "current", "travel")
 
-    def __init__(self, configs: Sequence[Any]) -> None:
+    def __init__(self, configs: Sequence[Any], rows: Rows = OWN) -> None:
         super().__init__(configs)
         self.max_v = np.array([c.max_speed for c in configs], dtype=float)  # [m/s]
         self.max_w = np.array([c.max_angular_speed for c in configs], dtype=float)  # [rad/s]
         self.max_accel = np.array([c.max_accel for c in configs], dtype=float)  # [m/s^2]
         self.max_alpha = np.array([c.max_angular_accel for c in configs], dtype=float)
         self.wheels = np.array([wheel_matrix(c.wheels, c.wheel_distance) for c in configs])
-        self.target = np.zeros((self.n, 3))  # (vx, vy, omega) after the limits
-        self.current = np.zeros((self.n, 3))  # acceleration-limited twist
-        self.travel = np.zeros((self.n, 4))  # wheel rim travel since it was last taken [m]
+        self.target = rows.hold("target", np.zeros((self.n, 3)))  # (vx, vy, omega), limited
+        self.current = rows.hold("current", np.zeros((self.n, 3)))  # acceleration-limited twist
+        self.travel = rows.hold("travel", np.zeros((self.n, 4)))  # rim travel since taken [m]
 
     def set_command(self, i: int, command: Any) -> None:
         if not isinstance(command, Command):
