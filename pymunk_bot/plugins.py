@@ -106,14 +106,12 @@ def _register_builtins() -> None:
             ("policy", "policy:PolicyController", c.PolicyControllerConfig))
     for name, cls, model in builtin_controllers:
         controllers.add(name, f"pymunk_bot.controllers.{cls}", model)
-    from pymunk_bot.localization import config as lc
-
     builtin_localizers: tuple[tuple[str, str, type], ...] = (
             ("ground_truth", "simple:GroundTruthLocalizer", loc.GroundTruthLocalizerConfig),
             ("odometry", "simple:OdometryLocalizer", loc.OdometryLocalizerConfig),
-            ("mcl", "mcl:MclLocalizer", lc.MclConfig),
-            ("ekf", "ekf:EkfLocalizer", lc.EkfConfig),
-            ("slam", "slam:SlamLocalizer", lc.SlamConfig),
+            ("mcl", "mcl:MclLocalizer", loc.MclConfig),
+            ("ekf", "ekf:EkfLocalizer", loc.EkfConfig),
+            ("slam", "slam:SlamLocalizer", loc.SlamConfig),
             ("python", "python:PythonLocalizer", loc.PythonLocalizerConfig))
     for name, cls, model in builtin_localizers:
         localizers.add(name, f"pymunk_bot.localization.{cls}", model)

@@ -10,7 +10,7 @@ from typing import Annotated, Any, Callable, ClassVar, Literal
 from pydantic import Field, PrivateAttr
 
 from pymunk_bot.config.events import EventList
-from pymunk_bot.localization.config import MappingConfig
+from pymunk_bot.config.localization import MappingConfig
 from pymunk_bot.config.footprint import FootprintConfig
 from pymunk_bot.config.metric_bounds import MetricBounds
 from pymunk_bot.config.motion import MotionConfig

@@ -146,7 +146,7 @@ def _check_point_in_arena(loc: tuple, point, scenario: ScenarioConfig) -> None:
 
 def _check_localization(index: int, robot: RobotConfig, scenario: ScenarioConfig) -> None:
     """A localizer or mapping the robot cannot run (no LiDAR, too large a map) is bad input."""
-    from pymunk_bot.localization.checks import check_localizer, check_mapping
+    from pymunk_bot.config.localizer_checks import check_localizer, check_mapping
     try:
         x0, y0, x1, y1 = scenario.world.extent
         check_localizer(robot.localization, robot, has_map=True,  # the scenario is its map

@@ -23,7 +23,7 @@ from pymunk_bot.config.substeps import mover_speed
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.geometry.footprint import of_robot
 from pymunk_bot.localization.base import LocalizerContext
-from pymunk_bot.localization.config import LOCALIZER_MAP_RESOLUTION
+from pymunk_bot.config.localization import LOCALIZER_MAP_RESOLUTION
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.outcomes.metrics import RobotMetrics
 from pymunk_bot.outcomes.navigation.recorder import NavMetrics

@@ -9,12 +9,10 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from pymunk_bot import config as _config  # noqa: F401  (first: config's schema imports .config, which
-# imports config.types; loaded in this order the cycle resolves whichever package comes first)
 from pymunk_bot.plugins import localizers
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
-from pymunk_bot.localization.checks import check_localizer, check_mapping
-from pymunk_bot.localization.config import MAX_MAP_CELLS, MAX_PARTICLES_LIMIT, EkfConfig, MappingConfig, MclConfig, SlamConfig
+from pymunk_bot.config.localizer_checks import check_localizer, check_mapping
+from pymunk_bot.config.localization import MAX_MAP_CELLS, MAX_PARTICLES_LIMIT, EkfConfig, MappingConfig, MclConfig, SlamConfig
 
 _LAZY = {"MclLocalizer": "mcl", "EkfLocalizer": "ekf", "SlamLocalizer": "slam",
          "OccupancyMapper": "mapping", "ate": "metrics", "rpe": "metrics",

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
-from pymunk_bot.localization.config import EkfConfig
+from pymunk_bot.config.localization import EkfConfig
 from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.dynamic import short_returns
 from pymunk_bot.localization.scanmatch import MIN_POINTS, match_scan, subsample

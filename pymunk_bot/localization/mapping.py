@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from pymunk_bot.maps.grid import UNKNOWN, OccupancyGrid
-from pymunk_bot.localization.config import MAX_MAP_CELLS, MappingConfig
+from pymunk_bot.config.localization import MAX_MAP_CELLS, MappingConfig
 from pymunk_bot.localization.se2 import transform_points
 
 

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
-from pymunk_bot.localization.config import MclConfig
+from pymunk_bot.config.localization import MclConfig
 from pymunk_bot.localization.dynamic import excused_fit, short_returns
 from pymunk_bot.localization.explore import Explorer, trace
 from pymunk_bot.localization.likelihood import LikelihoodField

@@ -43,7 +43,7 @@ import numpy as np
 
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
-from pymunk_bot.localization.config import MappingConfig, SlamConfig
+from pymunk_bot.config.localization import MappingConfig, SlamConfig
 from pymunk_bot.localization.loopsearch import ChainUncertainty, candidates
 from pymunk_bot.localization.mapping import OccupancyMapper
 from pymunk_bot.localization.moving import MovingReturns

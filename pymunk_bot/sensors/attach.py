@@ -1,9 +1,10 @@
 """Give a robot the sensors its config asks for (factories of the ``sensors`` registry)."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+import pymunk
 
 from pymunk_bot.plugins import sensors as sensor_kinds
 from pymunk_bot.sensors.bumper import Bumper
@@ -13,7 +14,16 @@ from pymunk_bot.sensors.lidar import Lidar
 
 if TYPE_CHECKING:
     from pymunk_bot.robots.robot import Robot
-    from pymunk_bot.physics.world import World
+
+
+class World(Protocol):
+    """What the sensors read of the world they are built in (physics/world.py's ``World``)."""
+
+    obstacles: list[Any]
+    time: float  # [s]
+
+    def ray_caster(self) -> Any: ...
+    def substep_for(self, body: pymunk.Body) -> float: ...
 
 
 def make_lidar(config: Any, robot: "Robot", world: "World", rng: np.random.Generator) -> Lidar:

@@ -12,10 +12,13 @@ from typing import Any, Sequence
 import numba
 import numpy as np
 
-from pymunk_bot.physics import settings as physics
 from pymunk_bot.robots.command import Command
 from pymunk_bot.robots.drives.base import DriveGroup
 from pymunk_bot.robots.rows import OWN, Rows
+
+
+# [m/s^2] the most sideways acceleration a wheel's grip on a floor gives (about 1 g)
+WHEEL_GRIP = 9.81
 
 
 def wheel_speeds(v: float, omega: float, track_width: float) -> tuple[float, float]:
@@ -133,7 +136,7 @@ class DiffDriveGroup(DriveGroup):
         # the joints out-push contacts (see docs/physics.md). The torque follows the fastest
         # spin-up, wheels accelerating in opposite directions: alpha = 2 a / L, with margin.
         a, track = self.max_accel[i], self.track[i]
-        force = mass * (a + min(self.max_wheel[i] ** 2 / track, physics.GRAVITY))
+        force = mass * (a + min(self.max_wheel[i] ** 2 / track, WHEEL_GRIP))
         torque = max(force * track / 2.0, 2.0 * moment * 2.0 * a / track)
         return force, torque
 

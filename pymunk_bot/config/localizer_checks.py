@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Any
 
 from pymunk_bot.plugins import localizers
-from pymunk_bot.localization.config import LOCALIZER_MAP_RESOLUTION, MAX_MAP_CELLS, MappingConfig
+from pymunk_bot.config.localization import LOCALIZER_MAP_RESOLUTION, MAX_MAP_CELLS, MappingConfig
 
 MIN_MATCH_BEAMS = 10  # ekf and slam match scans: fewer beams cannot fix a pose
 
