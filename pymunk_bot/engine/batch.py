@@ -19,7 +19,7 @@ from pymunk_bot.physics.propulsion import Propulsion
 from pymunk_bot.sensors.lidar import Lidar
 from pymunk_bot.sensors.lidar_rows import LidarRows
 from pymunk_bot.physics.substeps import SubstepGate
-from pymunk_bot.physics.apart import SplitPlanner
+from pymunk_bot.physics.apart import RobotsApart
 from pymunk_bot.physics.world import World
 
 if TYPE_CHECKING:
@@ -93,11 +93,10 @@ class Batch:
                                     before.gate.fixed if before and before.gate else None)
         # Robots that nothing can reach step apart (fleets of SPLIT_FROM robots, in a world
         # of their own: physics/world.py).
-        self.split: SplitPlanner | None = None
+        self.split: RobotsApart | None = None
         if self.gate is not None and not propulsion.copies and ground.can_split:
             assert ground.apart_space is not None
-            self.split = SplitPlanner(ground.apart_space, propulsion.bodies, self.gate.movers,
-                                      self.gate.fixed, self.dt)
+            self.split = RobotsApart(ground.apart_space, propulsion.bodies, self.gate, self.dt)
             propulsion.step_apart_in(ground.apart_space)
         # Phase 2, chosen once: a named substep count, substeps where contacts can start, or
         # those and robots stepping apart.
@@ -173,7 +172,7 @@ class Batch:
         if disturbed:  # a teleport: every robot back, decided anew
             split.settle(world, propulsion, np.zeros(split.n, dtype=bool))
             split.reset(disturbed=True)
-        apart, following_apart = split.apart, split.next_apart(propulsion)
+        apart, following_apart = split.apart, split.next_apart()
         substeps, following = gate.counts_apart(
             disturbed, split.crowded or not following_apart.all(), bool(apart.any()))
         propulsion.step(dt / substeps, substeps, dt / following, (apart, following_apart))

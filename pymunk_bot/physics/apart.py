@@ -14,15 +14,16 @@ the apart Space takes one.
 
 Every ``PLAN_TICKS`` ticks the planner decides which robots step apart until its next
 decision: those that neither another moving body nor a fixed shape can reach before the last
-of those ticks ends, at their top speeds (or faster, if they go faster now):
+of those ticks ends, at their top speeds (or faster, if they go faster now). The substep gate
+answers that (``SubstepGate.unreachable``: the one planner of when bodies can touch, asked
+here per robot and over a few ticks, there for the whole Space and the coming tick):
 
 - two moving bodies: the distance between their origins less both reaches, over both speeds
   (a k-d tree finds the pairs that are near);
 - a fixed shape: the distance to the nearest one (pymunk's point query, asked only where the
-  substep gate's cells of the fixed world, physics/static_cells.py, cannot rule one out) less
-  the robot's reach. The fixed world cannot change while robots step apart (below), so the
-  cells the gate built stand; a robot that a teleport put inside a fixed shape (a negative
-  distance) stays.
+  gate's cells of the fixed world, physics/static_cells.py, cannot rule one out) less the
+  robot's reach. The fixed world cannot change while robots step apart (below), so the cells
+  stand; a robot that a teleport put inside a fixed shape (a negative distance) stays.
 
 It plans only for fleets of ``SPLIT_FROM`` robots or more (physics/world.py: only their
 worlds have a Space apart), in a world of its own
@@ -41,22 +42,20 @@ import numpy as np
 import pymunk
 
 from pymunk_bot.physics.propulsion import Propulsion
-from pymunk_bot.physics.static_cells import StaticCells
-from pymunk_bot.physics.substeps import (MARGIN, Mover, motions, near_pairs, origin_speeds,
-                                         pair_gaps)
+from pymunk_bot.physics.substeps import SubstepGate
 from pymunk_bot.physics.world import World
 
 PLAN_TICKS = 4  # ticks between two decisions
 
 
-class SplitPlanner:
+class RobotsApart:
     """Which robots step apart (see the module docstring), from the contact Space to
-    ``apart``. ``robots``: the fleet's bodies in Propulsion's order; ``movers``: every
-    moving body (the gate's); ``fixed``: where the fixed world is (the gate's); ``dt``: the
+    ``apart``. ``robots``: the fleet's bodies in Propulsion's order, the first movers of
+    ``gate`` (the contact Space's substep gate, which tells who can be reached); ``dt``: the
     tick [s]."""
 
-    def __init__(self, apart: pymunk.Space, robots: Sequence[pymunk.Body],
-                 movers: Sequence[Mover], fixed: StaticCells, dt: float) -> None:
+    def __init__(self, apart: pymunk.Space, robots: Sequence[pymunk.Body], gate: SubstepGate,
+                 dt: float) -> None:
         self.dt = dt
         if all(b.center_of_gravity == (0, 0) for b in robots):
             # Each robot's joints pull through its centre of gravity (the pivot's anchor is
@@ -65,15 +64,9 @@ class SplitPlanner:
             # within 4e-15 m of ten iterations'). Nothing else is in that Space.
             apart.iterations = 1
         self.n = len(robots)
-        of = {id(m.body): m for m in movers}
-        own = {id(b) for b in robots}
-        # Rows: the robots in Propulsion's order, then the other moving bodies.
-        self._others = [m for m in movers if id(m.body) not in own]
-        rows = [of[id(b)] for b in robots] + self._others
-        self._reach = np.array([m.reach for m in rows])  # [m]
-        self._top = np.array([m.speed or 0.0 for m in rows])  # [m/s] (0: only its speed now)
-        self._offset = np.array([abs(m.body.center_of_gravity) for m in rows])  # [m] cog to origin
-        self._fixed = fixed
+        if [m.body for m in gate.movers[:self.n]] != list(robots):
+            raise ValueError("the gate's first movers must be the fleet's robots, in order")
+        self._gate = gate
         self.apart = np.zeros(self.n, dtype=bool)  # stepping apart in this tick
         self._ticks_left = 0  # ticks until the next decision
         self.layout = -1  # World.layout after this planner's last move (-1: none yet)
@@ -81,7 +74,7 @@ class SplitPlanner:
     @property
     def crowded(self) -> bool:
         """Whether the contact Space holds moving bodies besides robots (each tick: substeps)."""
-        return bool(self._others)
+        return len(self._gate.movers) > self.n
 
     def reset(self, disturbed: bool = False) -> None:
         """Every robot back in the contact Space: the next tick decides anew, with the fixed
@@ -89,19 +82,18 @@ class SplitPlanner:
         one may be among them)."""
         self.apart = np.zeros(self.n, dtype=bool)
         self._ticks_left = 0
+        fixed = self._gate.fixed
         if disturbed:
-            self._fixed.forget()
-        self._fixed.refresh()
+            fixed.forget()
+        fixed.refresh()
 
-    def next_apart(self, propulsion: Propulsion) -> np.ndarray:
-        """Which robots step apart in the next tick (``propulsion``: the fleet's, which reads
-        the robots' motion when a decision is due)."""
+    def next_apart(self) -> np.ndarray:
+        """Which robots step apart in the next tick."""
         if self._ticks_left > 1:
             self._ticks_left -= 1
             return self.apart
         self._ticks_left = PLAN_TICKS
-        return self._clear((PLAN_TICKS + 1) * self.dt, propulsion.motion_array(),
-                           propulsion.position_array())
+        return self._gate.unreachable((PLAN_TICKS + 1) * self.dt)[:self.n]
 
     def settle(self, world: World, propulsion: Propulsion, apart: np.ndarray) -> None:
         """After a tick: the robots that step apart in the next one (``apart``) move there,
@@ -114,29 +106,3 @@ class SplitPlanner:
             world.move_apart([(bodies[k], controls[k]) for k in went])
         self.apart = apart
         self.layout = world.layout
-
-    def _clear(self, horizon: float, motion: np.ndarray, xy: np.ndarray) -> np.ndarray:
-        """The robots that nothing can reach within ``horizon`` [s]."""
-        n = self.n
-        origins = np.empty((self._reach.shape[0], 2))
-        origins[:n] = xy
-        others = [mover.body for mover in self._others]  # few: crates, moving obstacles
-        for k, body in enumerate(others, start=n):
-            origins[k] = tuple(body.position)
-        moving = np.concatenate([motion[:, 1:4], motions(others)])  # (vx, vy, omega) each
-        now = origin_speeds(moving[:, 0], moving[:, 1], moving[:, 2], self._offset)
-        speeds = np.maximum(self._top, now)
-        if not (np.isfinite(origins).all() and np.isfinite(speeds).all()):
-            return np.zeros(n, dtype=bool)  # a body thrown out of the world: no telling
-        reach = self._reach
-        travel = speeds * horizon  # [m] the most each origin moves
-        clear = np.ones(reach.shape[0], dtype=bool)
-        pairs = near_pairs(origins, 2.0 * float(reach.max() + travel.max()) + MARGIN)
-        if pairs.size:
-            i, j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
-            gap = pair_gaps(np.ascontiguousarray(origins), reach, i, j)  # one layout: one compile
-            meet = gap <= travel[i] + travel[j]
-            clear[i[meet]] = False
-            clear[j[meet]] = False
-        gaps = self._fixed.distances(origins[:n], reach[:n] + travel[:n] + MARGIN)  # [m]
-        return clear[:n] & (gaps - reach[:n] - MARGIN > travel[:n])

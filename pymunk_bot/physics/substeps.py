@@ -322,6 +322,30 @@ class SubstepGate:
         clear = min(clear, float(until.min()))
         return max(clear, 0.0)
 
+    def unreachable(self, horizon: float) -> np.ndarray:
+        """Per mover: whether neither another mover nor a fixed shape can reach it within
+        ``horizon`` [s], each as fast as it can go (the question of which robots may step
+        apart: physics/apart.py); none when some body was thrown out of the world."""
+        xy, speeds = self._origins_and_speeds()
+        clear = np.zeros(len(self.movers), dtype=bool)
+        if not math.isfinite(float(xy.sum() + speeds.sum())):
+            return clear  # no telling
+        clear.fill(True)
+        reach = self._reach
+        travel = speeds * horizon  # [m] the most each origin moves
+        if clear.shape[0] > 1:
+            found = near_pairs(xy, 2.0 * float(reach.max() + travel.max()) + MARGIN)
+            i, j = self._meeting(found[:, 0], found[:, 1])
+            gap = pair_gaps(np.ascontiguousarray(xy), reach, i.astype(np.intp), j.astype(np.intp))
+            meet = gap <= travel[i] + travel[j]
+            clear[i[meet]] = False
+            clear[j[meet]] = False
+        # Fixed shapes reach only dynamic movers (inf for the rest, and for those not clear).
+        self.fixed.refresh()
+        gaps = self.fixed.distances(xy, reach + travel + MARGIN, clear & self._dynamic,
+                                    self._filters)
+        return clear & (gaps - reach - MARGIN > travel)
+
     def _meeting(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The pairs (i, j) of movers that can touch: of one copy, not both kinematic."""
         meet = (self._copy[i] == self._copy[j]) & (self._dynamic[i] | self._dynamic[j])
