@@ -23,6 +23,11 @@ _PARALLEL_EPS = 10e-6  # as kernels._PARALLEL_EPS (Chipmunk's 10e-6)
 _EDGE_MARGIN = 1e-7  # as scene._EDGE_MARGIN
 _EDGE_NEAR = 1e-5  # as scene.EDGE_NEAR
 LOOK_AGAIN = 32  # primitives traced between two looks at the farthest hit (once every ray hit)
+# The primitives are traced nearest first, roughly: by the least alpha a hit on their shape can
+# have, in rings whose outer edges double (the last reaches the range), so the rays' hits are
+# near early and the farther rings are passed over once every ray has hit something nearer.
+RINGS = 6
+_RING_EDGES = (1.0 / 32.0, 1.0 / 16.0, 0.125, 0.25, 0.5)  # [alpha] outer edges but the last's
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -175,17 +180,28 @@ def trace_filtered(rows: np.ndarray, counts: np.ndarray, owner: np.ndarray, boun
     filters are applied here: ``filters`` (K, 3) and ``shape_filters`` (3, n_shapes) hold
     (group, categories, mask) of each cast and of each shape; a shape is traced unless
     cpShapeFilterReject rejects the pair."""
+    # Scratch of every cast: the primitives it admits, with their rings, then in ring order;
+    # where each ring starts in that order.
+    near_first = np.empty((3, rows.shape[1]), dtype=np.intp)
+    starts = np.empty(RINGS + 1, dtype=np.intp)
+    # Whether to trace nearest first: it pays where every ray hits something (the farther
+    # primitives are then passed over), and costs a sort where some ray reaches its range.
+    # The cast before tells (casts of one call are alike: one scene, one kind of LiDAR).
+    sort = True
     for k in range(ox.shape[0]):
         n_flagged[k] = trace(rows, counts, shape_filters, filters[k], owner, bound, rounded,
                              ox[k], oy[k], scale[k], rng[k], ang[k], ends[k],
-                             sides[k, :, :n_sides[k]], order_given[k], best[k], flagged[k])
+                             sides[k, :, :n_sides[k]], order_given[k], best[k], flagged[k],
+                             near_first, starts, sort)
+        sort = best[k].max() < 1.0
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query: np.ndarray,
           owner: np.ndarray, bound: np.ndarray, rounded: bool, ox: float, oy: float,
           scale: float, rng: float, ang: np.ndarray, ends: np.ndarray, side: np.ndarray,
-          order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray) -> int:
+          order_given: np.ndarray, best: np.ndarray, flagged: np.ndarray,
+          near_first: np.ndarray, starts: np.ndarray, sort: bool) -> int:
     """Lower ``best`` (alpha per ray, starting at 1) by every hit of a primitive of the table
     ``rows`` (columns: ``counts`` edges, flags, circles, segments; ``owner``: the shape of
     each, whose bounding circle (cx, cy, r) is a column of ``bound``) that the ``query``
@@ -194,7 +210,8 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
     rays that pass near a flag, or inside a ``side`` interval (2, k) [rad], to ``flagged``
     and return how many there are (a ray may appear more than once); -1 if they do not
     fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
-    with their angle order)."""
+    with their angle order). ``near_first`` (3, m) and ``starts`` (RINGS + 1): scratch; ``sort``: the primitives
+    in range are traced nearest first (else in the table's order; the same answers)."""
     n = best.shape[0]
     group, categories, mask = query[0], query[1], query[2]
     st, order, t0, inv, err, wrap = _sorted_rays(ang, order_given)
@@ -219,15 +236,9 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
         if d >= 0.0 and d <= near_plane and not _rejects(shape_filters, owner[j], group,
                                                           categories, mask):
             on_plane = True
-    # Once every ray has hit something, a primitive whose shape lies farther than the
-    # farthest hit cannot lower any ray's alpha: it is passed over (the farthest hit is
-    # looked at again every LOOK_AGAIN primitives traced), and so is a ray already nearer.
-    unhit = 0
-    for i in range(n):
-        if best[i] >= 1.0:
-            unhit += 1
-    farthest = 1.0  # [alpha] at least the farthest any ray still reaches
-    traced = 0
+    # The primitives in range that the filter admits, ring by ring where there are many.
+    admitted, ring_of, in_order = near_first[0], near_first[1], near_first[2]
+    count = 0
     for j in range(m):
         if j < ne and not d_edge[j] >= 0.0:
             continue
@@ -236,10 +247,41 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
         d2 = cx * cx + cy * cy
         if d2 > reach * reach or _rejects(shape_filters, o, group, categories, mask):
             continue
+        admitted[count] = j
+        count += 1
+    sequence = admitted
+    starts[0] = 0
+    starts[1:] = count  # one ring, in the table's order
+    if sort:
+        _sort_near_first(admitted, ring_of, in_order, starts, count, owner, bound, ox, oy, rng,
+                         slack, ne, nf)
+        sequence = in_order
+    # Once every ray has hit something, a primitive whose shape lies farther than the
+    # farthest hit cannot lower any ray's alpha: it is passed over (the farthest hit is
+    # looked at again every LOOK_AGAIN primitives traced, and at each ring, which ends the
+    # cast when its inner edge lies beyond), and so is a ray already nearer.
+    unhit = 0
+    for i in range(n):
+        if best[i] >= 1.0:
+            unhit += 1
+    farthest = 1.0  # [alpha] at least the farthest any ray still reaches
+    traced = 0
+    ring = 0
+    for q in range(count):
+        if q == starts[ring + 1]:  # a ring more (or several: empty ones between)
+            while q == starts[ring + 1]:
+                ring += 1
+            if unhit == 0:
+                farthest = best.max()
+                if _RING_EDGES[ring - 1] > farthest:
+                    break
+        j = sequence[q]
+        o = owner[j]
         kind = 0 if j < ne else (1 if j < ne + nf else (2 if j < ne + nf + nc else 3))
         least = -1.0  # [alpha] the least a hit on the shape can have (-1: not known)
         if unhit == 0 and kind != 1:  # (flags, within rounding of their shape, are kept)
-            least = (math.sqrt(d2) - bound[2, o] - slack) / rng
+            cx, cy = bound[0, o] - ox, bound[1, o] - oy
+            least = (math.sqrt(cx * cx + cy * cy) - bound[2, o] - slack) / rng
             traced += 1
             if traced % LOOK_AGAIN == 0:
                 farthest = best.max()
@@ -313,6 +355,38 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
             flagged[n_flagged] = order[e % n]
             n_flagged += 1
     return n_flagged
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _sort_near_first(admitted: np.ndarray, ring_of: np.ndarray, in_order: np.ndarray,
+                     starts: np.ndarray, count: int, owner: np.ndarray, bound: np.ndarray,
+                     ox: float, oy: float, rng: float, slack: float, ne: int, nf: int) -> None:
+    """The ``count`` primitives ``admitted`` into ``in_order`` ring by ring (each ring in
+    the table's order; a counting sort), ``starts[r]`` where ring r begins (``starts[RINGS]``:
+    ``count``). A primitive's ring: the least alpha a hit on its shape (its bounding circle,
+    seen from the origin ``ox``, ``oy`` [m], ``rng`` [m] ahead) can have; flags (corners pymunk
+    decides, always kept) go first."""
+    starts[:] = 0
+    for q in range(count):
+        j = admitted[q]
+        ring = 0
+        if not ne <= j < ne + nf:
+            o = owner[j]
+            cx, cy = bound[0, o] - ox, bound[1, o] - oy
+            least = (math.sqrt(cx * cx + cy * cy) - bound[2, o] - slack) / rng
+            while ring < RINGS - 1 and least >= _RING_EDGES[ring]:
+                ring += 1
+        ring_of[q] = ring
+        starts[ring + 1] += 1
+    for ring in range(RINGS):  # sizes -> where each ring ends
+        starts[ring + 1] += starts[ring]
+    for q in range(count - 1, -1, -1):  # from the last: each ring keeps the table's order
+        ring = ring_of[q]
+        starts[ring + 1] -= 1  # (ends down to beginnings: ring r's is now at r + 1)
+        in_order[starts[ring + 1]] = admitted[q]
+    for ring in range(RINGS):
+        starts[ring] = starts[ring + 1]
+    starts[RINGS] = count
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
