@@ -211,6 +211,7 @@ class Batch:
         return [run.bookkeep() for run in self.runs]
 
 
-def single(run: Run) -> Batch:
-    """The batch of one run, in a world of its own."""
-    return Batch((run,), run.world, run.built.propulsion)
+def single(run: Run, before: Batch | None = None) -> Batch:
+    """The batch of one run, in a world of its own; ``before``: its batch before a reset
+    (what it knew of the fixed world stands where the rebuilt world's is the same)."""
+    return Batch((run,), run.world, run.built.propulsion, before=before)

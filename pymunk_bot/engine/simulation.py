@@ -39,6 +39,7 @@ class Simulation:
 
     world: World
     _robots: list[Robot]
+    _batch: Batch | None = None  # its batch (none for a copy on a shared ground)
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None, *, ground: World | None = None,
@@ -112,7 +113,8 @@ class Simulation:
         self.reads = bool(self._sensors or self._mapping or self._localized or self._scores
                           or built.metrics)
         # A copy on a shared ground ticks in its Replicas' batch, never in one of its own.
-        self._batch = None if self._ground is not None else single(self)
+        self._batch = (None if self._ground is not None
+                       else single(self, self._batch))
         # What step() calls: its batch's tick (or, for a copy, the error above)
         self._tick = self._batch.step if self._batch is not None else self._own_batch
 

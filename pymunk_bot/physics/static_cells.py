@@ -13,9 +13,11 @@ went since, or after :meth:`StaticCells.forget` (the gate calls it when bodies w
 outside the physics: ``World.disturb``; a fixed body moved by hand is not looked for at every
 test, which cost a microsecond per body). The Space's shapes are compared only when the
 world's ``fixed_version`` changed (someone was handed the Space, or disturbed the world):
-comparing them at every test cost 34 us on the real warehouse map. The substep gate refreshes
-before each test; the planner of robots that step apart (physics/apart.py) when it starts, as
-nothing fixed can change while they do.
+comparing them at every test cost 34 us on the real warehouse map. Where the fixed shapes
+are others that lie where the old ones did (a run rebuilt by a reset, in a new Space:
+:meth:`StaticCells.watching`), the cells stand: building them was half of a simple scenario's
+reset (3-11 ms). The substep gate refreshes before each of its tests, and when it is asked
+which robots may step apart (physics/apart.py).
 """
 from __future__ import annotations
 
@@ -58,6 +60,7 @@ class StaticCells:
         self._seen: int | None = None  # the version the cells were checked at
         self._key: tuple | None = None  # the Space's shapes when the cells were last checked
         self._fixed: list[pymunk.Shape] | None = None  # the fixed shapes the cells were built from
+        self._outline: list[tuple] | None = None  # what they cover (_outline_of)
         self._origin = (0.0, 0.0)  # [m] the grid's lower-left corner
         self._cell = 1.0  # [m]
         self._table = np.zeros((1, 1), dtype=np.int32)  # summed-area table of marked cells
@@ -122,12 +125,18 @@ class StaticCells:
         """Fixed bodies may have moved: the next :meth:`refresh` builds the cells again."""
         self._key = self._seen = self._fixed = None
 
-    def watching(self, moving: Collection[pymunk.Body]) -> "StaticCells":
-        """These cells, for another set of ``moving`` bodies in the same Space (a copy of a
-        scenario rebuilt among others: its new robots come, its old ones go, and the fixed
-        world, unless its version says otherwise, is what it was, so its cells are kept)."""
+    def watching(self, space: pymunk.Space, moving: Collection[pymunk.Body],
+                 version: Callable[[], int] | None = None) -> "StaticCells":
+        """These cells, for another set of ``moving`` bodies in ``space``: the same Space (a
+        copy of a scenario rebuilt among others: its new robots come, its old ones go, and
+        the fixed world, unless its version says otherwise, is what it was), or another one
+        (a run rebuilt: its fixed shapes are new, and where they lie where the old ones did,
+        the cells stand). Built again only where the fixed world differs."""
+        if space is not self.space:
+            self.space, self._version, self._seen, self._fixed = space, version, None, None
         self._moving = moving
-        self._key = None  # the shapes are compared at the next refresh, the fixed ones kept
+        self._key = None  # the shapes are compared at the next refresh
+        self.refresh()
         return self
 
     def _fixed_shapes(self, shapes: tuple[pymunk.Shape, ...]) -> list[pymunk.Shape]:
@@ -152,6 +161,10 @@ class StaticCells:
         if fixed == self._fixed:  # the shapes that moved came or went: the fixed ones stand
             return
         self._fixed = fixed
+        outline = [_outline_of(shape) for shape in fixed]
+        if outline == self._outline:  # other shapes where the old ones were: the cells stand
+            return
+        self._outline = outline
         boxes = np.array([tuple(shape.cache_bb()) for shape in fixed], dtype=float).reshape(-1, 4)
         self._everywhere = not np.isfinite(boxes).all()
         if boxes.shape[0] == 0 or self._everywhere:  # nothing fixed, or nothing to mark
@@ -198,6 +211,22 @@ def _mark(grid: np.ndarray, shape: pymunk.Shape, box: list[float], left: float, 
         covered = shapely.intersects(squares, outline)
     grid[j0:j1 + 1, i0:i1 + 1] |= covered.astype(np.int32)
     return True
+
+
+def _outline_of(shape: pymunk.Shape) -> tuple:
+    """What ``shape`` covers, as numbers: its kind, its points in the world frame [m] and its
+    rounding radius [m] (its bounding box for a kind not known here)."""
+    body = shape.body
+    assert body is not None
+    if isinstance(shape, pymunk.Circle):
+        points: tuple = (tuple(body.local_to_world(shape.offset)),)
+    elif isinstance(shape, pymunk.Segment):
+        points = (tuple(body.local_to_world(shape.a)), tuple(body.local_to_world(shape.b)))
+    elif isinstance(shape, pymunk.Poly):
+        points = tuple(tuple(body.local_to_world(v)) for v in shape.get_vertices())
+    else:
+        points = (tuple(shape.cache_bb()),)
+    return type(shape).__name__, points, float(getattr(shape, "radius", 0.0))
 
 
 def _outline(shape: pymunk.Shape) -> shapely.Geometry | None:

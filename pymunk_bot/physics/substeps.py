@@ -182,7 +182,7 @@ class SubstepGate:
         self._bodies = {m.body for m in self.movers}  # shapes of any other body stand still
         # where the fixed shapes are (looked at again when fixed_version() changes)
         self.fixed = (StaticCells(space, self._bodies, fixed_version) if fixed is None
-                      else fixed.watching(self._bodies))
+                      else fixed.watching(space, self._bodies, fixed_version))
         # The movers as Chipmunk addresses, read by a compiled loop, and their (x, y, vx, vy, omega)
         self._addresses = addresses([m.body for m in self.movers])
         self._state = np.empty((len(self.movers), 5))
