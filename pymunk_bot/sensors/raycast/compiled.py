@@ -210,8 +210,9 @@ def trace(rows: np.ndarray, counts: np.ndarray, shape_filters: np.ndarray, query
     rays that pass near a flag, or inside a ``side`` interval (2, k) [rad], to ``flagged``
     and return how many there are (a ray may appear more than once); -1 if they do not
     fit; -2 if the rays are not one turn in order and ``order_given`` is empty (call again
-    with their angle order). ``near_first`` (3, m) and ``starts`` (RINGS + 1): scratch; ``sort``: the primitives
-    in range are traced nearest first (else in the table's order; the same answers)."""
+    with their angle order). ``near_first`` (3, m) and ``starts`` (RINGS + 1): scratch;
+    ``sort``: the primitives in range are traced nearest first (else in the table's order;
+    the same answers)."""
     n = best.shape[0]
     group, categories, mask = query[0], query[1], query[2]
     st, order, t0, inv, err, wrap = _sorted_rays(ang, order_given)
