@@ -26,7 +26,8 @@ as the probe draws no random numbers). A line per filter update:
 
 At the end, a JSON summary of the run (how often and how much the search seeded, the seeds'
 gains, the median count of look-alike places, when it said ``localized``, for how long on a
-wrong pose, and when it converged by the benchmark's rule).
+wrong pose, when it converged by the benchmark's rule, and how far the robot had driven, in
+truth, by the benchmark's 20 s).
 """
 from __future__ import annotations
 
@@ -37,7 +38,8 @@ from typing import Any, Callable, Iterator, NoReturn
 
 import numpy as np
 
-from bench.localization_robustness import (FAMILIES, GLOBAL_HEADING, GLOBAL_POSITION, MAX_SEEDS,
+from bench.localization_robustness import (FAMILIES, GLOBAL_HEADING, GLOBAL_POSITION, GLOBAL_TIME,
+                                           MAX_SEEDS,
                                            MAX_TIME, PEOPLE_FAMILIES, lidar_for, odometry_for,
                                            settings_option, world_for)
 from pymunk_bot.localization.se2 import transform_points, wrap
@@ -203,15 +205,18 @@ def probe(family: str, seed: int, profile: str = "typical", settings: dict | Non
     seen: dict[str, Any] = {}
     rows: list[dict[str, Any]] = []
     out(HEADER)
+    path, last = 0.0, np.array(r.pose[:2], dtype=float)  # [m] the true path so far
     with _watched(r, seen):
         updates = mcl.updates
         while sim.time < MAX_TIME and not r.goal_reached:
             seen.clear()
             sim.step()
+            here = np.array(r.pose[:2], dtype=float)
+            path, last = path + float(np.hypot(*(here - last))), here
             if mcl.updates == updates:
                 continue
             updates = mcl.updates
-            rows.append(_row(sim, r, mcl, walkers, seen))
+            rows.append(_row(sim, r, mcl, walkers, seen) | {"path": path})
             flipped = len(rows) > 1 and rows[-1]["localized"] != rows[-2]["localized"]
             if (len(rows) - 1) % every == 0 or flipped:
                 out(_line(rows[-1]))
@@ -230,10 +235,12 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     converged = (t[0] if bad.size == 0 else t[bad[-1] + 1] if bad[-1] + 1 < t.size else math.inf)
     seeding = [r for r in rows if r["seeded"] > 0]
     alike = [r["alike"] for r in rows if r["alike"] >= 0]
+    by_20 = [r["path"] for r in rows if r["t"] <= GLOBAL_TIME]
     return {"updates": len(rows),
             "converged_at": float(converged),
             "first_localized": float(t[np.argmax(said)]) if said.any() else math.inf,
             "localized_while_off": float(np.diff(np.append(t, t[-1]))[said & off].sum()),
+            "path_by_20s": by_20[-1] if by_20 else 0.0,
             "median_used": float(np.median([r["used"] for r in rows])),
             "median_weighed": float(np.median([r["weighed"] for r in rows])),
             "median_fit_true": float(np.nanmedian([r["fit_true"] for r in rows])),
