@@ -129,11 +129,6 @@ def origin_speeds(vx: np.ndarray, vy: np.ndarray, omega: np.ndarray,
     return np.hypot(vx, vy) + np.abs(omega) * offset
 
 
-def motions(bodies: Sequence[pymunk.Body]) -> np.ndarray:
-    """(vx, vy, omega) of a few bodies, read one by one: (n, 3) [m/s, m/s, rad/s]."""
-    return np.array([(*b.velocity, b.angular_velocity) for b in bodies]).reshape(-1, 3)
-
-
 def near_pairs(xy: np.ndarray, distance: float) -> np.ndarray:
     """Every pair (i < j) of the points ``xy`` (n, 2) [m] within ``distance`` [m] of each
     other, (m, 2); found by a k-d tree, in no particular order."""
