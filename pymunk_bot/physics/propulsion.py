@@ -30,8 +30,8 @@ from pymunk_bot.physics.chipmunk import CALLS, addresses, read_motions, read_pos
 from pymunk_bot.robots.stacking import DriveUnits
 from pymunk_bot.physics.row_table import RowTable
 from pymunk_bot.physics.steering import (ANCHORED, COG_X, COG_Y, HELD, HELD_STEP,
-                                         STEER_COLUMNS, aim_each, hold_coasting_wheels,
-                                         hold_each)
+                                         STEER_COLUMNS, advance_and_aim_wheels, aim_each,
+                                         hold_coasting_wheels, hold_each)
 from pymunk_bot.robots.drives.diff import DiffDriveGroup
 from pymunk_bot.physics.substeps import spin_reach
 
@@ -88,11 +88,13 @@ class Propulsion:
         self.steer[:, COG_X], self.steer[:, COG_Y] = self.cog[:, 0], self.cog[:, 1]
         self._aimed = np.empty(self.n, dtype=np.intp)  # hold_each's robots left to aim
         self._h_hold = np.empty(1)  # [s] one step for every robot held
-        # Whole differential drives: their settled motors coast and are held in one compiled
-        # pass (steering.hold_coasting_wheels); other groups in two calls, the same arithmetic.
+        self._h_next = np.empty(1)  # [s] one next step for every robot aimed
+        # Whole differential drives: their settled motors coast and are held, or their motors
+        # advance and their robots are aimed, in one compiled pass each
+        # (steering.hold_coasting_wheels, advance_and_aim_wheels); other groups in two calls,
+        # the same arithmetic.
         self._wheels = [self._wheel_table(d) if isinstance(d.group, DiffDriveGroup)
                         and d.starts is None else None for d in self._drives]
-        self._h_next = np.empty(1)  # [s] one next step for every robot aimed
         self._xy = np.zeros((self.n, 2))  # [m] positions (positions())
         spin = np.array([spin_reach(b) for b in self.bodies])  # [m / rad]
         # Each group's rows (copies' groups: each stacked group's, one call for all copies).
@@ -118,7 +120,8 @@ class Propulsion:
         # Groups (copies' parts) settled before the step keep their twists through it: held,
         # and coasted (not in a tick before another substep length: every substep is aimed).
         steady: list[tuple[np.ndarray, Twists]] = []  # held, yet aimed each substep
-        loose: list[tuple[DriveUnits, list[int]]] = []
+        # Groups still moving, their units (a whole differential drive: its table as well).
+        loose: list[tuple[DriveUnits, list[int], RowTable | None]] = []
         for drives, wheels in zip(self._drives, self._wheels):
             if h_last != h:
                 moving = drives.every_unit
@@ -130,7 +133,7 @@ class Propulsion:
             else:
                 moving = self._settle(drives, drives.every_unit, h, substeps, steady)
             if moving:
-                loose.append((drives, moving))
+                loose.append((drives, moving, wheels))
         if not (steady or loose):  # every robot held: nothing to do between substeps
             for _ in range(substeps):
                 space.step(h)
@@ -141,18 +144,21 @@ class Propulsion:
             if sub:
                 for members, (ux, uy, omega) in steady:
                     aim_each(CALLS, self.chip, self.steer, members, ux, uy, omega, h, after)
-            for drives, units in loose:
+            for drives, units, wheels in loose:
+                if wheels is not None:  # a whole differential drive: one compiled pass
+                    advance_and_aim_wheels(wheels.table, h)
+                    continue
                 rows, _, members = drives.rows(units)
                 ux, uy, omega = _rows(drives.advance(h, rows))
                 aim_each(CALLS, self.chip, self.steer, members, ux, uy, omega, h, after)
             space.step(h)
             left = substeps - 1 - sub
             if loose and left > 1 and h_last == h:  # motors settled now: held for the rest
-                still: list[tuple[DriveUnits, list[int]]] = []
-                for drives, units in loose:
+                still: list[tuple[DriveUnits, list[int], RowTable | None]] = []
+                for drives, units, wheels in loose:
                     moving = self._settle(drives, units, h, left, steady)
                     if moving:
-                        still.append((drives, moving))
+                        still.append((drives, moving, wheels))
                 loose = still
 
     def _wheel_table(self, drives: DriveUnits) -> RowTable:
@@ -163,7 +169,8 @@ class Propulsion:
                          (group, "commanded", f64, 2), (group, "target", f64, 2),
                          (group, "turning", f64, 2), (group, "travel", f64, 2),
                          (group, "track", f64, 1), (group, "twist_rows", f64, 2),
-                         (self._aimed, None, intp, 1), (self._h_hold, None, f64, 1)])
+                         (self._aimed, None, intp, 1), (self._h_hold, None, f64, 1),
+                         (group, "max_accel", f64, 1), (self._h_next, None, f64, 1)])
 
     def _settle(self, drives: DriveUnits, units: list[int], h: float, substeps: int,
                 steady: list[tuple[np.ndarray, Twists]]) -> list[int]:

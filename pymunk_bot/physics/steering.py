@@ -21,7 +21,7 @@ from pymunk_bot.geometry.arcs import sinc_half
 from pymunk_bot.physics.chipmunk import (GET_ANGLE, GET_SPIN, SET_ANCHOR, SET_ANGLE, SET_SPIN,
                                          SET_VELOCITY, get_scalar, set_scalar, set_vect)
 from pymunk_bot.physics.row_table import floats_1d, floats_2d, integers_1d, integers_2d
-from pymunk_bot.robots.drives.diff import coast_settled_rows
+from pymunk_bot.robots.drives.diff import advance_every_row, coast_settled_rows
 
 
 @numba.njit(cache=True)
@@ -184,3 +184,20 @@ def hold_coasting_wheels(table: np.ndarray, h: float, substeps: int) -> int:
     step = floats_1d(table, 11)
     step[0] = h
     return hold_each(calls, chip, steer, members, ux, uy, omega, step, aimed)
+
+
+@numba.njit(cache=True)
+def advance_and_aim_wheels(table: np.ndarray, h: float) -> None:
+    """A differential drive's robots through one substep of ``h`` [s] while some motor still
+    reaches its target: the motors advance (robots/drives/diff.py) and every robot is aimed
+    for the step the table's last slot names (:func:`aim_each`). One call, given one array,
+    instead of the drive's and the aim's, given thirteen. ``table``: the slots of
+    :func:`hold_coasting_wheels`, then the drive's ``max_accel`` and the next step [s]."""
+    calls, chip, steer = integers_1d(table, 0), integers_2d(table, 1), floats_2d(table, 2)
+    twists = floats_2d(table, 9)
+    ux, uy, omega = twists[0], twists[1], twists[2]
+    advance_every_row(floats_2d(table, 4), floats_2d(table, 5), floats_2d(table, 6),
+                      floats_2d(table, 7), floats_1d(table, 12), floats_1d(table, 8), h, ux,
+                      omega)
+    aim_each(calls, chip, steer, integers_1d(table, 3), ux, uy, omega, h,
+             floats_1d(table, 13))

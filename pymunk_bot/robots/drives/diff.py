@@ -235,13 +235,30 @@ def _advance_rows(rows: np.ndarray, commanded: np.ndarray, target: np.ndarray,
     (the encoders count that), the commands move toward their targets by at most
     max_accel * h, and the body twists (ux [m/s], omega [rad/s]) of the new commands."""
     for j in range(rows.shape[0]):
-        i = rows[j]
-        _turn_wheels(i, commanded, turning, travel, h)
-        step = max_accel[i] * h
-        for wheel in range(2):
-            speed = commanded[i, wheel]
-            commanded[i, wheel] = speed + min(step, max(-step, target[i, wheel] - speed))
-        _twist(i, j, commanded, track, ux, omega)
+        _advance_one(rows[j], j, commanded, target, turning, travel, max_accel, track, h, ux,
+                     omega)
+
+
+@numba.njit(cache=True)
+def advance_every_row(commanded: np.ndarray, target: np.ndarray, turning: np.ndarray,
+                      travel: np.ndarray, max_accel: np.ndarray, track: np.ndarray, h: float,
+                      ux: np.ndarray, omega: np.ndarray) -> None:
+    """:func:`_advance_rows` of every robot of the group, in order."""
+    for i in range(commanded.shape[0]):
+        _advance_one(i, i, commanded, target, turning, travel, max_accel, track, h, ux, omega)
+
+
+@numba.njit(cache=True)
+def _advance_one(i: int, j: int, commanded: np.ndarray, target: np.ndarray,
+                 turning: np.ndarray, travel: np.ndarray, max_accel: np.ndarray,
+                 track: np.ndarray, h: float, ux: np.ndarray, omega: np.ndarray) -> None:
+    """Robot ``i``'s substep of :func:`_advance_rows`, its twist written at ``j``."""
+    _turn_wheels(i, commanded, turning, travel, h)
+    step = max_accel[i] * h
+    for wheel in range(2):
+        speed = commanded[i, wheel]
+        commanded[i, wheel] = speed + min(step, max(-step, target[i, wheel] - speed))
+    _twist(i, j, commanded, track, ux, omega)
 
 
 @numba.njit(cache=True)
