@@ -23,6 +23,7 @@ from pymunk_bot.config.substeps import mover_speed
 from pymunk_bot.config.errors import ScenarioError
 from pymunk_bot.geometry.footprint import of_robot
 from pymunk_bot.localization.base import LocalizerContext
+from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.config.localization import LOCALIZER_MAP_RESOLUTION
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.outcomes.metrics import RobotMetrics
@@ -59,12 +60,14 @@ class Built:
 
 
 class MapSource:
-    """What a robot may know in advance: the scenario's map, built once on first request."""
+    """What a robot may know in advance: the scenario's map, built once on first request (and
+    kept by a run's resets: build's ``maps``), with the likelihood fields localizers read."""
 
     def __init__(self, config: ScenarioConfig) -> None:
         self.config = config
         self._info: MapInfo | None = None
         self._grid: OccupancyGrid | None = None
+        self._fields: dict[float, LikelihoodField] = {}  # by max_dist [m]
 
     def info(self) -> MapInfo:
         """Arena and obstacles as geometry (for planners)."""
@@ -79,16 +82,25 @@ class MapSource:
             self._grid = grid_from_map(self.info().without_movable(), LOCALIZER_MAP_RESOLUTION)
         return self._grid
 
+    def likelihood(self, max_dist: float) -> LikelihoodField:
+        """The likelihood field of :meth:`grid` capped at ``max_dist`` [m] (read only, so
+        every localizer on this map shares it; building it was half of an MCL run's reset)."""
+        field = self._fields.get(max_dist)
+        if field is None:
+            field = self._fields[max_dist] = LikelihoodField(self.grid(), max_dist)
+        return field
+
 
 def build(config: ScenarioConfig, seed: int, source: str,
           handles: dict[str, Robot] | None = None, world: World | None = None,
-          rows: Rows = OWN) -> Built:
+          rows: Rows = OWN, maps: MapSource | None = None) -> Built:
     """Build a run; ``handles`` (from an earlier build) are rebound instead of made anew.
     ``world``: a world already made for it (a copy on a shared ground), else a new one.
     ``rows``: where its groups keep their per-robot state (a copy's rows of the arrays its
-    copies share: :mod:`pymunk_bot.robots.rows`), else arrays of their own."""
+    copies share: :mod:`pymunk_bot.robots.rows`), else arrays of their own. ``maps``: what an
+    earlier build of this config knew of its map (a reset), else found anew."""
     with _collector_paused():
-        return _build(config, seed, source, handles, world, rows)
+        return _build(config, seed, source, handles, world, rows, maps)
 
 
 @contextmanager
@@ -106,7 +118,7 @@ def _collector_paused() -> Iterator[None]:
 
 
 def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Robot] | None,
-           world: World | None, rows: Rows) -> Built:
+           world: World | None, rows: Rows, known: MapSource | None) -> Built:
     """:func:`build`, the collector paused."""
     rng = np.random.default_rng(seed)
     world_rng, sensor_rng = rng.spawn(2)
@@ -144,7 +156,7 @@ def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Ro
     world.actors.extend(make_actors(world, ordered, actor_rng))
     for robot, child in zip(ordered, sensor_rng.spawn(n)):
         attach_sensors(robot, world, child)
-    maps = MapSource(config)
+    maps = known if known is not None and known.config is config else MapSource(config)
     schedules: list[Schedule | None] = []
     mind_rngs = mind_rng.spawn(n)
     for index, (robot, child) in enumerate(zip(ordered, mind_rngs)):
@@ -283,6 +295,7 @@ def _make_localizer(robot: Robot, index: int, maps: MapSource, source: str,
     context = LocalizerContext(
         robot=robot.spec, start_pose=np.array(robot.config.pose, dtype=float), rng=rng,
         arena=config.world.arena, map=maps.grid() if needs_map else None,
+        likelihood=maps.likelihood if needs_map else None,
         lidar_offset=lidar.offset if lidar is not None else (0.0, 0.0, 0.0),
         origin=config.world.extent[:2])
     kwargs: dict[str, Any] = {}

@@ -10,7 +10,7 @@ import numpy as np
 import pymunk
 
 from pymunk_bot.engine.batch import Batch, single
-from pymunk_bot.engine.build import Built, build
+from pymunk_bot.engine.build import Built, MapSource, build
 from pymunk_bot.config import ScenarioConfig, load_scenario
 from pymunk_bot.config.checks import check_seed
 from pymunk_bot.engine.events import EventSchedule
@@ -40,6 +40,7 @@ class Simulation:
     world: World
     _robots: list[Robot]
     _batch: Batch | None = None  # its batch (none for a copy on a shared ground)
+    _maps: MapSource | None = None  # its map and what was derived from it (engine/build.py)
 
     def __init__(self, config: ScenarioConfig, seed: int | None = None,
                  source: str | None = None, *, ground: World | None = None,
@@ -71,8 +72,9 @@ class Simulation:
                 self.world.retire([b for r in self._robots for b in (r.body, r.control)])
             world = World(self.config, self._ground, self._replica)
         built: Built = build(self.config, self.seed, self.source, handles=self.robots,
-                             world=world, rows=self._rows)
+                             world=world, rows=self._rows, maps=self._maps)
         self._built = built
+        self._maps = built.maps  # a reset keeps what it knew of the map
         self.robots.clear()
         self.robots.update(built.robots)  # the same dict and the same handles after a reset
         self.world = built.world

@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.robots.readings import LaserScan, RobotSpec
+
+if TYPE_CHECKING:
+    from pymunk_bot.localization.likelihood import LikelihoodField
 
 # When an estimate is trustworthy enough to drive on (docs/localization.md, "Localize before
 # driving"): its position std (along its worst axis) and heading std within these bounds.
@@ -33,6 +36,18 @@ class LocalizerContext:
     lidar_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # LiDAR mount in the robot frame
     origin: tuple[float, float] = (0.0, 0.0)  # [m] the arena's lower-left corner (a ROS map's
     # origin): the arena spans [x0, x0 + width] x [y0, y0 + height]
+    # The likelihood field of ``map`` capped at a distance [m], built once for every localizer
+    # and every reset of the run on that map (None: build your own from ``map``).
+    likelihood: "Callable[[float], LikelihoodField] | None" = None
+
+    def likelihood_field(self, max_dist: float) -> "LikelihoodField":
+        """The likelihood field of ``map`` capped at ``max_dist`` [m]: the run's shared one,
+        else one of its own."""
+        if self.likelihood is not None:
+            return self.likelihood(max_dist)
+        from pymunk_bot.localization.likelihood import LikelihoodField
+        assert self.map is not None
+        return LikelihoodField(self.map, max_dist)
 
     @property
     def extent(self) -> tuple[float, float, float, float]:

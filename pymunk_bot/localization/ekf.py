@@ -43,7 +43,6 @@ import numpy as np
 
 from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerInputs
 from pymunk_bot.config.localization import EkfConfig
-from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.dynamic import short_returns
 from pymunk_bot.localization.scanmatch import MIN_POINTS, match_scan, subsample
 from pymunk_bot.localization.se2 import between, compose, scan_points, wrap
@@ -62,7 +61,7 @@ class EkfLocalizer(Localizer):
         super().__init__(config, context)
         if context.map is None:
             raise ValueError("ekf needs a map (the scenario's, or world.map)")
-        self.field = LikelihoodField(context.map, config.max_dist)
+        self.field = context.likelihood_field(config.max_dist)
         self.covariance = np.diag(np.square(config.initial_std))
         self._odom: np.ndarray | None = None
         self.updates = 0  # scans folded in

@@ -36,7 +36,6 @@ from pymunk_bot.localization.base import Localizer, LocalizerContext, LocalizerI
 from pymunk_bot.config.localization import MclConfig
 from pymunk_bot.localization.dynamic import excused_fit, short_returns
 from pymunk_bot.localization.explore import Explorer, trace
-from pymunk_bot.localization.likelihood import LikelihoodField
 from pymunk_bot.localization.motion import sample_motion
 from pymunk_bot.localization.moving import MovingReturns
 from pymunk_bot.localization.particles import (CLUSTER_BIN, cluster_labels, cluster_modes, kld_limit,
@@ -105,7 +104,7 @@ class MclLocalizer(Localizer):
         if context.map is None:
             raise ValueError("mcl needs a map (the scenario's, or world.map)")
         self.rng = context.rng
-        self.field = LikelihoodField(context.map, config.laser_likelihood_max_dist)
+        self.field = context.likelihood_field(config.laser_likelihood_max_dist)
         self._cell = context.map.resolution  # [m]
         if self.field.free_xy.shape[0] == 0:
             raise ValueError("mcl: the map has no free cell to place particles on")
