@@ -125,7 +125,7 @@ def _build(config: ScenarioConfig, seed: int, source: str, handles: dict[str, Ro
     (mind_rng,) = rng.spawn(1)  # controllers and localizers
     (actor_rng,) = rng.spawn(1)  # pedestrians (spawned last: earlier streams stay as they were)
     world = World(config) if world is None else world
-    fleet = Fleet(list(config.robots), rows.within("fleet"))
+    fleet = Fleet(list(config.robots), rows.of_fleet())
     fleet.extent = config.world.extent  # goals set from code must lie in the arena
     n = len(config.robots)
     robots: dict[str, Robot] = {}
@@ -216,7 +216,7 @@ def _make_drive(name: str, configs: list[Any], rows: Rows) -> Any:
     (``ROWS``) keeps them on ``rows``."""
     kind = drives.get(name)
     if getattr(kind, "ROWS", ()):
-        return kind(configs, rows.within(f"drive:{name}"))
+        return kind(configs, rows.of_drive(name))
     return kind(configs)
 
 
@@ -227,7 +227,7 @@ def _make_odometry(group: Any, rngs: list[np.random.Generator], rows: Rows) -> A
     if kind not in odometry_kinds:
         return group.make_odometry(rngs)
     if getattr(type(group), "ROWS", ()):
-        return odometry_kinds.get(kind)(group, rngs, rows=rows.within(f"odometry:{kind}"))
+        return odometry_kinds.get(kind)(group, rngs, rows=rows.of_odometry(kind))
     return odometry_kinds.get(kind)(group, rngs)
 
 

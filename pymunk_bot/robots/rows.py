@@ -34,6 +34,20 @@ class Rows:
         """Where a part of the group (its encoders: ``"encoders"``) keeps its fields."""
         return self
 
+    # Where each group of a run keeps its fields: the names a build and the stack of copies
+    # both use, so the group of every copy at once reads the rows each copy's group holds.
+    def of_fleet(self) -> "Rows":
+        """The fleet's."""
+        return self.within("fleet")
+
+    def of_drive(self, kind: str) -> "Rows":
+        """The drive group of drive ``kind``'s."""
+        return self.within(f"drive:{kind}")
+
+    def of_odometry(self, kind: str) -> "Rows":
+        """The odometry group of drive ``kind``'s."""
+        return self.within(f"odometry:{kind}")
+
 
 OWN = Rows()
 

@@ -28,7 +28,7 @@ class Stack:
     def __init__(self, sims: Sequence[Any], shared: SharedRows) -> None:
         whole = shared.whole()
         fleets = [sim.built.fleet for sim in sims]
-        self.fleet = type(fleets[0]).stacked(fleets, whole.within("fleet"))
+        self.fleet = type(fleets[0]).stacked(fleets, whole.of_fleet())
         self.per_copy = len(sims[0].robots)  # robots of each copy
         slots = len(sims[0].built.drive_groups)
         # Each whole, with its robots' indices and the first row of each copy's part.
@@ -41,10 +41,10 @@ class Stack:
             members = [copy * self.per_copy + i for copy, sim in enumerate(sims)
                        for i in sim.built.drive_groups[j][1]]
             starts = np.cumsum([0] + [part.n for part in drives[:-1]]).tolist()
-            drive = type(drives[0]).stacked(drives, whole.within(f"drive:{kind}"))
+            drive = type(drives[0]).stacked(drives, whole.of_drive(kind))
             self.drive_groups.append((drive, members, starts))
             self.pairs.append((drive, type(odometries[0]).stacked(
-                odometries, whole.within(f"odometry:{kind}"))))
+                odometries, whole.of_odometry(kind))))
         # Robot (copy * per_copy + index in its copy) -> (its stacked drive group, its row).
         self.row_of = {robot: (whole, row) for whole, members, _ in self.drive_groups
                        for row, robot in enumerate(members)}
