@@ -2,6 +2,7 @@
 benchmark (issue 36).
 
     python -m bench.slam_heading_probe FAMILY PROFILE SEED [--settings JSON] [--keyframes]
+                                       [--noise-free]
     e.g. python -m bench.slam_heading_probe warehouse uncalibrated 5 --keyframes
 
 At each keyframe, as it is taken (before any later loop closure moves it): the estimate's
@@ -12,6 +13,12 @@ worst and best axes and of its heading (a corridor: the worst axis near the odom
 The summary says which dominates: a forward error entered where the scan could not pin the
 position along the route; a sideways error that grows with the distance driven, under a
 steady heading error, entered with the heading.
+
+The matcher's own heading error (``matcher_heading_error``): the keyframe's scan matched as
+the front end matches it, but to the previous LOCAL_KEYFRAMES keyframes' scans placed at
+their *true* poses, from the true pose, with no odometry prior. What it shows adds up along
+the chain whatever the rest of SLAM does; ``--noise-free`` gives the LiDAR no range noise, so
+what is left is the matcher's (docs/localization.md, "SLAM: lines that are not lines").
 
 The step's heading error is split into where it came from: the odometry's own step heading
 error (the prior's mean), what the scan alone said (the match's information less the
@@ -24,6 +31,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from collections import deque
 from typing import NoReturn
 
 import numpy as np
@@ -31,8 +39,11 @@ import numpy as np
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, Tour,
                                            lidar_for, odometry_for, settings_option,
                                            tour_goals, world_for)
+from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.odometry_trust import scan_only
-from pymunk_bot.localization.se2 import between, wrap
+from pymunk_bot.localization.scanmatch import subsample
+from pymunk_bot.localization.se2 import between, scan_points, transform_points, wrap
+from pymunk_bot.localization.slam import LOCAL_KEYFRAMES
 
 
 def _refuse(problem: str) -> NoReturn:
@@ -56,8 +67,20 @@ def _sources(step, truth_turn: float) -> dict:
             "prior_pull": math.degrees(float(wrap(float(step.pose[2]) - scan_heading)))}
 
 
-def probe(family: str, profile: str, seed: int, settings: dict | None = None) -> dict:
-    """Per keyframe figures (``keyframes``: a list of dicts, [deg] and [cm]) and a summary."""
+def matcher_heading_error(earlier: deque, points: np.ndarray, truth: np.ndarray, config) -> float:
+    """[deg] the heading error of robot-frame scan ``points`` taken at ``truth`` [x, y, theta],
+    matched as SLAM's front end (``config``: its SlamConfig) to ``earlier`` keyframes' (true
+    pose, robot-frame points), placed at their true poses (module docstring); NaN if no match."""
+    reference = Reference.surfaces(np.concatenate([transform_points(pose, p) for pose, p in earlier]))
+    match = icp(reference, subsample(points, config.max_beams), truth, config.iterations,
+                config.max_pair, config.huber)
+    return math.degrees(float(wrap(match.pose[2] - truth[2]))) if match.ok else math.nan
+
+
+def probe(family: str, profile: str, seed: int, settings: dict | None = None,
+          noise_free: bool = False) -> dict:
+    """Per keyframe figures (``keyframes``: a list of dicts, [deg] and [cm]) and a summary;
+    ``noise_free``: the LiDAR without range noise."""
     from pymunk_bot.engine.simulation import Simulation
 
     data = world_for(family, seed, revisit=True)
@@ -65,7 +88,8 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
         _refuse(f"the {family} map is not here")
     tour = Tour(tour_goals(family, seed, data)[1:])
     robot = data["robots"][0]
-    robot.update(lidar=lidar_for(seed), odometry=odometry_for(profile, seed),
+    robot.update(lidar={**lidar_for(seed), **({"noise_std": 0.0} if noise_free else {})},
+                 odometry=odometry_for(profile, seed),
                  localization={"type": "slam", **(settings or {})})
     data["seed"] = seed
     data.setdefault("world", {})["duration"] = REVISIT_MAX_TIME
@@ -78,11 +102,15 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
     rows: list[dict] = []
     last_truth = last_pose = None
     seen = 0  # keyframes seen so far (one new keyframe a row; the first has no step)
+    earlier: deque = deque(maxlen=LOCAL_KEYFRAMES)  # (true pose, scan points) of the latest keyframes
     while sim.time < REVISIT_MAX_TIME:
         sim.step()
         if len(slam.keyframes) > seen:
             seen = len(slam.keyframes)
             truth, pose = np.array(r.pose, dtype=float), np.array(slam.keyframes[-1], dtype=float)
+            points = scan_points(r.lidar.latest)[0]  # the keyframe's scan (taken this step)
+            matcher = matcher_heading_error(earlier, points, truth, slam.config) if earlier else math.nan
+            earlier.append((truth, points))
             if last_truth is not None:
                 c, s = math.cos(truth[2]), math.sin(truth[2])
                 d = pose[:2] - truth[:2]
@@ -99,6 +127,7 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
                     "match_std_worst": 100.0 * float(axes[1]), "match_std_best": 100.0 * float(axes[0]),
                     "match_heading_std": math.degrees(math.sqrt(max(float(cov[2, 2]), 0.0))),
                     "driven": 100.0 * float(np.hypot(*(truth[:2] - last_truth[:2]))),
+                    "matcher_heading_error": matcher,
                     **_sources(slam.front_end_step, truth_turn)})
             last_truth, last_pose = truth, pose
         if not tour.next_goal(r):
@@ -120,7 +149,10 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None) ->
                                                           / max(float(np.sum(table["driven"])) / 100.0, 1e-9)),
                "step_heading_error_sum_deg": float(np.sum(table["step_heading_error"])),
                "scan_step_heading_error_sum_deg": float(np.nansum(table["scan_step_heading_error"])),
-               "prior_pull_sum_deg": float(np.sum(table["prior_pull"]))}
+               "prior_pull_sum_deg": float(np.sum(table["prior_pull"])),
+               "matcher_heading_error_rms_deg": float(np.sqrt(np.nanmean(table["matcher_heading_error"] ** 2))),
+               "matcher_heading_error_mean_deg": float(np.nanmean(table["matcher_heading_error"])),
+               "matcher_heading_error_sum_deg": float(np.nansum(table["matcher_heading_error"]))}
     return {"summary": summary, "keyframes": rows}
 
 
@@ -133,11 +165,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("seed", type=int)
     parser.add_argument("--settings", default="{}", metavar="JSON", help="extra SLAM keys")
     parser.add_argument("--keyframes", action="store_true", help="a line for every keyframe")
+    parser.add_argument("--noise-free", action="store_true", help="a LiDAR without range noise")
     args = parser.parse_args(argv)
     if not 0 <= args.seed < MAX_SEEDS:
         parser.error(f"seed must be 0..{MAX_SEEDS - 1} (got {args.seed})")
     settings = settings_option(parser, args.settings, "SLAM")
-    out = probe(args.family, args.profile, args.seed, settings)
+    out = probe(args.family, args.profile, args.seed, settings, args.noise_free)
     if args.keyframes:
         for k, row in enumerate(out["keyframes"], start=1):
             print(f"{k:4d} " + " ".join(f"{key} {value:.2f}" for key, value in row.items()))

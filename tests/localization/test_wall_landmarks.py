@@ -111,16 +111,17 @@ def test_walls_as_landmarks_hold_the_heading_the_chain_drifts():
 
 
 @pytest.mark.slow
-def test_walls_take_half_the_drift_out_of_a_warehouse_tour():
+def test_a_warehouse_loop_around_a_shelf_ends_within_3_5_cm():
     # Nav2's warehouse, a loop around a shelf (seed 12: typical odometry; the chain-floor test's
-    # tour in test_loop_closure.py): with its loop closure alone the keyframes end at ATE 4.6
-    # cm; with the walls in the graph (the default), 2.5 cm.
+    # tour in test_loop_closure.py). With its loop closure alone the keyframes ended at ATE 4.6
+    # cm and the walls in the graph (the default) took it to 2.5 cm; since the front end weighs
+    # each line fit by how thin it is ("SLAM: lines that are not lines"), the heading the
+    # walls held no longer drifts here: 2.0 cm with or without them. What the walls do is
+    # tested above, on a corridor whose chain drifts.
     out = run_one("slam_revisit", "warehouse", "typical", 12)
     if out is None:
         pytest.skip("the shared warehouse map is not beside the checkout")
-    without = run_one("slam_revisit", "warehouse", "typical", 12, {"wall_landmarks": False})
     assert out.success and out.ate <= 0.035, out.line()
-    assert without.ate >= 0.04, without.line()
 
 
 def _scan_of_segments(segments: list[tuple[float, float, float, float]], beams: int = 360,
