@@ -41,7 +41,7 @@ class Reference:
                  weighed: bool = True) -> "Reference":
         """Local line fits of a cloud (the end points of several scans, world frame): for each
         point, the centroid and normal of its neighbours within ``radius`` (at least
-        SURFACE_MIN_POINTS, thin enough to be a line: corners and clutter are left out). Fitted
+        SURFACE_MIN_POINTS, thin enough to be a line: clutter is left out). Fitted
         over every scan of the submap, the lines average the range noise out; a normal from a
         point's two neighbours in its own scan was tilted by about 6 deg at 5 m with 180 beams
         and 2.5 cm noise, and pairing with a raw noisy point added that point's noise.
@@ -52,8 +52,8 @@ class Reference:
         rack's end taken for a line (v several times s) a few tenths. Weighed alike, such fits
         turned every match a little towards the scan's turn: a scan matched to the other
         scans at their *true* poses, no range noise, warehouse, came out 0.07 deg off a
-        keyframe, 0.025 deg one way on average, 5 deg over a tour (noise-free, they are now
-        0.004 deg off); docs/localization.md, "SLAM: lines that are not lines"."""
+        keyframe, 0.025 deg one way on average, 5 deg over a tour (now 0.005 deg off);
+        docs/localization.md, "SLAM: lines that are not lines". ``weighed`` False: every fit 1."""
         empty = cls(np.empty((0, 2)), np.empty((0, 2)))
         if points.shape[0] < SURFACE_MIN_POINTS:
             return empty

@@ -175,7 +175,8 @@ def _exact_scan(walls: np.ndarray, pose: np.ndarray, beams: int = 180,
 def test_exact_scans_among_corners_match_exactly():
     # Rack ends and corners fitted as lines, weighed as walls, turned each match a little: a
     # scan matched to the ten before it at their true poses, no noise, 180 beams at 3.5 m,
-    # along a row of racks and round its end: 0.030 deg RMS, -0.25 deg over the 59 matches.
+    # along a row of racks and round its end: 0.030 deg RMS, -0.25 deg over the 59 matches
+    # (weighed by how thin a line each fit is: 0.003 deg RMS, +0.02 deg).
     walls = _racks()
     poses = [np.array([1.0 + 0.2 * k, 4.0, 0.0]) for k in range(40)]
     poses += [np.array([9.0 + 0.5 * np.sin(np.radians(6 * k)), 4.5 - 0.5 * np.cos(np.radians(6 * k)),
