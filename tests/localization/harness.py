@@ -5,6 +5,8 @@ The loop itself lives in ``pymunk_bot.localization.trial`` so the bench measures
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from pymunk_bot import Simulation
@@ -48,3 +50,31 @@ def converged(trial: Trial, position: float = 0.3, heading: float = np.deg2rad(1
     if bad.size == 0:
         return float(t[0])
     return float(t[bad[-1] + 1]) if bad[-1] + 1 < t.size else float("inf")
+
+
+def scan_of_segments(segments, pose=(0.0, 0.0, 0.0), beams: int = 360, max_range: float = 8.0,
+                     noise: float = 0.01, rng: np.random.Generator | None = None) -> np.ndarray:
+    """End points (robot frame) of a scan of the ``segments`` (x0, y0, x1, y1) [m] from
+    ``pose`` [x, y, theta] (default: the origin, heading along x): each beam's nearest hit,
+    range noise ``noise`` [m]."""
+    rng = rng or np.random.default_rng(0)
+    x, y, theta = pose
+    c, s = math.cos(theta), math.sin(theta)
+    bearings = np.linspace(-math.pi, math.pi, beams, endpoint=False)
+    direction = np.column_stack([np.cos(bearings), np.sin(bearings)])
+    ranges = np.full(beams, np.inf)
+    for x0, y0, x1, y1 in segments:
+        # the segment in the robot's frame
+        a = np.array([c * (x0 - x) + s * (y0 - y), -s * (x0 - x) + c * (y0 - y)])
+        b = np.array([c * (x1 - x) + s * (y1 - y), -s * (x1 - x) + c * (y1 - y)])
+        e = b - a
+        # origin + r d = a + u e  ->  [d, -e] [r, u]^T = a
+        det = direction[:, 0] * -e[1] - direction[:, 1] * -e[0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = (a[0] * -e[1] - a[1] * -e[0]) / det
+            u = (direction[:, 0] * a[1] - direction[:, 1] * a[0]) / det
+        hit = (np.abs(det) > 1e-12) & (r > 0) & (u >= 0) & (u <= 1)
+        ranges = np.where(hit & (r < ranges), r, ranges)
+    ranges = ranges + rng.normal(0.0, noise, beams)
+    keep = np.isfinite(ranges) & (ranges < max_range)
+    return direction[keep] * ranges[keep, None]

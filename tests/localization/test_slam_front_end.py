@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from bench.localization_robustness import run_one
+from harness import scan_of_segments
 from pymunk_bot.localization.icp import Reference, icp
 from pymunk_bot.localization.odometry_trust import OdometryTrust, scan_only
 from pymunk_bot.localization.se2 import compose, transform_points
@@ -144,32 +145,15 @@ def test_what_the_scan_alone_said_is_read_back_from_a_prior_held_match():
     assert np.allclose(recovered, scan_cov, rtol=1e-6)
 
 
-def _racks() -> np.ndarray:
-    """A 12 x 8 m room with two rows of three racks (1.3 x 0.6 m): (n, 2, 2) wall segments."""
+def _racks() -> list[tuple[float, float, float, float]]:
+    """A 12 x 8 m room with two rows of three racks (1.3 x 0.6 m): wall segments (x0, y0, x1, y1)."""
     def box(x0: float, y0: float, x1: float, y1: float) -> list:
         c = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
-        return [(c[i], c[(i + 1) % 4]) for i in range(4)]
+        return [(*c[i], *c[(i + 1) % 4]) for i in range(4)]
     walls = box(0.0, 0.0, 12.0, 8.0)
     for x0 in (2.0, 4.5, 7.0):
         walls += box(x0, 2.0, x0 + 1.3, 2.6) + box(x0, 5.0, x0 + 1.3, 5.6)
-    return np.array(walls, dtype=float)
-
-
-def _exact_scan(walls: np.ndarray, pose: np.ndarray, beams: int = 180,
-                max_range: float = 3.5) -> np.ndarray:
-    """The end points (robot frame) of a noise-free scan of ``walls`` from ``pose``."""
-    angles = pose[2] + np.linspace(-np.pi, np.pi, beams, endpoint=False)
-    d = np.stack([np.cos(angles), np.sin(angles)], axis=1)[:, None, :]
-    start, edge = walls[None, :, 0], (walls[:, 1] - walls[:, 0])[None]
-    w = start - pose[:2]
-    cross = d[..., 0] * edge[..., 1] - d[..., 1] * edge[..., 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * edge[..., 1] - w[..., 1] * edge[..., 0]) / cross
-        u = (w[..., 0] * d[..., 1] - w[..., 1] * d[..., 0]) / cross
-    r = np.where((t > 0) & (u >= 0) & (u <= 1), t, np.inf).min(axis=1)
-    hit = r < max_range
-    rel = angles[hit] - pose[2]
-    return np.stack([r[hit] * np.cos(rel), r[hit] * np.sin(rel)], axis=1)
+    return walls
 
 
 def test_exact_scans_among_corners_match_exactly():
@@ -182,7 +166,7 @@ def test_exact_scans_among_corners_match_exactly():
     poses += [np.array([9.0 + 0.5 * np.sin(np.radians(6 * k)), 4.5 - 0.5 * np.cos(np.radians(6 * k)),
                         np.radians(6 * k)]) for k in range(1, 16)]
     poses += [np.array([9.5, 4.5 + 0.2 * k, np.pi / 2]) for k in range(1, 15)]
-    scans = [_exact_scan(walls, p) for p in poses]
+    scans = [scan_of_segments(walls, p, beams=180, max_range=3.5, noise=0.0) for p in poses]
     errors = []
     for j in range(10, len(poses)):
         ref = Reference.surfaces(np.concatenate([transform_points(poses[k], scans[k])

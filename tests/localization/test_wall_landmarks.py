@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from bench.localization_robustness import run_one
+from harness import scan_of_segments
 from pymunk_bot.localization.posegraph import Edge, edge_information, optimize
 from pymunk_bot.localization.se2 import between, compose
 from pymunk_bot.localization.walls import Wall, WallLandmarks, long_walls
@@ -124,29 +125,6 @@ def test_a_warehouse_loop_around_a_shelf_ends_within_3_5_cm():
     assert out.success and out.ate <= 0.035, out.line()
 
 
-def _scan_of_segments(segments: list[tuple[float, float, float, float]], beams: int = 360,
-                      max_range: float = 8.0, noise: float = 0.01,
-                      rng: np.random.Generator | None = None) -> np.ndarray:
-    """End points (robot frame, robot at the origin heading along x) of a scan of the
-    ``segments`` (x0, y0, x1, y1) [m]: each beam's nearest hit, range noise ``noise`` [m]."""
-    rng = rng or np.random.default_rng(0)
-    bearings = np.linspace(-math.pi, math.pi, beams, endpoint=False)
-    direction = np.column_stack([np.cos(bearings), np.sin(bearings)])
-    ranges = np.full(beams, np.inf)
-    for x0, y0, x1, y1 in segments:
-        a, e = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
-        # origin + r d = a + u e  ->  [d, -e] [r, u]^T = a
-        det = direction[:, 0] * -e[1] - direction[:, 1] * -e[0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = (a[0] * -e[1] - a[1] * -e[0]) / det
-            u = (direction[:, 0] * a[1] - direction[:, 1] * a[0]) / det
-        hit = (np.abs(det) > 1e-12) & (r > 0) & (u >= 0) & (u <= 1)
-        ranges = np.where(hit & (r < ranges), r, ranges)
-    ranges = ranges + rng.normal(0.0, noise, beams)
-    keep = np.isfinite(ranges) & (ranges < max_range)
-    return direction[keep] * ranges[keep, None]
-
-
 def test_a_row_of_racks_is_not_a_wall_and_a_doorway_makes_two():
     # Three racks 1.3 m wide, 1.5 m apart, their faces on one line 2 m ahead (as the Nav2
     # depot's rows): nothing of them is a wall (each face is shorter than one), though their
@@ -154,9 +132,9 @@ def test_a_row_of_racks_is_not_a_wall_and_a_doorway_makes_two():
     # which racks were in view, and its landmark turned the headings of the keyframes that saw
     # it to follow (docs/localization.md, "SLAM: why the walls pulled the depot's headings").
     racks = [(2.0, -3.45 + 2.8 * k, 2.0, -2.15 + 2.8 * k) for k in range(3)]
-    assert long_walls(_scan_of_segments(racks)) == []
+    assert long_walls(scan_of_segments(racks)) == []
     # A wall with a 1 m doorway: two walls, each its own side's.
     doorway = [(2.0, -4.0, 2.0, -0.5), (2.0, 0.5, 2.0, 4.0)]
-    walls = long_walls(_scan_of_segments(doorway))
+    walls = long_walls(scan_of_segments(doorway))
     assert len(walls) == 2
     assert all(wall.length < 3.6 for wall in walls)
