@@ -91,12 +91,13 @@ class Reference:
 
 def icp(reference: Reference, points: np.ndarray, guess: np.ndarray, iterations: int = 20,
         max_pair: float = 0.3, huber: float = 0.05, cov_scale: float = 1.0,
-        prior: np.ndarray | None = None) -> Match:
+        prior: np.ndarray | None = None, start: np.ndarray | None = None) -> Match:
     """Align robot-frame ``points`` (m, 2) with ``reference``, from ``guess``. ``prior``: the
     information matrix (3x3, world frame) of ``guess`` as a measurement of the pose (odometry):
     the match is then the maximum a posteriori pose, which holds the directions the scan does
-    not fix (a corridor's length) where the odometry puts them instead of letting them slide."""
-    pose = np.array(guess, dtype=float)
+    not fix (a corridor's length) where the odometry puts them instead of letting them slide.
+    ``start``: the pose the iterations start from, when not ``guess`` (the prior stays there)."""
+    pose = np.array(guess if start is None else start, dtype=float)
     prior_info = np.zeros((3, 3)) if prior is None else np.asarray(prior, dtype=float)
     fail = Match(pose, np.eye(3) * 1e6, 0.0, float("inf"), False)
     if reference.tree is None or points.shape[0] < MIN_POINTS:

@@ -10,7 +10,9 @@
   tried: its 5 cm cells bias each match by millimetres and milliradians, and those add up
   over hundreds of keyframes.) The matched pose becomes a
   keyframe, joined to the previous one by an edge with the match's covariance, and its scan
-  is folded into the map (mapping.py).
+  is folded into the map (mapping.py); a match with few points on the submap (a turn towards
+  what it has not seen) counts when the prior explains it (``front_end_accepts``), else the
+  keyframe takes the prediction.
 - **Loop closures.** Candidates come from the graph's uncertainty (loopsearch.py): the
   keyframes passed at least ``loop_min_travel`` of driving ago that the newest keyframe could
   be within ``loop_radius`` of, at LOOP_GATE standard deviations of the chain's accumulated
@@ -82,6 +84,10 @@ OVERRULED_WEIGHT = 0.1  # a closure whose kernel weight falls below this is over
 # A keyframe keeps at least this share of its returns: past it, the prediction is too far off
 # for the free-space test (walls land in free space) and only the moving test counts.
 MIN_STATIC_SHARE = 0.4
+MATCH_INLIERS = 0.5  # a front-end match with more than this share of its points on the submap
+# is taken as it is; one with fewer (a robot turning to face what the submap has not seen)
+# when the odometry's prior explains its correction at chi^2_3 (99 %): PRIOR_CONSISTENCY.
+PRIOR_CONSISTENCY = 11.34
 
 
 @dataclass(frozen=True)
@@ -105,6 +111,24 @@ class LoopClosure:
     new: int
     relative: np.ndarray  # [x, y, theta] of new in old's frame, as the scan match measured it
     correction: float  # [m] how far the match moved the new keyframe from its estimate
+
+
+def front_end_accepts(match: Match, predicted: np.ndarray, prior: np.ndarray) -> bool:
+    """Whether a front-end ``match`` is kept: a well-conditioned fit with more than
+    MATCH_INLIERS of its points on the submap, or with fewer but a correction from the
+    odometry's prediction ``predicted`` [x, y, theta] that the prediction's uncertainty (the
+    inverse of ``prior``, its information) and the match's explain. Rejected, the keyframe took
+    the prediction instead: a few degrees off after a turn (an uncalibrated robot's odometry),
+    and every later match against that keyframe's scan inherited them (the Nav2 depot,
+    uncalibrated, seed 5: ATE 60 cm; docs/localization.md)."""
+    if not match.ok:
+        return False
+    if match.inliers > MATCH_INLIERS:
+        return True
+    correction = np.asarray(match.pose, dtype=float) - np.asarray(predicted, dtype=float)
+    correction[2] = float(wrap(correction[2]))
+    spread = np.linalg.inv(prior) + match.covariance
+    return float(correction @ np.linalg.solve(spread, correction)) <= PRIOR_CONSISTENCY
 
 
 class SlamLocalizer(Localizer):
@@ -201,7 +225,7 @@ class SlamLocalizer(Localizer):
             static = self.static_returns(scan, predicted)
             points = subsample(scan_points(scan)[0][static], self.config.max_beams)
             match = self._front_end_match(points, predicted, prior)
-            matched = match.ok and match.inliers > 0.5
+            matched = front_end_accepts(match, predicted, prior)
             if matched:
                 pose, cov = match.pose, match.covariance
                 self.odometry_trust.learn(moved, predicted, pose, cov, prior)
@@ -256,19 +280,21 @@ class SlamLocalizer(Localizer):
         at 5 m a few degrees put every point beyond ``max_pair`` of its surface and the match
         fails. Then it is tried again from headings HEADING_RETRY apart, within
         HEADING_RETRY_STD standard deviations of the prior's heading, and the match with the
-        most inliers wins (the prior stays at the prediction)."""
+        most inliers wins (the prior stays at the prediction: centred on each retry's start, it
+        pulled the match that way)."""
         c = self.config
         reference = self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
                                           len(self.keyframes)))
         match = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber, prior=prior)
-        if match.ok and match.inliers > 0.5:
+        if match.ok and match.inliers > MATCH_INLIERS:
             return match
         reach = HEADING_RETRY_STD * math.sqrt(max(float(np.linalg.inv(prior)[2, 2]), 0.0))  # [rad]
         steps = int(min(reach, MAX_HEADING_RETRY) // HEADING_RETRY)
         for k in range(1, steps + 1):
             for sign in (1.0, -1.0):
                 guess = predicted + np.array([0.0, 0.0, sign * k * HEADING_RETRY])
-                retry = icp(reference, points, guess, c.iterations, c.max_pair, c.huber, prior=prior)
+                retry = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber,
+                            prior=prior, start=guess)
                 if retry.ok and (not match.ok or retry.inliers > match.inliers):
                     match = retry
         return match
