@@ -295,7 +295,8 @@ def _people(family: str) -> tuple[str, str, int] | None:
 
 
 def run_one(localizer: str, family: str, profile: str, seed: int,
-            settings: dict | None = None, on_finish=None, laps: int = 1) -> Outcome | None:
+            settings: dict | None = None, on_finish=None, laps: int = 1,
+            on_start=None) -> Outcome | None:
     """One run (``localizer``: mcl, ekf, mcl_global, mcl_kidnap or slam); None when the world is
     unavailable. ``mcl_kidnap``: default MCL, the robot teleported at KIDNAP_TIME to a free
     point (at least KIDNAP_CLEARANCE from the map's obstacles, drawn from the seed), any heading;
@@ -303,7 +304,9 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     ``settings``: extra localization keys (for experiments; the benchmark uses none).
     ``laps``: slam_revisit drives its tour this many times.
     ``on_finish(sim, keyframe_truth)``: called at the end (slam runs: the true pose at each
-    keyframe, (n, 3); else empty), for figures and tests that look closer."""
+    keyframe, (n, 3); else empty), for figures and tests that look closer. ``on_start(sim)``:
+    called once the simulation is built, before its first step (to attach an observer:
+    bench/slam_replay.py records SLAM's inputs)."""
     from pymunk_bot.engine.simulation import Simulation
 
     revisit = localizer == "slam_revisit"
@@ -336,6 +339,8 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     except Exception as exc:  # a world that cannot be built is a failure line, not a crash
         out.error = f"{type(exc).__name__}: {exc}"
         return out
+    if on_start is not None:
+        on_start(sim)
     r = sim.robots["r1"]
     times: list[float] = []
     errors: list[float] = []
