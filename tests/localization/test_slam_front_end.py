@@ -144,7 +144,6 @@ def test_a_match_that_sees_mostly_new_walls_is_kept_when_the_odometry_explains_i
     # step. The match finds the true heading; the front end keeps it because the prior's
     # uncertainty explains the correction (before, it took the prediction, 5 deg off, and
     # every later match inherited it: the Nav2 depot, uncalibrated, seed 5, ATE 60 cm).
-    # (The prediction's heading set 5 deg off below; the prior's covariance is the step's.)
     seen = [(2.0, -2.0, 2.0, 2.0), (-0.5, 2.0, 2.0, 2.0)]  # what the submap holds
     room = seen + [(-2.0, 2.0, -0.5, 2.0), (-2.0, -2.0, -2.0, 2.0), (-2.0, -2.0, 2.0, -2.0)]
     ref = Reference.surfaces(scan_of_segments(seen, noise=0.005))
