@@ -396,18 +396,25 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     if localizer in SLAM_RUNS + ("mapping",):  # the map built against the scenario's
         _score_map(out, r.mapper.grid, sim.config, walked, walkers)
     if localizer in SLAM_RUNS:
-        from pymunk_bot.localization.metrics import false_closures
-
-        slam = r.localizer
-        at_keyframes = np.asarray(keyframe_truth)
-        final = np.asarray(slam.keyframes)[:at_keyframes.shape[0]]
-        out.ate = float(np.sqrt(np.mean(np.sum((final[:, :2] - at_keyframes[:, :2]) ** 2, axis=1))))
-        out.closures, out.closures_rejected = len(slam.closures), slam.closures_rejected
-        if slam.closures:
-            out.false_closures = false_closures(
-                [c.old for c in slam.closures], [c.new for c in slam.closures],
-                [c.relative for c in slam.closures], at_keyframes)
+        score_slam(out, r.localizer, np.asarray(keyframe_truth))
     return out
+
+
+def score_slam(out: Outcome, slam, at_keyframes: np.ndarray) -> None:
+    """Into ``out``: the ATE of ``slam``'s final (optimized) keyframes against the true pose at
+    each (``at_keyframes``, (n, 3)), its loop closures, rejected candidates and false closures
+    (bench/slam_replay.py scores its replays with this too)."""
+    from pymunk_bot.localization.metrics import ate, false_closures
+
+    at_keyframes = np.asarray(at_keyframes, dtype=float).reshape(-1, 3)
+    final = np.asarray(slam.keyframes, dtype=float).reshape(-1, 3)[:at_keyframes.shape[0]]
+    if final.shape[0]:
+        out.ate = ate(at_keyframes[:final.shape[0]], final)["rmse"]
+    out.closures, out.closures_rejected = len(slam.closures), slam.closures_rejected
+    if slam.closures:
+        out.false_closures = false_closures(
+            [c.old for c in slam.closures], [c.new for c in slam.closures],
+            [c.relative for c in slam.closures], at_keyframes)
 
 
 def _score_map(out: Outcome, built, config, walked: list[np.ndarray], walkers: list) -> None:

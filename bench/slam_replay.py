@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import pickle
 import re
@@ -51,7 +50,7 @@ from typing import TYPE_CHECKING, Any, Iterator, NoReturn
 import numpy as np
 
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, SLAM_PROFILES, SLAM_RUNS, Outcome,
-                                           run_one, settings_option)
+                                           run_one, score_slam, settings_option)
 from pymunk_bot.config.localization import SlamConfig
 from pymunk_bot.maps.grid import OccupancyGrid
 from pymunk_bot.robots.readings import LaserScan, RobotSpec
@@ -286,7 +285,7 @@ def replay(recording: Recording, settings: dict | None = None) -> ReplayResult:
     """SLAM, as the code stands, on ``recording``'s input stream (``settings``: SLAM config
     keys over the recorded config), scored as the benchmark scores a SLAM run."""
     from pymunk_bot.localization.base import LocalizerContext, LocalizerInputs
-    from pymunk_bot.localization.metrics import false_closures, map_scores
+    from pymunk_bot.localization.metrics import map_scores
     from pymunk_bot.localization.slam import SlamLocalizer
     from pymunk_bot.maps.rasterize import grid_from_map
 
@@ -302,25 +301,17 @@ def replay(recording: Recording, settings: dict | None = None) -> ReplayResult:
         slam.update(LocalizerInputs(float(now), odometry, scan))
         while len(at_keyframes) < len(slam.keyframes):
             at_keyframes.append(truth)
-    truth_k = np.asarray(at_keyframes, dtype=float).reshape(-1, 3)
-    final = np.asarray(slam.keyframes, dtype=float).reshape(-1, 3)
-    ate = (float(np.sqrt(np.mean(np.sum((final[:, :2] - truth_k[:, :2]) ** 2, axis=1))))
-           if final.shape[0] else math.nan)
-    wrong = 0
-    if slam.closures:
-        wrong = false_closures([c.old for c in slam.closures], [c.new for c in slam.closures],
-                               [c.relative for c in slam.closures], truth_k)
     built: OccupancyGrid = slam.grid
-    # as the benchmark's _score_map in a world without people (scenario_grid's raster)
-    precision = map_scores(built, grid_from_map(r.true_map, built.resolution))["precision"]
-    # The benchmark's own verdict, on an outcome without a collision
-    scored = Outcome(r.localizer, r.family, r.profile, r.seed, ate=ate, map_precision=precision,
-                     closures=len(slam.closures), closures_rejected=slam.closures_rejected,
-                     false_closures=wrong)
-    return ReplayResult(r.localizer, r.family, r.profile, r.seed, final.shape[0],
-                        r.online_keyframes.shape[0], ate, r.online.ate, len(slam.closures),
-                        slam.closures_rejected, wrong, float(precision), scored.success,
-                        r.online.success, time.perf_counter() - started)
+    # The benchmark's own scoring and verdict, on an outcome without a collision; the map as
+    # its _score_map scores it in a world without people (scenario_grid's raster)
+    scored = Outcome(r.localizer, r.family, r.profile, r.seed,
+                     map_precision=map_scores(built, grid_from_map(r.true_map, built.resolution))["precision"])
+    score_slam(scored, slam, np.asarray(at_keyframes))
+    return ReplayResult(r.localizer, r.family, r.profile, r.seed, len(slam.keyframes),
+                        r.online_keyframes.shape[0], scored.ate, r.online.ate, scored.closures,
+                        scored.closures_rejected, scored.false_closures,
+                        float(scored.map_precision), scored.success, r.online.success,
+                        time.perf_counter() - started)
 
 
 def _replay_file(job: tuple[str, dict | None]) -> ReplayResult | str:
