@@ -352,15 +352,21 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     keyframe_truth: list[np.ndarray] = []  # slam: the true pose at each keyframe
     walkers = [o for o in sim.world.obstacles if getattr(o.config, "type", "") == "pedestrian"]
     walked: list[np.ndarray] = []  # walkers' positions, 10 Hz
+    def read_keyframe_truth() -> None:
+        # each new keyframe's true pose, read at its scan's time: the build's (t = 0) before
+        # the first step, every later one after the step it appeared in
+        if localizer in SLAM_RUNS:
+            while len(keyframe_truth) < len(r.localizer.keyframe_times):
+                keyframe_truth.append(np.array(r.pose, dtype=float))
+
+    read_keyframe_truth()
     while sim.time < max_time:
         if kidnap is not None and sim.time + 1e-9 >= KIDNAP_TIME:
             r.teleport(*kidnap)
             kidnap, kidnapped_at = None, sim.time
             times, errors, headings, localized = [], [], [], []  # scored from the kidnapping on
         sim.step()
-        if localizer in SLAM_RUNS:
-            while len(keyframe_truth) < len(r.localizer.keyframe_times):
-                keyframe_truth.append(np.array(r.pose, dtype=float))
+        read_keyframe_truth()
         if sim.time + 1e-9 >= next_sample:
             next_sample += 1.0 / SAMPLE_RATE
             est, truth = np.asarray(r.localizer.pose), r.pose

@@ -143,29 +143,21 @@ class _InputRecorder:
     """A simulation observer: after every tick the robot's odometry, scan and true pose, when
     the scan is fresh; ``attach`` calls ``on_reset`` first, for the update the simulation
     makes as it is built (t = 0). An observer runs after the localizers in the same tick with
-    nothing moved in between, so it reads exactly the inputs SLAM was given."""
+    nothing moved in between, so it reads exactly the inputs SLAM was given, and the true
+    pose at the scan's time, as run_one reads each keyframe's."""
 
     def __init__(self) -> None:
         self.times: list[float] = []
         self.odometry: list[np.ndarray] = []
         self.scans: list[LaserScan] = []
         self.truth: list[np.ndarray] = []
-        self._built = False  # the build's record waits for its truth (on_reset)
 
     def on_reset(self, sim: Any) -> None:
         for rows in (self.times, self.odometry, self.scans, self.truth):
             rows.clear()
         self._read(sim)
-        self._built = bool(self.times)
 
     def __call__(self, sim: Any) -> None:
-        if self._built:
-            # run_one reads the truth of a new keyframe after the step it appeared in; the
-            # build's keyframe has no step of its own, so it gets the pose after the first
-            # (the robot has moved a fraction of a millimetre). Kept as the benchmark has it,
-            # so a replay scores exactly what the online run did.
-            self.truth[0] = np.array(sim.robots[ROBOT].pose, dtype=float)
-            self._built = False
         self._read(sim)
 
     def _read(self, sim: Any) -> None:

@@ -3,7 +3,9 @@
 - **Front end.** Every ``keyframe_d`` of travel or ``keyframe_a`` of turn (by odometry), the
   new scan is aligned by point-to-line ICP (icp.py) with line fits of the end points of the
   latest ``LOCAL_KEYFRAMES`` keyframes (each fit weighed by how thin a line it is: a chain of
-  matches adds up what corners taken for lines turn each one by), from the odometry
+  matches adds up what corners taken for lines turn each one by; each fit of one face of a
+  surface, the side it was seen from, and a point paired only with a face towards the LiDAR:
+  a thin wall seen from both rooms had both faces in one fit), from the odometry
   prediction, with the odometry as the
   match's prior (odometry_trust.py: an uncalibrated robot's step error, fitted to what the
   matches show of this robot's odometry). (Matching against the occupancy grid itself was
@@ -144,6 +146,7 @@ class SlamLocalizer(Localizer):
             context.origin)
         self.covariance = np.zeros((3, 3))
         self.keyframes: list[np.ndarray] = []  # estimated poses
+        self._sensor = np.asarray(context.lidar_offset[:2], dtype=float)  # [m] robot frame
         self.keyframe_times: list[float] = []  # [s] when each keyframe's scan was taken
         self._scans: list = []  # the LaserScan of each keyframe
         self._points: list[np.ndarray] = []  # its subsampled end points, robot frame
@@ -285,7 +288,8 @@ class SlamLocalizer(Localizer):
         c = self.config
         reference = self._reference(range(max(0, len(self.keyframes) - LOCAL_KEYFRAMES),
                                           len(self.keyframes)))
-        match = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber, prior=prior)
+        match = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber, prior=prior,
+                    sensor=self._sensor)
         if match.ok and match.inliers > MATCH_INLIERS:
             return match
         reach = HEADING_RETRY_STD * math.sqrt(max(float(np.linalg.inv(prior)[2, 2]), 0.0))  # [rad]
@@ -294,7 +298,7 @@ class SlamLocalizer(Localizer):
             for sign in (1.0, -1.0):
                 guess = predicted + np.array([0.0, 0.0, sign * k * HEADING_RETRY])
                 retry = icp(reference, points, predicted, c.iterations, c.max_pair, c.huber,
-                            prior=prior, start=guess)
+                            prior=prior, start=guess, sensor=self._sensor)
                 if retry.ok and (not match.ok or retry.inliers > match.inliers):
                     match = retry
         return match
@@ -330,10 +334,16 @@ class SlamLocalizer(Localizer):
         self.keyframe_limit_reached = len(self.keyframes) >= self.config.max_keyframes
 
     def _reference(self, keyframes, weighed: bool = True) -> Reference:
-        """The surfaces (line fits) of these keyframes' end points, in the world frame;
-        ``weighed``: each fit weighed by how thin a line it is (icp.Reference.surfaces)."""
-        return Reference.surfaces(np.concatenate([transform_points(self.keyframes[k], self._local[k])
-                                                  for k in keyframes]), weighed=weighed)
+        """The surfaces (line fits) of these keyframes' end points, in the world frame, each
+        of the face its keyframes saw (icp.Reference.surfaces' ``facing``); ``weighed``: each
+        fit weighed by how thin a line it is."""
+        points, facing = [], []
+        for k in keyframes:
+            world = transform_points(self.keyframes[k], self._local[k])
+            towards = transform_points(self.keyframes[k], self._sensor[None]) - world
+            points.append(world)
+            facing.append(towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-12)[:, None])
+        return Reference.surfaces(np.concatenate(points), weighed=weighed, facing=np.concatenate(facing))
 
     # ------------------------------------------------------------------ loops
     def _close_loop(self, index: int) -> bool:
@@ -389,7 +399,7 @@ class SlamLocalizer(Localizer):
         lo, hi = max(0, old - SUBMAP_NEIGHBOURS), min(index, old + SUBMAP_NEIGHBOURS + 1)
         reach = LOOP_GATE * math.sqrt(max(float(np.linalg.eigvalsh(accumulated[:2, :2])[-1]), 0.0))
         match = icp(self._reference(range(lo, hi), weighed=False), self._points[index], here, c.iterations,
-                    min(max(c.max_pair, reach), LOOP_MAX_PAIR), c.huber)
+                    min(max(c.max_pair, reach), LOOP_MAX_PAIR), c.huber, sensor=self._sensor)
         if not (match.ok and match.inliers >= c.loop_min_inliers):
             return None
         cov = match.covariance
