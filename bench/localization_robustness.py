@@ -352,6 +352,7 @@ def run_one(localizer: str, family: str, profile: str, seed: int,
     keyframe_truth: list[np.ndarray] = []  # slam: the true pose at each keyframe
     walkers = [o for o in sim.world.obstacles if getattr(o.config, "type", "") == "pedestrian"]
     walked: list[np.ndarray] = []  # walkers' positions, 10 Hz
+
     def read_keyframe_truth() -> None:
         # each new keyframe's true pose, read at its scan's time: the build's (t = 0) before
         # the first step, every later one after the step it appeared in

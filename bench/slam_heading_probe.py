@@ -39,10 +39,10 @@ import numpy as np
 from bench.localization_robustness import (FAMILIES, MAX_SEEDS, REVISIT_MAX_TIME, Tour,
                                            lidar_for, odometry_for, settings_option,
                                            tour_goals, world_for)
-from pymunk_bot.localization.icp import Reference, icp
+from pymunk_bot.localization.icp import Reference, icp, seen_from
 from pymunk_bot.localization.odometry_trust import scan_only
 from pymunk_bot.localization.scanmatch import subsample
-from pymunk_bot.localization.se2 import between, scan_points, transform_points, wrap
+from pymunk_bot.localization.se2 import between, scan_points, wrap
 from pymunk_bot.localization.slam import LOCAL_KEYFRAMES
 
 
@@ -67,13 +67,16 @@ def _sources(step, truth_turn: float) -> dict:
             "prior_pull": math.degrees(float(wrap(float(step.pose[2]) - scan_heading)))}
 
 
-def matcher_heading_error(earlier: deque, points: np.ndarray, truth: np.ndarray, config) -> float:
+def matcher_heading_error(earlier: deque, points: np.ndarray, truth: np.ndarray, config,
+                          sensor: np.ndarray) -> float:
     """[deg] the heading error of robot-frame scan ``points`` taken at ``truth`` [x, y, theta],
     matched as SLAM's front end (``config``: its SlamConfig) to ``earlier`` keyframes' (true
-    pose, robot-frame points), placed at their true poses (module docstring); NaN if no match."""
-    reference = Reference.surfaces(np.concatenate([transform_points(pose, p) for pose, p in earlier]))
+    pose, robot-frame points), placed at their true poses (module docstring); NaN if no match.
+    ``sensor``: the LiDAR's mount (robot frame [m])."""
+    world, facing = zip(*(seen_from(pose, p, sensor) for pose, p in earlier))
+    reference = Reference.surfaces(np.concatenate(world), facing=np.concatenate(facing))
     match = icp(reference, subsample(points, config.max_beams), truth, config.iterations,
-                config.max_pair, config.huber)
+                config.max_pair, config.huber, sensor=sensor)
     return math.degrees(float(wrap(match.pose[2] - truth[2]))) if match.ok else math.nan
 
 
@@ -109,7 +112,9 @@ def probe(family: str, profile: str, seed: int, settings: dict | None = None,
             seen = len(slam.keyframes)
             truth, pose = np.array(r.pose, dtype=float), np.array(slam.keyframes[-1], dtype=float)
             points = scan_points(r.lidar.latest)[0]  # the keyframe's scan (taken this step)
-            matcher = matcher_heading_error(earlier, points, truth, slam.config) if earlier else math.nan
+            matcher = (matcher_heading_error(earlier, points, truth, slam.config,
+                                                 np.asarray(slam.context.lidar_offset[:2]))
+                       if earlier else math.nan)
             earlier.append((truth, points))
             if last_truth is not None:
                 c, s = math.cos(truth[2]), math.sin(truth[2])

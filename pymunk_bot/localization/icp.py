@@ -102,6 +102,16 @@ class Reference:
         return cls(centroid[keep], normals[keep], 2.0 * typical / (typical + across), oriented)
 
 
+def seen_from(pose: np.ndarray, points: np.ndarray,
+              sensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A scan's robot-frame end ``points`` (m, 2) placed at ``pose`` [x, y, theta]: their world
+    positions (m, 2) and, per point, the unit vector towards the ``sensor`` (robot frame [m],
+    the LiDAR's mount) that saw it (:meth:`Reference.surfaces`' ``facing``)."""
+    world = transform_points(pose, points)
+    towards = transform_points(pose, np.asarray(sensor, dtype=float).reshape(1, 2)) - world
+    return world, towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-12)[:, None]
+
+
 def _thinned(points: np.ndarray, facing: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
     """One point per SURFACE_CELL (the centroid of those in it), with the mean of their
     ``facing`` (renormalised): overlapping scans would otherwise pack a point's nearest

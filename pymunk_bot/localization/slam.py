@@ -55,7 +55,7 @@ from pymunk_bot.localization.mapping import OccupancyMapper
 from pymunk_bot.localization.moving import MovingReturns
 from pymunk_bot.localization.odometry_trust import OdometryTrust
 from pymunk_bot.localization.posegraph import Edge, edge_information, final_weights, optimize
-from pymunk_bot.localization.icp import Reference, icp
+from pymunk_bot.localization.icp import Reference, icp, seen_from
 from pymunk_bot.localization.scanmatch import Match, subsample
 from pymunk_bot.localization.se2 import between, compose, scan_points, transform_points, wrap
 from pymunk_bot.localization.walls import WallLandmarks, long_walls
@@ -337,12 +337,8 @@ class SlamLocalizer(Localizer):
         """The surfaces (line fits) of these keyframes' end points, in the world frame, each
         of the face its keyframes saw (icp.Reference.surfaces' ``facing``); ``weighed``: each
         fit weighed by how thin a line it is."""
-        points, facing = [], []
-        for k in keyframes:
-            world = transform_points(self.keyframes[k], self._local[k])
-            towards = transform_points(self.keyframes[k], self._sensor[None]) - world
-            points.append(world)
-            facing.append(towards / np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-12)[:, None])
+        points, facing = zip(*(seen_from(self.keyframes[k], self._local[k], self._sensor)
+                               for k in keyframes))
         return Reference.surfaces(np.concatenate(points), weighed=weighed, facing=np.concatenate(facing))
 
     # ------------------------------------------------------------------ loops
