@@ -84,12 +84,13 @@ class Reference:
         reach = np.maximum(radius, dist[:, SURFACE_MIN_POINTS - 1])  # inf: too few within max
         member = (dist <= reach[:, None]) & (idx < n)  # (n, k) each fit's neighbours
         idx = np.where(member, idx, 0)
-        count, centroid, values, vectors = _line_fits(points, idx, member)
+        near = points[idx]  # (n, k, 2)
+        count, centroid, values, vectors = _line_fits(near, member)
         normals = vectors[:, :, 0]
         if facing is not None:
             side = np.einsum("ni,ni->n", facing, normals) >= 0.0  # which side each point saw
             member &= (np.einsum("nki,ni->nk", facing[idx], normals) >= 0.0) == side[:, None]
-            count, centroid, values, vectors = _line_fits(points, idx, member)
+            count, centroid, values, vectors = _line_fits(near, member)
             normals = vectors[:, :, 0]
             normals = normals * np.where(np.einsum("ni,ni->n", facing, normals) >= 0.0, 1.0, -1.0)[:, None]
         keep = (count >= SURFACE_MIN_POINTS) & (values[:, 0] <= SURFACE_THINNESS ** 2 * values[:, 1])
@@ -126,14 +127,13 @@ def _thinned(points: np.ndarray, facing: np.ndarray | None) -> tuple[np.ndarray,
     return thinned, mean / np.maximum(np.hypot(mean[:, 0], mean[:, 1]), 1e-12)[:, None]
 
 
-def _line_fits(points: np.ndarray, idx: np.ndarray,
+def _line_fits(near: np.ndarray,
                member: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per fit, of the neighbours ``points[idx]`` where ``member`` (n, k): their count, centroid
-    (n, 2) and the eigenvalues (n, 2, ascending) and eigenvectors (n, 2, 2; column 0 the
-    normal) of their covariance."""
+    """Per fit, of its neighbours ``near`` (n, k, 2) where ``member`` (n, k): their count,
+    centroid (n, 2) and the eigenvalues (n, 2, ascending) and eigenvectors (n, 2, 2; column 0
+    the normal) of their covariance."""
     count = np.count_nonzero(member, axis=1)
     weight = member / np.maximum(count, 1)[:, None]
-    near = points[idx]  # (n, k, 2)
     centroid = np.einsum("nk,nki->ni", weight, near)
     centred = near - centroid[:, None, :]
     cov = np.einsum("nk,nki,nkj->nij", weight, centred, centred)
@@ -149,7 +149,8 @@ def _pairs(reference: Reference, world: np.ndarray, sensor: np.ndarray,
     assert reference.tree is not None
     if not reference.oriented:
         dist, idx = reference.tree.query(world, distance_upper_bound=radius)
-        return np.isfinite(dist), np.where(np.isfinite(dist), idx, 0)
+        found = np.isfinite(dist)
+        return found, np.where(found, idx, 0)
     dist, idx = reference.tree.query(world, k=SIDE_CANDIDATES, distance_upper_bound=radius)
     found = np.isfinite(dist)
     idx = np.where(found, idx, 0)
