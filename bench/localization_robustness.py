@@ -264,7 +264,7 @@ class Tour:
     (status ``"arrived"``: its estimate at the goal), as a robot's own mission would go on.
     Waiting for the truth alone left a robot whose estimate was 0.26-0.78 m off at a goal
     standing there for the rest of the run (warehouse, uncalibrated odometry): its tour never
-    came back, so no loop could close (docs/localization.md)."""
+    came back, so no loop could close (docs/localization-journal.md)."""
 
     def __init__(self, goals: list[tuple[float, float]]) -> None:
         self.goals = list(goals)  # still to give, in turn

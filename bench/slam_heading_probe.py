@@ -18,7 +18,7 @@ The matcher's own heading error (``matcher_heading_error``): the keyframe's scan
 the front end matches it, but to the previous LOCAL_KEYFRAMES keyframes' scans placed at
 their *true* poses, from the true pose, with no odometry prior. What it shows adds up along
 the chain whatever the rest of SLAM does; ``--noise-free`` gives the LiDAR no range noise, so
-what is left is the matcher's (docs/localization.md, "SLAM: lines that are not lines").
+what is left is the matcher's (docs/localization-journal.md, "SLAM: lines that are not lines").
 
 The step's heading error is split into where it came from: the odometry's own step heading
 error (the prior's mean), what the scan alone said (the match's information less the

@@ -82,7 +82,7 @@ class MclConfig(Section):
     z_max: Weight = 0.05  # beam model only
     z_rand: Weight = 0.5
     # [m] (Nav2: 0.2) the end point's error: 0.2 made the likelihood's heading curvature a
-    # one-scan std of 2.6-2.8 deg where the scan fixes it to 0.35 deg (docs/localization.md)
+    # one-scan std of 2.6-2.8 deg where the scan fixes it to 0.35 deg (docs/localization-journal.md)
     sigma_hit: Annotated[Float, Field(ge=0.001, le=10.0)] = 0.1
     lambda_short: Annotated[Float, Field(gt=0.0, le=100.0)] = 0.1  # [1/m], beam model only
     laser_likelihood_max_dist: Distance = 2.0  # [m] distance field cap
@@ -105,7 +105,7 @@ class MclConfig(Section):
     # too (a walker that stops or walks away along the beam); 0: no memory
     moving_track: Annotated[Float, Field(ge=0.0, le=10.0)] = 0.5  # [m]
     # AMCL's recovery, on (Nav2: 0, off): a kidnapped robot or a wrong global guess needs it;
-    # with it on, tracking succeeded as often (robustness benchmark, docs/localization.md).
+    # with it on, tracking succeeded as often (robustness benchmark, docs/localization-journal.md).
     recovery_alpha_slow: Weight = 0.001  # 0 (both) disables recovery
     recovery_alpha_fast: Weight = 0.1
 
@@ -181,7 +181,7 @@ class SlamConfig(Section):
     surface_radius: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.1  # [m]
     # Long straight walls as landmarks of the pose graph (walls.py): each keyframe's walls tie
     # its heading to the landmark's direction at the graph's optimizations. Every slam_revisit
-    # row of the robustness benchmark gains or holds its runs within 5 cm (docs/localization.md).
+    # row of the robustness benchmark gains or holds its runs within 5 cm (docs/localization-journal.md).
     wall_landmarks: bool = True
 
 

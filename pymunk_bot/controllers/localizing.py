@@ -27,7 +27,7 @@ from pymunk_bot.robots.readings import LaserScan, Observation
 LOCALIZING = "localizing: waiting for a trustworthy estimate"  # the controller's message
 LOCALIZING_TURN_RATE = 0.5  # [rad/s] turn on the spot while localizing
 # [m/s] explore while localizing, where the scan shows room: at 0.15 m/s a robot got 3 m in
-# 20 s, seldom to where a warehouse aisle and its look-alikes differ (docs/localization.md);
+# 20 s, seldom to where a warehouse aisle and its look-alikes differ (docs/localization-journal.md);
 # stopping from 0.3 m/s takes a few cm.
 LOCALIZING_SPEED = 0.3
 LOCALIZING_LOOKAHEAD = 0.6  # [m] free corridor ahead of the robot's disc needed to drive on

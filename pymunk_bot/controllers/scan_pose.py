@@ -3,7 +3,7 @@
 A controller is handed the LiDAR's latest scan on every tick. A LiDAR slower than the
 controller (5 Hz under a 10 Hz controller) hands it the same scan on two ticks or more; placed
 with the later tick's pose, a robot turning at a few rad/s puts the scan tens of degrees off
-and copies the room's walls around itself as "unmapped obstacles" (docs/localization.md,
+and copies the room's walls around itself as "unmapped obstacles" (docs/localization-journal.md,
 "navigate: its own scans placed with a later pose"). :class:`ScanPoses` says which scan is new
 and the pose estimate at its time.
 """

@@ -112,7 +112,7 @@ class Explorer:
     chosen, its corridor is no longer free, or EXPLORE_PATIENCE has passed; with none, a new
     one is sought every EXPLORE_RETRY. (Chosen afresh every second, the heading swung as the
     hypotheses' weights shifted, and the robot turned to and fro on the spot, learning
-    nothing: instrumented in the warehouse, docs/localization.md.)"""
+    nothing: instrumented in the warehouse, docs/localization-journal.md.)"""
 
     def __init__(self, robot_radius: float, clearance: float) -> None:
         self.robot_radius = robot_radius  # [m]

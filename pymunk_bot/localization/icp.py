@@ -59,7 +59,7 @@ class Reference:
         turned every match a little towards the scan's turn: a scan matched to the other
         scans at their *true* poses, no range noise, warehouse, came out 0.07 deg off a
         keyframe, 0.025 deg one way on average, 5 deg over a tour (now 0.005 deg off);
-        docs/localization.md, "SLAM: lines that are not lines". ``weighed`` False: every fit 1.
+        docs/localization-journal.md, "SLAM: lines that are not lines". ``weighed`` False: every fit 1.
 
         ``facing`` (n, 2): per point, the unit vector from it towards the sensor that saw it.
         Given, each fit is of one face: its neighbours on the other side of its line (seen
@@ -67,7 +67,7 @@ class Reference:
         side it was seen from (``oriented``: icp then pairs a point only with a face towards
         the sensor). An office's 10 cm walls, seen from both rooms, had both faces in one
         neighbourhood: the line lay between them, and a scan of one face was paired with the
-        other (docs/localization.md, "SLAM: the two faces of a wall")."""
+        other (docs/localization-journal.md, "SLAM: the two faces of a wall")."""
         oriented = facing is not None
         empty = cls(np.empty((0, 2)), np.empty((0, 2)), oriented=oriented)
         if points.shape[0] < SURFACE_MIN_POINTS:

@@ -334,7 +334,7 @@ class MclLocalizer(Localizer):
         """A tight cloud that the scans contradict LOST_UPDATES times in a row (a kidnapping, a
         wrong global guess) starts over as a global localization: ``max_particles`` over the
         free space. AMCL's recovery alone injects once (it resets w_slow and w_fast), a few
-        random particles that rarely land near the truth; see docs/localization.md."""
+        random particles that rarely land near the truth; see docs/localization-journal.md."""
         c = self.config
         tight = self.cluster_weight >= LOCALIZED_CLUSTER_WEIGHT and self.spread_within_bounds()
         recovery = c.recovery_alpha_slow > 0 or c.recovery_alpha_fast > 0

@@ -4,7 +4,7 @@ The front end aligns each new scan with the latest keyframes (slam.py), so it me
 heading relative to them, and with a sparse, noisy LiDAR (180-270 beams at 5-6 m) a step's
 heading is pinned to only ~0.2 deg: along a 10 m aisle the chain drifts by a degree or two,
 10-40 cm sideways, and a there-and-back tour shares the outbound error on both legs, so its
-loop closures cannot see it (docs/localization.md, "SLAM: where the error enters").
+loop closures cannot see it (docs/localization-journal.md, "SLAM: where the error enters").
 
 A long straight wall's *direction* is the same from wherever it is seen. So:
 
@@ -27,7 +27,7 @@ A long straight wall's *direction* is the same from wherever it is seen. So:
   the submap the next match used.)
 
 On by default (``SlamConfig.wall_landmarks``). Measured with the robustness benchmark (every
-``slam_revisit`` row; docs/localization.md, "SLAM: walls as graph landmarks" and "SLAM: why
+``slam_revisit`` row; docs/localization-journal.md, "SLAM: walls as graph landmarks" and "SLAM: why
 the walls pulled the depot's headings"). On the Nav2 depot map, which they were not built
 on, the first walls made 9 of 10 typical tours end farther off (median ATE 1.65 -> 2.25 cm):
 rows of racks fitted as one wall whose direction depended on the racks in view, and the south
@@ -62,7 +62,7 @@ MAX_WALL_STD = math.radians(1.0)  # [rad] a wall whose direction is less sure is
 # Nav2 depot's rows of racks (faces 1.3 m wide, 1.5-1.7 m apart, in line within a cell) fitted
 # as one wall had a direction that depended on which racks were in view, and the south wall
 # is cut where a pillar stands out of it, between its parts 0.88 deg apart
-# (docs/localization.md, "SLAM: why the walls pulled the depot's headings").
+# (docs/localization-journal.md, "SLAM: why the walls pulled the depot's headings").
 MAX_WALL_GAP = 0.5
 SAME_WALL_DISTANCE = 0.3  # [m] a wall is a landmark's when both its ends lie this near its line
 MIN_OVERLAP = 0.5  # [m] ... its extent overlaps the landmark's segment by this much
@@ -77,7 +77,7 @@ WALL_KERNEL = 2.0  # [std] Cauchy scale of the wall factors: an observation this
 # -0.8 -> +0.1 deg, each stated to 0.5-0.6 deg; taken at their stated variance the walls
 # twisted the graph by 0.9 deg). Each observation weighs as 1 in WALL_VARIANCE_SCALE (20
 # and 40 measured on every slam_revisit row: 40 better or equal on all, 20 made the warehouse
-# with uncalibrated odometry worse; docs/localization.md).
+# with uncalibrated odometry worse; docs/localization-journal.md).
 WALL_VARIANCE_SCALE = 40.0
 
 

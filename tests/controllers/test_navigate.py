@@ -89,7 +89,7 @@ def test_turning_on_the_spot_does_not_wall_itself_in_with_its_own_scans(rate):
     # A room with a door onto a corridor; the goal is down the corridor, so the robot first
     # turns on the spot towards the door. The controller is handed the LiDAR's latest scan on
     # every tick; placed with the pose of a later tick, a turn copies the room's walls around
-    # the robot as "unmapped obstacles" (office seed 11's tour gave up, docs/localization.md).
+    # the robot as "unmapped obstacles" (office seed 11's tour gave up, docs/localization-journal.md).
     walls = [{"type": "wall", "start": [0.0, 3.3], "end": [4.6, 3.3], "thickness": 0.1},
              {"type": "wall", "start": [5.5, 3.3], "end": [8.0, 3.3], "thickness": 0.1},
              {"type": "wall", "start": [3.4, 0.0], "end": [3.4, 3.3], "thickness": 0.1},

@@ -162,7 +162,7 @@ def test_a_warehouse_tour_that_comes_back_closes_its_loop_and_undoes_the_drift()
     # Nav2's warehouse, there and back (seed 12: 270 beams, 3.5 m range, 1.5 cm noise, 15 Hz).
     # Without closures its keyframes end 5.9 cm off, with its one closure 2.0 cm. (The seed
     # this test first ran, 2, drifted 11.6 cm without closures, 4.9 cm with them; since the line
-    # fits keep a wall's two faces apart it ends 3.7 cm off without any: docs/localization.md,
+    # fits keep a wall's two faces apart it ends 3.7 cm off without any: docs/localization-journal.md,
     # "SLAM: the two faces of a wall".)
     out = run_one("slam_revisit", "warehouse", "typical", 12)
     if out is None:

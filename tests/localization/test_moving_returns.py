@@ -97,7 +97,7 @@ def _comes_then_goes(moving: MovingReturns, robot: np.ndarray) -> list[tuple[np.
 
 def test_a_walker_seen_moving_that_walks_away_along_the_beam_stays_flagged():
     # Issue 36: walkers that walked away along the beam (or stood) were weighed while
-    # localizing, and a look-alike place that explained their legs won (docs/localization.md)
+    # localizing, and a look-alike place that explained their legs won (docs/localization-journal.md)
     robot = np.array([1.0, 2.5, 0.0])
     tracked = _comes_then_goes(MovingReturns(window=1.0, margin=0.2, blob=0.8, track=0.5), robot)
     for flagged, on in tracked:

@@ -130,7 +130,7 @@ def test_a_row_of_racks_is_not_a_wall_and_a_doorway_makes_two():
     # depot's rows): nothing of them is a wall (each face is shorter than one), though their
     # faces line up over 6.9 m. Fitted as one wall (as before), its direction depended on
     # which racks were in view, and its landmark turned the headings of the keyframes that saw
-    # it to follow (docs/localization.md, "SLAM: why the walls pulled the depot's headings").
+    # it to follow (docs/localization-journal.md, "SLAM: why the walls pulled the depot's headings").
     racks = [(2.0, -3.45 + 2.8 * k, 2.0, -2.15 + 2.8 * k) for k in range(3)]
     assert long_walls(scan_of_segments(racks)) == []
     # A wall with a 1 m doorway: two walls, each its own side's.
